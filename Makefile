@@ -1,0 +1,47 @@
+# gear-diag: `make demo` runs a diagnosis end to end, `make test` runs the tests.
+# The venv is created and the pinned dependencies installed on first use.
+
+PYTHON_BOOT ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+MODELS := GearPair
+FMUS := $(patsubst %,build/%.fmu,$(MODELS))
+MODELICA := $(shell find modelica -name '*.mo')
+BRIDGE := $(wildcard fmu_build/*.py)
+
+.PHONY: venv fmu demo test test-slow regress bless bench clean
+
+venv: $(STAMP)
+
+$(STAMP): requirements.txt pyproject.toml
+	$(PYTHON_BOOT) -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
+	touch $(STAMP)
+
+fmu: $(FMUS)
+
+build/GearPair.fmu: $(MODELICA) $(BRIDGE) $(STAMP)
+	$(PY) -m fmu_build modelica/GearDiag/GearPair.mo --model GearDiag.GearPair -o $@
+
+demo: fmu
+	$(PY) -m pydiag demo --fmu build/GearPair.fmu
+
+test: fmu
+	$(PY) -m pytest -q
+
+test-slow: fmu
+	$(PY) -m pytest -q -m slow
+
+regress: fmu
+	$(PY) -m pydiag regress --fmu build/GearPair.fmu --golden tests/golden/GearPair.json
+
+bless: fmu
+	$(PY) -m pydiag regress --fmu build/GearPair.fmu --golden tests/golden/GearPair.json --bless
+
+bench: fmu
+	$(PY) bench/paper_cases.py
+
+clean:
+	rm -rf build

@@ -1,0 +1,17 @@
+"""Modelica file + model name -> FMU, the whole pipeline."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from fmu_build.flatten import flatten
+from fmu_build.fmu_export import export_fmu
+from fmu_build.ode_system import OdeSystem, build_ode_system
+
+
+def ode_system(model_file: str | Path, model: str) -> OdeSystem:
+    return build_ode_system(flatten(model_file, model))
+
+
+def build_fmu(model_file: str | Path, model: str, out_path: str | Path) -> Path:
+    return export_fmu(ode_system(model_file, model), out_path)

@@ -1,0 +1,168 @@
+"""rumoca front end: compile a Modelica model and return its flat equations with roles.
+
+Variable roles (state, algebraic, output, parameter) come from rumoca's DAE stage
+(``Model.states``, ``Model.algebraics``...). Expressions come from its ``flat`` stage,
+whose equations are residual trees with source spans; the DAE stage stores the same
+expressions in a compact arena that is harder to walk and carries no extra information
+for the models this bridge supports.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import rumoca
+
+from fmu_build.errors import ModelicaBuildError
+
+Tree = dict[str, Any]
+
+
+@dataclass
+class SourceMap:
+    """Turns rumoca's (source id, byte offset) spans into ``file:line`` strings."""
+
+    files: dict[int, tuple[str, str]] = field(default_factory=dict)
+
+    def locate(self, span: dict | None) -> str | None:
+        if not span or span.get("source") not in self.files:
+            return None
+        name, text = self.files[span["source"]]
+        line = text.count("\n", 0, span.get("start", 0)) + 1
+        return f"{name}:{line}"
+
+
+@dataclass
+class Variable:
+    name: str
+    role: str  # "parameter" | "state" | "algebraic" | "output"
+    type_name: str  # "Real" | "Integer" | "Boolean"
+    unit: str | None
+    description: str | None
+    start: Tree | None
+    binding: Tree | None
+    fixed: bool | None
+    location: str | None
+
+
+@dataclass
+class Equation:
+    residual: Tree
+    location: str | None
+
+
+@dataclass
+class FlatModel:
+    name: str
+    variables: dict[str, Variable]
+    equations: list[Equation]
+    functions: dict[str, Tree]
+    sources: SourceMap
+
+    def names(self, role: str) -> list[str]:
+        return [v.name for v in self.variables.values() if v.role == role]
+
+
+def find_library_root(model_file: Path) -> Path:
+    """The folder holding the top-level package of ``model_file`` (walk up through package.mo)."""
+    folder = model_file.resolve().parent
+    while (folder / "package.mo").exists() and (folder.parent / "package.mo").exists():
+        folder = folder.parent
+    return folder.parent if (folder / "package.mo").exists() else folder
+
+
+def _diagnostics_text(err: rumoca.RumocaError) -> str:
+    lines = []
+    for diag in getattr(err, "diagnostics", None) or []:
+        where = f"{diag.file}:{diag.line}: " if diag.file and diag.line else ""
+        lines.append(f"{where}{diag.message}")
+    return "; ".join(lines) or str(err).splitlines()[0]
+
+
+def _literal_value(tree: Tree | None) -> float | None:
+    if tree and "Literal" in tree:
+        (kind, value), = tree["Literal"]["value"].items()
+        return float(value)
+    return None
+
+
+def flatten(model_file: str | Path, model: str) -> FlatModel:
+    """Compile ``model`` from ``model_file`` with rumoca; raise ModelicaBuildError on any failure."""
+    path = Path(model_file)
+    if not path.is_file():
+        raise ModelicaBuildError(f"no such Modelica file: {path}")
+    session = rumoca.Session(roots=[str(find_library_root(path))])
+    try:
+        compiled = session.load(str(path), model=model)
+        dae = compiled.to_dict("dae")
+        flat = compiled.to_dict("flat")
+    except rumoca.RumocaError as err:
+        raise ModelicaBuildError(f"rumoca could not compile {model}: {_diagnostics_text(err)}") from None
+
+    sources = SourceMap({sid: (name, text) for sid, name, text in dae["source_map"]["files"]})
+    if len(compiled.inputs):
+        raise ModelicaBuildError(
+            f"top-level inputs are not supported ({', '.join(compiled.inputs.names)}); "
+            "make them parameters")
+    roles = {name: "state" for name in compiled.states.names}
+    roles.update({name: "algebraic" for name in compiled.algebraics.names})
+    roles.update({name: "output" for name in compiled.outputs.names})
+    roles.update({name: "parameter" for name in compiled.parameters.names})
+
+    variables: dict[str, Variable] = {}
+    for name, var in flat["variables"].items():
+        if name not in roles:
+            continue  # constants, folded into literals by rumoca
+        if var.get("dims"):
+            raise ModelicaBuildError(f"array variable '{name}' is not supported",
+                                     sources.locate(var.get("source_span")))
+        type_name = flat["variable_type_names"].get(name, "Real") if isinstance(
+            flat.get("variable_type_names"), dict) else "Real"
+        fixed = var.get("fixed")  # rumoca gives [bool] or null
+        if isinstance(fixed, list):
+            fixed = fixed[0] if fixed else None
+        variables[name] = Variable(
+            name=name,
+            role=roles[name],
+            type_name=type_name,
+            unit=var.get("unit"),
+            description=var.get("description"),
+            start=var.get("start"),
+            binding=var.get("binding"),
+            fixed=None if fixed is None else bool(fixed),
+            location=sources.locate(var.get("source_span")),
+        )
+    missing = set(roles) - set(variables)
+    if missing:
+        raise ModelicaBuildError(f"rumoca's flat model lacks variables {sorted(missing)}")
+
+    for key in ("algorithms", "when_chains", "initial_equations", "initial_algorithms",
+                "structured_equations", "assert_equations"):
+        if flat.get(key):
+            raise ModelicaBuildError(f"{key.replace('_', ' ')} are not supported")
+
+    equations = []
+    for eq in flat["equations"]:
+        if "residual" not in eq:
+            raise ModelicaBuildError(f"equation form {next(iter(eq))} is not supported")
+        equations.append(Equation(eq["residual"], sources.locate(_first_span(eq["residual"]))))
+    return FlatModel(model, variables, equations, flat["functions"], sources)
+
+
+def _first_span(tree: Any) -> dict | None:
+    """The first source span found in a tree (depth first), for error messages."""
+    if isinstance(tree, dict):
+        if "span" in tree and isinstance(tree["span"], dict) and "source" in tree["span"]:
+            return tree["span"]
+        for value in tree.values():
+            span = _first_span(value)
+            if span:
+                return span
+    elif isinstance(tree, list):
+        for value in tree:
+            span = _first_span(value)
+            if span:
+                return span
+    return None

@@ -1,0 +1,8 @@
+within GearDiag.Functions;
+function lcm "Least common multiple of two positive integers"
+  input Integer a;
+  input Integer b;
+  output Integer l;
+algorithm
+  l := div(a*b, GearDiag.Functions.gcd(a, b));
+end lcm;

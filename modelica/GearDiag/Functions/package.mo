@@ -1,0 +1,3 @@
+within GearDiag;
+package Functions "Pure functions used by the gear models"
+end Functions;

@@ -1,0 +1,74 @@
+within GearDiag;
+model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pinion tooth, assembly and geometric transmission errors"
+  // Paper Eq. (6), written as a balance of forces along the line of action:
+  //   m*x'' + c*x' + k_eff(t)*(x - e(t)) = T/r_p + F_extra
+  //   k(t)  = K*(1 + a(tooth)*sigma(theta_mesh, f_f) + k_mod)
+  //   e(t)  = e_ate + e_dte + e_extra
+  //   e_ate = f_ate*xi_max*sin(w_pinion*t)          assembly TE, Eq. (4)
+  //   e_dte = f_dte*gamma_max*sin(w_fe*t)            geometric TE, Eq. (5), w_fe = w_mesh/N_ap
+  // k_mod, e_extra, F_extra and contact are hooks with neutral declaration equations;
+  // a model in Effects/ overrides one of them with a modifier on `extends GearPair(...)`.
+
+  // ---- fault parameters (normalised, estimated by pydiag) ----
+  parameter Real a0(min=0, max=0.9) = 0.1 "Stiffness variation amplitude of the healthy teeth, relative to K";
+  parameter Real a_f(min=0, max=0.9) = 0.1 "Stiffness variation amplitude of the faulty pinion tooth, relative to K";
+  parameter Real f_f(min=0, max=0.99) = 0.1 "Form factor of the stiffness wave: 0 cosine, towards 1 square";
+  parameter Real f_ate(min=0, max=1) = 0 "Assembly transmission error level, 0..1 of xi_max";
+  parameter Real f_dte(min=0, max=1) = 0 "Geometric transmission error level, 0..1 of gamma_max";
+
+  // ---- kinematics ----
+  parameter Integer Np = 14 "Number of pinion teeth";
+  parameter Integer Ng = 21 "Number of gear teeth";
+  parameter Real f_pinion(unit="Hz") = 25 "Pinion shaft speed (1500 rpm)";
+
+  // ---- physical parameters ----
+  parameter Real m(unit="kg") = 0.5 "Equivalent mass of the gear pair along the line of action";
+  parameter Real K(unit="N/m") = 2e8 "Mean mesh stiffness";
+  parameter Real c(unit="N.s/m") = 1000 "Mesh damping (damping ratio 0.05 with the defaults)";
+  parameter Real T(unit="N.m") = 50 "Pinion torque";
+  parameter Real r_p(unit="m") = 0.03 "Pinion pitch radius";
+  parameter Real xi_max(unit="m") = 50e-6 "Assembly TE amplitude at f_ate = 1 (pinion runout)";
+  parameter Real gamma_max(unit="m") = 7e-6 "Geometric TE amplitude at f_dte = 1 (precision class)";
+
+  // ---- derived parameters ----
+  parameter Real N_ap = GearDiag.Functions.lcm(Np, Ng)/Np "Number of assembly phases, lcm(Np, Ng)/Np";
+  parameter Real f_mesh(unit="Hz") = Np*f_pinion "Mesh frequency";
+  parameter Real f_fe(unit="Hz") = f_mesh/N_ap "Geometric TE (assembly-phase) frequency";
+  parameter Real x_static(unit="m") = T/r_p/(K*(1 + a_f*GearDiag.Functions.formWave(0, f_f)))
+    "Static deflection at t = 0 (faulty tooth in mesh, zero TE): the start point";
+
+  // ---- effect hooks (neutral here) ----
+  Real k_mod = 0 "Extra relative stiffness modulation (effects)";
+  Real e_extra(unit="m") = 0 "Extra transmission error (effects)";
+  Real F_extra(unit="N") = 0 "Extra force on the line of action (effects)";
+  Real contact = 1 "Contact factor, 1 while the teeth touch (effects)";
+
+  // ---- states and internal variables ----
+  Real x(unit="m", start=x_static, fixed=true) "Mesh displacement along the line of action";
+  Real v(unit="m/s", start=0, fixed=true) "Mesh velocity";
+  Real toothIndex "Index of the pinion tooth in mesh, 0 is the faulty one";
+  Real a "Stiffness variation amplitude of the tooth in mesh";
+  Real sigma "Normalised stiffness wave";
+  Real e_ate(unit="m") "Assembly transmission error";
+  Real e_dte(unit="m") "Geometric transmission error";
+
+  // ---- outputs ----
+  output Real acc(unit="m/s2") "Sensor acceleration along the line of action (the diagnosed signal)";
+  output Real disp(unit="m") "Mesh displacement";
+  output Real stiffness(unit="N/m") "Mesh stiffness";
+  output Real mesh_force(unit="N") "Dynamic mesh force";
+equation
+  // Tooth periods start a quarter mesh cycle early, where sigma = 0, so the jump of a
+  // between teeth leaves k continuous and CVode sees no discontinuity.
+  toothIndex = mod(floor(f_mesh*time + 0.25), Np);
+  a = if toothIndex < 0.5 then a_f else a0;
+  sigma = GearDiag.Functions.formWave(2*pi*f_mesh*time, f_f);
+  stiffness = K*(1 + a*sigma + k_mod);
+  e_ate = f_ate*xi_max*sin(2*pi*f_pinion*time);
+  e_dte = f_dte*gamma_max*sin(2*pi*f_fe*time);
+  mesh_force = contact*stiffness*(x - e_ate - e_dte - e_extra) + c*v;
+  der(x) = v;
+  m*der(v) + mesh_force = T/r_p + F_extra;
+  acc = der(v);
+  disp = x;
+end GearPair;

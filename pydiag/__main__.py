@@ -1,0 +1,5 @@
+import sys
+
+from pydiag.cli import main
+
+sys.exit(main())

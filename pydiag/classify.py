@@ -1,0 +1,51 @@
+"""Failure mode and degradation level from estimated fault parameters.
+
+Thresholds are the midpoints between the levels of the paper's Table 1:
+
+==========  =======  =====  ======  ========
+level       healthy  early  medium  advanced
+==========  =======  =====  ======  ========
+a_f - a0    0        0.1    0.2     0.5
+f_f         0.1      0.4    0.6     0.9
+f_ate/f_dte 0        0.1    0.2     0.4
+==========  =======  =====  ======  ========
+
+so a tooth level comes from a_f - a0 at 0.05 / 0.15 / 0.35 and from f_f at
+0.25 / 0.5 / 0.75 (the higher of the two), and a transmission-error level from
+max(f_ate, f_dte) at 0.05 / 0.15 / 0.3. The failure mode names which of the two
+is above "none"; the severity is the higher of the two levels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+SEVERITIES = ("none", "early", "medium", "advanced")
+FAULT_MODES = ("healthy", "tooth_fault", "transmission_error", "combined")
+TOOTH_AMPLITUDE_EDGES = (0.05, 0.15, 0.35)
+FORM_FACTOR_EDGES = (0.25, 0.5, 0.75)
+TE_EDGES = (0.05, 0.15, 0.3)
+DEFAULT_A0 = 0.1
+
+
+def _level(value: float, edges: tuple[float, ...]) -> int:
+    return int(np.searchsorted(edges, value, side="right"))
+
+
+@dataclass(frozen=True)
+class Classification:
+    fault_mode: str
+    severity: str
+    tooth_severity: str
+    te_severity: str
+
+
+def classify(parameters: dict[str, float], a0: float = DEFAULT_A0) -> Classification:
+    """Classify from ``a_f``, ``f_f``, ``f_ate``, ``f_dte`` (missing ones count as healthy)."""
+    tooth = max(_level(parameters.get("a_f", a0) - a0, TOOTH_AMPLITUDE_EDGES),
+                _level(parameters.get("f_f", 0.0), FORM_FACTOR_EDGES))
+    te = _level(max(parameters.get("f_ate", 0.0), parameters.get("f_dte", 0.0)), TE_EDGES)
+    mode = FAULT_MODES[(tooth > 0) + 2 * (te > 0)]
+    return Classification(mode, SEVERITIES[max(tooth, te)], SEVERITIES[tooth], SEVERITIES[te])

@@ -1,0 +1,185 @@
+"""An FMU as a plant: load once, set parameters, simulate, return the sensor signal.
+
+One extracted FMU and one instance serve every evaluation (the instance is reset
+between runs): re-extracting and re-instantiating per call is slow and, with some
+vendor FMUs, leaks. Not thread-safe; use one plant per process.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import fmpy
+import numpy as np
+from fmpy.model_description import ModelDescription
+
+from pydiag.kinematics import GearKinematics
+
+
+class PlantError(Exception):
+    """The FMU cannot be loaded or simulated as asked."""
+
+
+@dataclass(frozen=True)
+class FmuVariable:
+    name: str
+    causality: str
+    variability: str | None
+    start: float | None
+    unit: str | None
+    description: str | None
+
+
+def _float(value) -> float | None:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
+
+def read_model_description(fmu_path: Path) -> tuple[ModelDescription, list[str]]:
+    """The model description and the validation problems (as warnings, not errors)."""
+    warnings: list[str] = []
+    try:
+        md = fmpy.read_model_description(str(fmu_path), validate=True)
+    except Exception as err:  # fmpy raises plain Exception with the problems listed
+        warnings = [line.strip("- ").strip() for line in str(err).splitlines()[1:] if line.strip()]
+        warnings = warnings or [str(err)]
+        try:
+            md = fmpy.read_model_description(str(fmu_path), validate=False)
+        except Exception as err2:
+            raise PlantError(f"cannot read {fmu_path}: {err2}") from None
+    return md, warnings
+
+
+class FmuPlant:
+    """Simulate an FMU's sensor output for given parameter values.
+
+    Args:
+        fmu_path: the FMU file
+        sensors: names of the output variables to return (one row each)
+        sample_rate_hz: output sample rate of :meth:`simulate`
+        relative_tolerance: solver tolerance (CVode for Model Exchange)
+        fixed_values: start values applied to every run (e.g. from an adapter)
+    """
+
+    def __init__(self, fmu_path: str | Path, sensors: tuple[str, ...] = ("acc",),
+                 sample_rate_hz: float = 10_000.0,
+                 relative_tolerance: float = 1e-6,
+                 fixed_values: dict[str, float] | None = None) -> None:
+        self.fmu_path = Path(fmu_path)
+        if not self.fmu_path.is_file():
+            raise PlantError(f"no such FMU: {self.fmu_path}")
+        if not sample_rate_hz > 0:
+            raise PlantError(f"sample rate must be positive, got {sample_rate_hz}")
+        self.sample_rate_hz = float(sample_rate_hz)
+        self.relative_tolerance = relative_tolerance
+        self.model_description, self.validation_warnings = read_model_description(self.fmu_path)
+        self.variables = {
+            v.name: FmuVariable(v.name, v.causality, v.variability, _float(v.start), v.unit,
+                                v.description)
+            for v in self.model_description.modelVariables}
+        self.sensors = tuple(sensors)
+        if not self.sensors:
+            raise PlantError("at least one sensor output is needed")
+        for sensor in self.sensors:
+            if sensor not in self.variables:
+                raise PlantError(f"sensor '{sensor}' is not a variable of {self.fmu_path.name}; "
+                                 f"outputs are: {', '.join(self.outputs()) or 'none'}")
+        self.fixed_values = dict(fixed_values or {})
+        self._check_settable(self.fixed_values)
+        self._fmi_type = ("ModelExchange" if self.model_description.modelExchange is not None
+                          else "CoSimulation")
+        self._unzipdir = tempfile.mkdtemp(prefix="pydiag_fmu_")
+        try:
+            fmpy.extract(str(self.fmu_path), unzipdir=self._unzipdir)
+            self._instance = fmpy.instantiate_fmu(self._unzipdir, self.model_description,
+                                                  fmi_type=self._fmi_type)
+        except Exception as err:
+            shutil.rmtree(self._unzipdir, ignore_errors=True)
+            raise PlantError(f"cannot instantiate {self.fmu_path.name}: {err}") from None
+        self._fresh = True
+
+    # ------------------------------------------------------------------ metadata
+    def outputs(self) -> list[str]:
+        return [n for n, v in self.variables.items() if v.causality == "output"]
+
+    def parameters(self) -> dict[str, float]:
+        """Start values of the FMU's parameters."""
+        return {n: v.start for n, v in self.variables.items()
+                if v.causality == "parameter" and v.start is not None}
+
+    def kinematics(self, n_pinion: str = "Np", n_gear: str = "Ng",
+                   f_pinion: str = "f_pinion") -> GearKinematics:
+        """Kinematics from the FMU's parameters (fixed values override start values)."""
+        values = {**self.parameters(), **self.fixed_values}
+        missing = [n for n in (n_pinion, n_gear, f_pinion) if n not in values]
+        if missing:
+            raise PlantError(f"{self.fmu_path.name} has no parameter(s) {', '.join(missing)}; "
+                             "give the kinematics explicitly (adapter or flags)")
+        return GearKinematics(int(round(values[n_pinion])), int(round(values[n_gear])),
+                              float(values[f_pinion]))
+
+    def _check_settable(self, values: dict[str, float]) -> None:
+        for name in values:
+            var = self.variables.get(name)
+            if var is None:
+                raise PlantError(f"{self.fmu_path.name} has no variable '{name}'")
+            if var.causality not in ("parameter", "input"):
+                raise PlantError(f"variable '{name}' has causality '{var.causality}' and "
+                                 "cannot be set; only parameters and inputs can")
+
+    # ------------------------------------------------------------------ simulation
+    def simulate(self, parameters: dict[str, float], duration_s: float,
+                 start_s: float = 0.0) -> np.ndarray:
+        """Sensor signals, shape (n_sensors, n), at ``start_s + n/sample_rate_hz``.
+
+        ``n = round(duration_s * sample_rate_hz)``. The model is always integrated from
+        t = 0; ``start_s`` drops the start-up part.
+        """
+        values = {**self.fixed_values, **parameters}
+        self._check_settable(values)
+        n = int(round(duration_s * self.sample_rate_hz))
+        first = int(round(start_s * self.sample_rate_hz))
+        stop = (first + n) / self.sample_rate_hz
+        if not self._fresh:
+            self._instance.reset()
+        self._fresh = False
+        try:
+            result = fmpy.simulate_fmu(
+                self._unzipdir, validate=False, start_time=0.0, stop_time=stop,
+                output_interval=1.0 / self.sample_rate_hz,
+                relative_tolerance=self.relative_tolerance, start_values=values,
+                output=list(self.sensors), model_description=self.model_description,
+                fmu_instance=self._instance, fmi_type=self._fmi_type)
+        except Exception as err:
+            raise PlantError(f"simulation of {self.fmu_path.name} failed with "
+                             f"{values}: {err}") from None
+        y = np.array([result[s][first:first + n] for s in self.sensors], dtype=float)
+        if y.shape[1] < n:
+            raise PlantError(f"simulation returned {y.shape[1]} samples, expected {n}")
+        if not np.all(np.isfinite(y)):
+            raise PlantError(f"simulation of {self.fmu_path.name} gave non-finite output "
+                             f"with {values}")
+        return y
+
+    def close(self) -> None:
+        if getattr(self, "_instance", None) is not None:
+            try:
+                self._instance.freeInstance()
+            except Exception:
+                pass
+            self._instance = None
+        shutil.rmtree(getattr(self, "_unzipdir", ""), ignore_errors=True)
+
+    def __enter__(self) -> "FmuPlant":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        self.close()
