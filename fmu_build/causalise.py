@@ -65,6 +65,12 @@ def causalise(residuals: list[Residual], unknowns: dict[str, SX]) -> dict[str, S
             remaining = [Residual(ca.substitute(r.expr, sym, value), r.location) for r in remaining]
             progress = True
             break  # rescan: the substitution may have left other equations with one unknown
+    for res in remaining:
+        present = [n for n, s in open_unknowns.items() if _depends(res.expr, s)]
+        if len(present) == 1:
+            raise ModelicaBuildError(
+                f"equation is nonlinear in its only unknown {present[0]}; only explicit or "
+                "linear equations can be causalised", res.location)
     if remaining:
         names = list(open_unknowns)
         syms = ca.vertcat(*[open_unknowns[n] for n in names])

@@ -16,13 +16,24 @@ from __future__ import annotations
 import numpy as np
 
 
-def spectral_error(model: np.ndarray, reference: np.ndarray, noise_power: float = 0.0) -> float:
+def spectral_residuals(model: np.ndarray, reference: np.ndarray,
+                       noise_power: float = 0.0) -> np.ndarray:
+    """The terms of Eq. (12) before squaring: E = ||residuals||.
+
+    ``residual_i = (S'_i/max S' + 1) (S'_i - R_i) / sqrt(sum R^2)`` with
+    ``S' = sqrt(S^2 + noise_power)``. Smooth in S, so least-squares solvers apply.
+    """
     model = np.asarray(model, dtype=float)
     reference = np.asarray(reference, dtype=float)
     if model.shape != reference.shape:
         raise ValueError(f"feature shapes differ: model {model.shape}, reference {reference.shape}")
     expected = np.sqrt(model ** 2 + max(noise_power, 0.0))
     peak = np.max(expected)
-    weight = (expected / peak + 1.0) ** 2 if peak > 0 else np.ones_like(expected)
+    weight = expected / peak + 1.0 if peak > 0 else np.ones_like(expected)
     scale = np.sqrt(np.sum(reference ** 2))
-    return float(np.sqrt(np.sum(weight * (expected - reference) ** 2)) / (scale if scale > 0 else 1.0))
+    return weight * (expected - reference) / (scale if scale > 0 else 1.0)
+
+
+def spectral_error(model: np.ndarray, reference: np.ndarray, noise_power: float = 0.0) -> float:
+    """Eq. (12), noise-aware and relative (see the module docstring)."""
+    return float(np.linalg.norm(spectral_residuals(model, reference, noise_power)))

@@ -1,0 +1,274 @@
+"""Command line: pydiag simulate | diagnose | regress | demo.
+
+Library modules never print; this module does. Known failures end with one line on
+stderr and exit status 2; a failed regression check exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from pydiag.estimate import EstimationError, FaultEstimator
+from pydiag.measurement import Measurement, MeasurementError, read_measurement, write_measurement
+from pydiag.noise import add_white_noise
+from pydiag.plant import FmuPlant, PlantError
+
+#: Sensor channels of the GearDiag models: acceleration for mesh content, displacement
+#: for the once-per-turn transmission error (see docs/method.md for the measurement).
+DEFAULT_SENSORS = ("acc", "disp")
+DEFAULT_WARMUP_S = 0.05
+KNOWN_ERRORS = (PlantError, MeasurementError, EstimationError, ValueError, OSError)
+
+
+class UsageError(Exception):
+    pass
+
+
+def _parse_set(items: list[str]) -> dict[str, float]:
+    values = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise UsageError(f"--set takes NAME=VALUE, got '{item}'")
+        try:
+            values[name.strip()] = float(value)
+        except ValueError:
+            raise UsageError(f"--set {name}: '{value}' is not a number") from None
+    return values
+
+
+def _default_sensors(plant_outputs: list[str]) -> tuple[str, ...]:
+    chosen = tuple(s for s in DEFAULT_SENSORS if s in plant_outputs)
+    return chosen or tuple(plant_outputs)
+
+
+def _outputs_of(fmu: str) -> list[str]:
+    from pydiag.plant import read_model_description
+    if not Path(fmu).is_file():
+        raise PlantError(f"no such FMU: {fmu}")
+    md, _ = read_model_description(Path(fmu))
+    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    if not outputs:
+        raise PlantError(f"{fmu} has no output variables to use as a sensor")
+    return outputs
+
+
+# ---------------------------------------------------------------------- simulate
+def simulate_measurement(fmu: str, values: dict[str, float], duration_s: float | None,
+                         sample_rate_hz: float, snr: float | None, seed: int,
+                         sensors: tuple[str, ...] | None, warmup_s: float = DEFAULT_WARMUP_S
+                         ) -> Measurement:
+    sensors = sensors or _default_sensors(_outputs_of(fmu))
+    with FmuPlant(fmu, sensors, sample_rate_hz) as plant:
+        try:
+            kin = plant.kinematics()
+        except PlantError:
+            kin = None
+        if duration_s is None:
+            duration_s = 10 * kin.period_s if kin else 1.0
+        if not duration_s > 0:
+            raise UsageError(f"--duration must be positive, got {duration_s}")
+        y = plant.simulate(values, duration_s, warmup_s)
+        meta = {"source": "pydiag simulate", "fmu": plant.fmu_path.name, "set": values,
+                "snr": snr, "seed": seed, "warmup_s": warmup_s}
+        if kin:
+            meta["kinematics"] = {"Np": kin.n_pinion, "Ng": kin.n_gear, "f_pinion": kin.f_pinion_hz}
+    rng = np.random.default_rng(seed)
+    channels = {s: (add_white_noise(y[i], snr, rng) if snr else y[i]) for i, s in enumerate(sensors)}
+    return Measurement(channels, sample_rate_hz, meta)
+
+
+def cmd_simulate(args) -> int:
+    values = _parse_set(args.set)
+    m = simulate_measurement(args.fmu, values, args.duration, args.sample_rate, args.snr, args.seed,
+                             tuple(args.sensor) if args.sensor else None)
+    write_measurement(args.out, m, overwrite=args.force)
+    if not args.quiet:
+        print(f"wrote {args.out}: {m.n_samples} samples at {m.sample_rate_hz:g} Hz, "
+              f"channels {', '.join(m.channels)}")
+    return 0
+
+
+# ---------------------------------------------------------------------- diagnose
+def _progress_bar(quiet: bool):
+    if quiet:
+        return None, lambda: None
+    from tqdm import tqdm
+    bar = tqdm(total=1, desc="diagnose", unit="sim", file=sys.stderr, leave=False)
+
+    def update(done: int, total: int, best: float) -> None:
+        bar.total = total
+        bar.n = done
+        bar.set_postfix(best_error=f"{best:.4g}", refresh=False)
+        bar.refresh()
+
+    return update, bar.close
+
+
+def format_result(result, truth: dict | None = None) -> str:
+    head = f"{'parameter':<10} {'estimate':>9}" + (f" {'true':>7} {'abs.err':>8}" if truth else "")
+    lines = [head, "-" * len(head)]
+    for name, value in result.parameters.items():
+        row = f"{name:<10} {value:9.4f}"
+        if truth and name in truth:
+            row += f" {truth[name]:7.3f} {abs(value - truth[name]):8.4f}"
+        lines.append(row)
+    lines += ["",
+              f"fault mode : {result.fault_mode}",
+              f"severity   : {result.severity} (tooth: {result.tooth_severity}, "
+              f"transmission error: {result.te_severity})",
+              f"error      : {result.error:.5f} (Eq. 12, relative, summed over channels)",
+              f"evaluations: {result.evaluations} in {result.elapsed_s:.1f} s"]
+    return "\n".join(lines)
+
+
+def run_diagnosis(fmu: str, measurement: Measurement, args):
+    update, close = _progress_bar(args.quiet)
+    est = FaultEstimator(fmu, n_particles=args.particles, iterations=args.iterations,
+                         seed=args.seed, polish_evaluations=args.polish,
+                         feature_mode=args.features, n_workers=args.workers, progress=update)
+    try:
+        return est.fit(measurement)
+    finally:
+        close()
+
+
+def cmd_diagnose(args) -> int:
+    if args.json and Path(args.json).resolve() == Path(args.measurement).resolve():
+        raise UsageError("--json would overwrite the measurement file")
+    m = read_measurement(args.measurement, args.sample_rate, args.column)
+    result = run_diagnosis(args.fmu, m, args)
+    print(format_result(result))
+    if args.json:
+        out = {"parameters": result.parameters, "fault_mode": result.fault_mode,
+               "severity": result.severity, "tooth_severity": result.tooth_severity,
+               "te_severity": result.te_severity, "error": result.error,
+               "evaluations": result.evaluations, "elapsed_s": result.elapsed_s,
+               "channels": list(m.channels), "measurement": str(args.measurement)}
+        Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+    return 0
+
+
+# ---------------------------------------------------------------------- regress
+def cmd_regress(args) -> int:
+    from pydiag import regress
+    if args.bless:
+        sensors = tuple(args.sensor) if args.sensor else _default_sensors(_outputs_of(args.fmu))
+        with FmuPlant(args.fmu, sensors, args.sample_rate) as plant:
+            path = regress.bless(plant, args.golden)
+        print(f"blessed {path}")
+        return 0
+    report = regress.check(args.fmu, args.golden, args.rtol)
+    for mm in report.mismatches:
+        print(f"FAIL {mm.case} {mm.sensor} at {mm.freq_hz:.2f} Hz: golden {mm.golden:.6g}, "
+              f"now {mm.actual:.6g} (allowed +-{mm.allowed:.3g})")
+    status = "PASS" if report.passed else "FAIL"
+    print(f"{status}: {report.cases} cases x {len(report.sensors)} sensors, worst deviation "
+          f"{report.worst_relative:.2e} of the largest line (tolerance {report.rtol:.1e})")
+    return 0 if report.passed else 1
+
+
+# ---------------------------------------------------------------------- demo
+def cmd_demo(args) -> int:
+    from pydiag.paper_cases import case
+    c = case(args.case)
+    print(f"Table 1 case {c.number} ({c.name}): simulating {', '.join(DEFAULT_SENSORS)} "
+          f"at SNR {args.snr:g} ...")
+    m = simulate_measurement(args.fmu, c.parameters, None, 10_000.0, args.snr, args.seed, None)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "measurement.csv"
+        write_measurement(path, m)
+        m = read_measurement(path)
+    print(f"measurement: {m.duration_s:.2f} s at {m.sample_rate_hz:g} Hz; diagnosing ...")
+    result = run_diagnosis(args.fmu, m, args)
+    print(format_result(result, c.parameters))
+    ok = result.fault_mode == c.fault_mode and result.severity == c.severity
+    print(f"\nexpected   : {c.fault_mode}, {c.severity} -> {'correct' if ok else 'WRONG'}")
+    return 0 if ok else 1
+
+
+# ---------------------------------------------------------------------- parser
+def _add_optimiser_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--particles", type=int, default=16, help="swarm size (default 16)")
+    p.add_argument("--iterations", type=int, default=20, help="swarm iterations (default 20)")
+    p.add_argument("--polish", type=int, default=150,
+                   help="Nelder-Mead polish evaluations, 0 to skip (default 150)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: cores)")
+    p.add_argument("--features", choices=("lines", "paper"), default="lines",
+                   help="every synchronous line in the bands, or the paper's band maxima")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="pydiag", description="FMU-based gear diagnosis")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("simulate", help="simulate a measurement CSV from an FMU")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="parameter value (repeat)")
+    p.add_argument("--duration", type=float, default=None,
+                   help="seconds of signal (default: 10 fundamental periods)")
+    p.add_argument("--sample-rate", type=float, default=10_000.0, help="Hz (default 10000)")
+    p.add_argument("--snr", type=float, default=None, help="signal/noise power ratio per channel")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--sensor", action="append", help="output to record (repeat; default acc, disp)")
+    p.add_argument("--out", required=True, help="CSV file to write")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("diagnose", help="estimate fault parameters from a measurement")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--measurement", required=True, help="CSV with time_s and sensor columns")
+    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
+    p.add_argument("--sample-rate", type=float, default=None, help="Hz, if the CSV has no time_s")
+    p.add_argument("--json", help="write the result as JSON here")
+    _add_optimiser_args(p)
+    p.set_defaults(func=cmd_diagnose)
+
+    p = sub.add_parser("regress", help="check an FMU against golden spectra")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--golden", required=True, help="golden JSON file")
+    p.add_argument("--bless", action="store_true", help="write the golden file from this FMU")
+    p.add_argument("--rtol", type=float, default=None,
+                   help="tolerance, fraction of the largest line (default 2e-3)")
+    p.add_argument("--sensor", action="append", help="output to check when blessing (repeat)")
+    p.add_argument("--sample-rate", type=float, default=10_000.0, help="Hz when blessing")
+    p.set_defaults(func=cmd_regress)
+
+    p = sub.add_parser("demo", help="simulate a Table 1 case at SNR 10 and diagnose it")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--case", type=int, default=8, help="Table 1 case number (default 8)")
+    p.add_argument("--snr", type=float, default=10.0)
+    _add_optimiser_args(p)
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if getattr(args, "rtol", 0) is None:
+        from pydiag.regress import DEFAULT_RTOL
+        args.rtol = DEFAULT_RTOL
+    try:
+        return args.func(args)
+    except (UsageError, *KNOWN_ERRORS) as err:
+        print(f"pydiag {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("pydiag: interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:  # never a traceback dump for the user; PYDIAG_DEBUG=1 shows it
+        if os.environ.get("PYDIAG_DEBUG"):
+            raise
+        print(f"pydiag {args.command}: internal error: {type(err).__name__}: {err} "
+              "(set PYDIAG_DEBUG=1 for the traceback)", file=sys.stderr)
+        return 3

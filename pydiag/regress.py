@@ -1,0 +1,156 @@
+"""Regression check of an exported FMU against golden spectra.
+
+A golden file records, for a set of cases (parameter values), the amplitude spectrum
+of each sensor over a fixed window after start-up: the period-synchronous lines up to
+the top band edge when the kinematics are known, else the windowed FFT magnitudes up
+to ``max_freq_hz``. A check passes when, for every case and sensor, every amplitude
+lies within ``rtol`` times the largest amplitude of that spectrum of its golden value.
+
+The default cases are Table 1's eight when the FMU has the paper's fault parameters,
+else one case at the FMU's own defaults: so any FMU can be blessed and checked.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pydiag.features import max_band_freq_hz
+from pydiag.kinematics import GearKinematics
+from pydiag.paper_cases import TABLE1
+from pydiag.plant import FmuPlant, PlantError
+from pydiag.spectrum import sync_spectrum
+
+GOLDEN_VERSION = 1
+DEFAULT_RTOL = 2e-3
+
+
+@dataclass
+class Mismatch:
+    case: str
+    sensor: str
+    freq_hz: float
+    golden: float
+    actual: float
+    allowed: float
+
+
+@dataclass
+class RegressionReport:
+    golden: str
+    cases: int
+    sensors: list[str]
+    rtol: float
+    mismatches: list[Mismatch] = field(default_factory=list)
+    worst_relative: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return not self.mismatches
+
+
+def default_cases(plant: FmuPlant) -> dict[str, dict[str, float]]:
+    names = set(TABLE1[0].parameters)
+    if names <= set(plant.parameters()):
+        return {f"case{c.number}": dict(c.parameters) for c in TABLE1}
+    return {"defaults": {}}
+
+
+def spectrum_of(plant: FmuPlant, parameters: dict[str, float], kin: GearKinematics | None,
+                warmup_s: float, window_s: float, max_freq_hz: float) -> dict[str, dict]:
+    if kin is not None:
+        y = plant.simulate(parameters, kin.period_s, warmup_s)
+        top = max_band_freq_hz(kin)
+        out = {}
+        for i, s in enumerate(plant.sensors):
+            spec = sync_spectrum(y[i], plant.sample_rate_hz, kin.period_s, top)
+            out[s] = {"freq_hz": spec.freq_hz.tolist(), "amplitude": spec.amplitude.tolist()}
+        return out
+    y = plant.simulate(parameters, window_s, warmup_s)
+    n = y.shape[1]
+    window = np.hanning(n)
+    freqs = np.fft.rfftfreq(n, 1.0 / plant.sample_rate_hz)
+    keep = freqs <= max_freq_hz
+    return {s: {"freq_hz": freqs[keep].tolist(),
+                "amplitude": (2 * np.abs(np.fft.rfft((y[i] - y[i].mean()) * window)) / window.sum())[keep].tolist()}
+            for i, s in enumerate(plant.sensors)}
+
+
+def _kinematics(plant: FmuPlant) -> GearKinematics | None:
+    try:
+        return plant.kinematics()
+    except PlantError:
+        return None
+
+
+def bless(plant: FmuPlant, golden_path: str | Path, warmup_s: float = 0.05,
+          window_s: float = 0.2, max_freq_hz: float = 2000.0,
+          cases: dict[str, dict[str, float]] | None = None) -> Path:
+    """Write (or replace: blessing is the explicit act of accepting new behaviour) the golden file."""
+    kin = _kinematics(plant)
+    cases = cases if cases is not None else default_cases(plant)
+    golden = {
+        "version": GOLDEN_VERSION,
+        "fmu": plant.fmu_path.name,
+        "sensors": list(plant.sensors),
+        "sample_rate_hz": plant.sample_rate_hz,
+        "warmup_s": warmup_s,
+        "window_s": window_s,
+        "max_freq_hz": max_freq_hz,
+        "kinematics": None if kin is None else {"Np": kin.n_pinion, "Ng": kin.n_gear,
+                                                "f_pinion": kin.f_pinion_hz},
+        "cases": {name: {"parameters": params,
+                         "spectra": spectrum_of(plant, params, kin, warmup_s, window_s, max_freq_hz)}
+                  for name, params in cases.items()},
+    }
+    path = Path(golden_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(golden, indent=1) + "\n")
+    os.replace(tmp, path)
+    return path
+
+
+def load_golden(golden_path: str | Path) -> dict:
+    path = Path(golden_path)
+    try:
+        golden = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise PlantError(f"no golden file {path}; create it with --bless") from None
+    except (OSError, json.JSONDecodeError) as err:
+        raise PlantError(f"cannot read golden file {path}: {err}") from None
+    if golden.get("version") != GOLDEN_VERSION:
+        raise PlantError(f"{path} has golden version {golden.get('version')}, expected {GOLDEN_VERSION}")
+    return golden
+
+
+def check(fmu_path: str | Path, golden_path: str | Path, rtol: float = DEFAULT_RTOL) -> RegressionReport:
+    """Simulate the golden cases on ``fmu_path`` and compare."""
+    golden = load_golden(golden_path)
+    with FmuPlant(fmu_path, tuple(golden["sensors"]), golden["sample_rate_hz"]) as plant:
+        kin_dict = golden["kinematics"]
+        kin = None if kin_dict is None else GearKinematics(kin_dict["Np"], kin_dict["Ng"],
+                                                           kin_dict["f_pinion"])
+        report = RegressionReport(str(golden_path), len(golden["cases"]), list(plant.sensors), rtol)
+        for name, case in golden["cases"].items():
+            actual = spectrum_of(plant, case["parameters"], kin, golden["warmup_s"],
+                                 golden["window_s"], golden["max_freq_hz"])
+            for sensor, ref in case["spectra"].items():
+                g = np.asarray(ref["amplitude"])
+                a = np.asarray(actual[sensor]["amplitude"])
+                scale = float(np.max(np.abs(g))) or 1.0
+                if a.shape != g.shape:
+                    report.mismatches.append(Mismatch(name, sensor, float("nan"), float(g.size),
+                                                      float(a.size), 0.0))
+                    continue
+                dev = np.abs(a - g)
+                report.worst_relative = max(report.worst_relative, float(np.max(dev)) / scale)
+                i = int(np.argmax(dev))
+                if dev[i] > rtol * scale:
+                    report.mismatches.append(Mismatch(name, sensor, ref["freq_hz"][i], float(g[i]),
+                                                      float(a[i]), rtol * scale))
+    return report

@@ -1,0 +1,202 @@
+"""The Modelica -> FMU bridge: what it builds, and how it refuses what it cannot."""
+
+import textwrap
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import casadi as ca
+import fmpy
+import numpy as np
+import pytest
+
+from conftest import run_cli
+from fmu_build import ModelicaBuildError, build_fmu
+from fmu_build.build import ode_system
+from fmu_build.fmu_export import add_unit_definitions
+
+FAULT_PARAMETERS = ["a0", "a_f", "f_f", "f_ate", "f_dte"]
+
+
+def write_model(folder: Path, text: str, name: str = "M.mo") -> Path:
+    path = folder / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def test_gear_fmu_validates_and_exposes_tunable_parameters(gear_fmu):
+    md = fmpy.read_model_description(str(gear_fmu), validate=True)  # raises on schema problems
+    assert md.fmiVersion == "3.0" and md.modelExchange is not None
+    variables = {v.name: v for v in md.modelVariables}
+    for name in FAULT_PARAMETERS + ["Np", "Ng", "f_pinion", "m", "c", "K", "T", "r_p",
+                                    "xi_max", "gamma_max"]:
+        assert variables[name].causality == "parameter", name
+        assert variables[name].variability == "tunable", name
+        assert variables[name].description, name
+    assert variables["K"].unit == "N/m" and variables["f_pinion"].unit == "Hz"
+    for out in ("acc", "disp", "stiffness", "mesh_force"):
+        assert variables[out].causality == "output"
+    units = {u.name for u in md.unitDefinitions}
+    assert {"N/m", "kg", "Hz", "m/s2"} <= units
+
+
+def test_start_follows_parameters_static_equilibrium(gear_fmu):
+    """x starts at the static deflection, recomputed from the parameters that are set."""
+    for a_f, T in ((0.1, 50.0), (0.5, 80.0)):
+        res = fmpy.simulate_fmu(str(gear_fmu), stop_time=1e-3, output_interval=1e-4,
+                                start_values={"a_f": a_f, "T": T}, output=["disp", "acc"])
+        x_static = T / 0.03 / (2e8 * (1 + a_f))  # formWave(0, f_f) = 1 at theta = 0
+        assert res["disp"][0] == pytest.approx(x_static, rel=1e-9)
+        assert abs(res["acc"][0]) < 1e-6 * 2e8 * x_static / 0.5  # no start-up jolt
+
+
+def test_functions_with_algorithms_if_and_for_are_inlined(tmp_path):
+    mo = write_model(tmp_path, """
+        package P
+          function gcd
+            input Integer a; input Integer b; output Integer g;
+          protected
+            Integer x; Integer y; Integer r;
+          algorithm
+            x := a; y := b;
+            for i in 1:30 loop
+              if y > 0 then r := mod(x, y); x := y; y := r; end if;
+            end for;
+            g := x;
+          end gcd;
+          model M
+            parameter Integer a = 42;
+            parameter Integer b = 30;
+            parameter Real g = gcd(a, b);
+            Real x(start = 1, fixed = true);
+            output Real y;
+          equation
+            der(x) = -g*x;
+            y = if x > 0.5 then 2*x else -x;
+          end M;
+        end P;
+        """)
+    system = ode_system(mo, "P.M")
+    rhs, out, x0 = system.functions()
+    p = ca.DM([q.value for q in system.parameters])
+    assert float(rhs(0, 1.0, p)) == pytest.approx(-6.0)  # gcd(42, 30) = 6
+    names = [q.name for q in system.parameters]
+    p2 = p.full().ravel().copy()
+    p2[names.index("a")], p2[names.index("b")] = 35, 21
+    assert float(rhs(0, 1.0, p2)) == pytest.approx(-7.0)  # stays a function of the parameters
+    assert float(out(0, 0.8, p)) == pytest.approx(1.6)
+    assert float(out(0, 0.2, p)) == pytest.approx(-0.2)
+
+
+def test_implicit_linear_equations_are_solved_jointly(tmp_path):
+    mo = write_model(tmp_path, """
+        model L
+          parameter Real k = 3;
+          Real x(start = 2, fixed = true);
+          Real a;
+          Real b;
+          output Real y;
+        equation
+          a + b = x;
+          a - b = k;
+          der(x) = -a;
+          y = b;
+        end L;
+        """)
+    system = ode_system(mo, "L")
+    rhs, out, _ = system.functions()
+    # a = (x + k)/2, b = (x - k)/2
+    assert float(rhs(0, 2.0, 3.0)) == pytest.approx(-2.5)
+    assert float(out(0, 2.0, 3.0)) == pytest.approx(-0.5)
+
+
+def test_nonlinear_algebraic_loop_is_reported_with_lines(tmp_path):
+    mo = write_model(tmp_path, """
+        model N
+          Real x(start = 1, fixed = true);
+          Real z;
+        equation
+          z*z + z = x;
+          der(x) = -z;
+        end N;
+        """)
+    with pytest.raises(ModelicaBuildError, match=r"M\.mo:6: equation is nonlinear in its only unknown z"):
+        ode_system(mo, "N")
+    mo = write_model(tmp_path, """
+        model N2
+          Real x(start = 1, fixed = true);
+          Real a;
+          Real b;
+        equation
+          a*b = x;
+          a + b = 3;
+          der(x) = -a;
+        end N2;
+        """)
+    with pytest.raises(ModelicaBuildError, match=r"nonlinear algebraic loop in .*a, b.*M\.mo:7, .*M\.mo:8"):
+        ode_system(mo, "N2")
+
+
+def test_unsupported_construct_names_it_and_its_line(tmp_path):
+    mo = write_model(tmp_path, """
+        model W
+          Real x(start = 1, fixed = true);
+        equation
+          der(x) = -x;
+        algorithm
+          when x < 0.5 then
+            terminate("done");
+          end when;
+        end W;
+        """)
+    with pytest.raises(ModelicaBuildError) as err:
+        ode_system(mo, "W")
+    assert "not supported" in str(err.value) or "rumoca" in str(err.value)
+
+
+def test_array_variables_are_refused_with_location(tmp_path):
+    mo = write_model(tmp_path, """
+        model A
+          Real x[2](each start = 1, each fixed = true);
+        equation
+          der(x) = -x;
+        end A;
+        """)
+    with pytest.raises(ModelicaBuildError, match=r"M\.mo:3: array variable 'x' is not supported"):
+        ode_system(mo, "A")
+
+
+def test_cli_errors_are_one_line_without_traceback(tmp_path):
+    mo = write_model(tmp_path, """
+        model Bad
+          Real x(start = 1, fixed = true);
+        equation
+          der(x) = -x + undefinedThing;
+        end Bad;
+        """)
+    res = run_cli("-m", "fmu_build", str(mo), "--model", "Bad", "-o", str(tmp_path / "b.fmu"))
+    assert res.returncode == 2
+    assert "Traceback" not in res.stderr
+    assert res.stderr.startswith("fmu_build: error:") and "undefinedThing" in res.stderr
+    assert not (tmp_path / "b.fmu").exists()
+    res = run_cli("-m", "fmu_build", str(tmp_path / "nope.mo"), "--model", "X", "-o", "x.fmu")
+    assert res.returncode == 2 and "no such Modelica file" in res.stderr
+
+
+def test_unit_definitions_are_inserted_before_variables():
+    md = ('<fmiModelDescription>\n    <ModelExchange modelIdentifier="m"/>\n    <ModelVariables>\n'
+          '        <Float64 name="k" unit="N/m"/>\n        <Float64 name="x" unit="m"/>\n'
+          '    </ModelVariables>\n</fmiModelDescription>\n')
+    root = ET.fromstring(add_unit_definitions(md))
+    assert [c.tag for c in root] == ["ModelExchange", "UnitDefinitions", "ModelVariables"]
+    assert sorted(u.get("name") for u in root.find("UnitDefinitions")) == ["N/m", "m"]
+
+
+def test_build_writes_only_the_requested_file(tmp_path, modelica_copy):
+    out = tmp_path / "out" / "G.fmu"
+    build_fmu(modelica_copy / "GearDiag" / "GearPair.mo", "GearDiag.GearPair", out)
+    assert sorted(p.name for p in out.parent.iterdir()) == ["G.fmu"]
+    names = zipfile.ZipFile(out).namelist()
+    assert "modelDescription.xml" in names and any(n.startswith("binaries/") for n in names)
+    res = fmpy.simulate_fmu(str(out), stop_time=1.0, output_interval=1e-4, output=["acc"])
+    assert len(res) == 10001 and np.all(np.isfinite(res["acc"]))

@@ -1,0 +1,108 @@
+"""Measurement files and the CLI's handling of bad input: one line, non-zero exit, nothing lost."""
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+from pydiag.measurement import Measurement, MeasurementError, read_measurement, write_measurement
+
+
+def write_csv(path, header, rows, meta=None):
+    lines = ([f"# meta: {json.dumps(meta)}"] if meta else []) + [",".join(header)]
+    lines += [",".join(str(v) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_round_trip_keeps_channels_rate_and_metadata(tmp_path):
+    m = Measurement({"acc": np.sin(np.arange(100)), "disp": np.arange(100.0)}, 2000.0, {"snr": 10})
+    write_measurement(tmp_path / "m.csv", m)
+    back = read_measurement(tmp_path / "m.csv")
+    assert back.sample_rate_hz == pytest.approx(2000.0)
+    assert back.metadata == {"snr": 10}
+    np.testing.assert_array_equal(back.channels["acc"], m.channels["acc"])
+    assert list(read_measurement(tmp_path / "m.csv", columns=["disp"]).channels) == ["disp"]
+
+
+def test_existing_file_is_not_overwritten(tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text("precious")
+    with pytest.raises(MeasurementError, match="exists"):
+        write_measurement(path, Measurement({"a": np.zeros(3)}, 1.0))
+    assert path.read_text() == "precious"
+
+
+@pytest.mark.parametrize("header,rows,kwargs,message", [
+    (["time_s", "acc"], [[0, 1], [1e-4, float("nan")], [2e-4, 1]], {}, "contains NaN"),
+    (["time_s", "acc"], [[0, 1], [1e-4, 2]], {"columns": ["disp"]}, "not in the measurement"),
+    (["acc"], [[1], [2]], {}, "give --sample-rate"),
+    (["time_s", "acc"], [[0, 1], [0, 2]], {}, "increase strictly"),
+    (["time_s", "acc"], [[0, 1], [1e-4, "x"]], {}, "non-numeric"),
+    (["time_s", "acc"], [[0, 1], [1e-4, 2]], {"sample_rate_hz": 5000.0}, "disagrees"),
+])
+def test_bad_measurements_are_refused(tmp_path, header, rows, kwargs, message):
+    path = write_csv(tmp_path / "m.csv", header, rows)
+    with pytest.raises(MeasurementError, match=message):
+        read_measurement(path, **kwargs)
+
+
+def test_unreadable_file(tmp_path):
+    with pytest.raises(MeasurementError, match="cannot read"):
+        read_measurement(tmp_path / "missing.csv")
+    (tmp_path / "bin.csv").write_bytes(b"\xff\xfe\x00\x81")
+    with pytest.raises(MeasurementError, match="cannot read"):
+        read_measurement(tmp_path / "bin.csv")
+
+
+@pytest.fixture(scope="module")
+def short_measurement(tmp_path_factory, gear_fmu):
+    path = tmp_path_factory.mktemp("meas") / "m.csv"
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--set", "a_f=0.3",
+                  "--duration", "0.25", "--snr", "10", "--out", str(path), "--quiet")
+    assert res.returncode == 0, res.stderr
+    return path
+
+
+def test_simulate_writes_channels_and_operating_point(short_measurement):
+    m = read_measurement(short_measurement)
+    assert list(m.channels) == ["acc", "disp"] and m.n_samples == 2500
+    assert m.metadata["set"] == {"a_f": 0.3} and m.metadata["snr"] == 10
+    assert m.metadata["kinematics"] == {"Np": 14, "Ng": 21, "f_pinion": 25.0}
+
+
+@pytest.mark.parametrize("extra,message", [
+    (["--column", "nope"], "not in the measurement"),
+    (["--column", "acc", "--particles", "1"], "at least 2 particles"),
+])
+def test_diagnose_rejects_bad_requests(gear_fmu, short_measurement, extra, message):
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(short_measurement), "--quiet", *extra)
+    assert res.returncode == 2, res.stdout
+    assert message in res.stderr and "Traceback" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_diagnose_rejects_low_rate_short_and_unknown_channel(gear_fmu, tmp_path):
+    t = np.arange(0, 1.0, 1 / 2000.0)
+    low = write_csv(tmp_path / "low.csv", ["time_s", "acc"], zip(t, np.sin(t)))
+    t = np.arange(0, 0.05, 1e-4)
+    short = write_csv(tmp_path / "short.csv", ["time_s", "acc"], zip(t, np.sin(t)))
+    t = np.arange(0, 0.5, 1e-4)
+    other = write_csv(tmp_path / "other.csv", ["time_s", "mystery"], zip(t, np.sin(t)))
+    for path, message in ((low, "below twice the highest band"),
+                          (short, "shorter than one fundamental period"),
+                          (other, "sensor 'mystery' is not a variable")):
+        res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                      str(path), "--quiet")
+        assert res.returncode == 2 and message in res.stderr, res.stderr
+        assert "Traceback" not in res.stderr
+
+
+def test_json_may_not_replace_the_measurement(gear_fmu, short_measurement):
+    before = short_measurement.read_text()
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(short_measurement), "--json", str(short_measurement), "--quiet")
+    assert res.returncode == 2 and "overwrite the measurement" in res.stderr
+    assert short_measurement.read_text() == before
