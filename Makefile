@@ -14,10 +14,14 @@ BRIDGE := $(wildcard fmu_build/*.py)
 
 venv: $(STAMP)
 
-$(STAMP): requirements.txt pyproject.toml
+# The checkout goes on the venv's path through a .pth file, and `pydiag` is a launcher:
+# no build step, edits take effect at once.
+$(STAMP): requirements.txt
 	$(PYTHON_BOOT) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
-	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(PY) -c 'import site, os; open(os.path.join(site.getsitepackages()[0], "gear_diag.pth"), "w").write(os.getcwd() + "\n")'
+	printf '#!/bin/sh\nexec "%s/bin/python" -m pydiag "$$@"\n' "$(abspath $(VENV))" > $(VENV)/bin/pydiag
+	chmod +x $(VENV)/bin/pydiag
 	touch $(STAMP)
 
 fmu: $(FMUS)
