@@ -45,6 +45,7 @@ class Variable:
     binding: Tree | None
     fixed: bool | None
     location: str | None
+    nominal: Tree | None = None
 
 
 @dataclass
@@ -133,6 +134,7 @@ def flatten(model_file: str | Path, model: str) -> FlatModel:
             binding=var.get("binding"),
             fixed=None if fixed is None else bool(fixed),
             location=sources.locate(var.get("source_span")),
+            nominal=var.get("nominal"),
         )
     missing = set(roles) - set(variables)
     if missing:

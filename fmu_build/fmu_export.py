@@ -35,7 +35,7 @@ def fmi_headers_dir() -> str:
 
 
 def _opts(unit: str | None, description: str | None, **extra) -> dict:
-    opts = dict(extra)
+    opts = {k: v for k, v in extra.items() if v is not None}
     if unit:
         opts["unit"] = unit
     if description:
@@ -68,7 +68,7 @@ def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
     for s in system.states:
         if s.start.is_constant():
             var = dae.add(s.name, "local", "continuous",
-                          _opts(s.unit, s.description, start=float(s.start)))
+                          _opts(s.unit, s.description, start=float(s.start), nominal=s.nominal))
             x_vars.append(var)
             physical.append(var)
         else:
@@ -77,7 +77,8 @@ def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
                 raise ModelicaBuildError(f"name '{name}' is reserved for the start offset of "
                                          f"state '{s.name}'")
             var = dae.add(name, "local", "continuous", _opts(
-                s.unit, f"{s.name} minus its parameter-dependent start value", start=0.0))
+                s.unit, f"{s.name} minus its parameter-dependent start value", start=0.0,
+                nominal=s.nominal))
             x_vars.append(var)
             delta_states.append((s, len(physical)))
             physical.append(None)

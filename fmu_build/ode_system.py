@@ -34,6 +34,7 @@ class Parameter(Quantity):
 class State(Quantity):
     symbol: SX = field(default_factory=lambda: SX(0))
     start: SX = field(default_factory=lambda: SX(0))  # may depend on parameters
+    nominal: float | None = None  # scale of the state; solvers use it for absolute tolerance
 
 
 @dataclass
@@ -145,7 +146,15 @@ def build_ode_system(model: FlatModel) -> OdeSystem:
         if ca.depends_on(start, ca.vertcat(t, *[sym[n] for n in ders])):
             raise ModelicaBuildError(f"start value of state '{name}' must depend on parameters only",
                                      var.location)
-        states.append(State(name, var.unit, var.description, sym[name], start))
+        nominal = None
+        if var.nominal is not None:
+            value = in_free_params(tr.translate(var.nominal, env))
+            p_syms = ca.vertcat(*[q.symbol for q in free])
+            value = ca.Function("nominal", [p_syms], [value])([q.value for q in free])
+            nominal = abs(float(value))
+            if not nominal > 0:
+                raise ModelicaBuildError(f"nominal of state '{name}' must be positive", var.location)
+        states.append(State(name, var.unit, var.description, sym[name], start, nominal))
 
     def computed(role: str) -> list[Computed]:
         return [Computed(v.name, v.unit, v.description, solved[v.name])

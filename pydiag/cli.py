@@ -1,4 +1,4 @@
-"""Command line: pydiag simulate | diagnose | regress | demo.
+"""Command line: pydiag simulate | diagnose | batch | regress | demo.
 
 Library modules never print; this module does. Known failures end with one line on
 stderr and exit status 2; a failed regression check exits 1.
@@ -156,6 +156,36 @@ def cmd_diagnose(args) -> int:
     return 0
 
 
+# ---------------------------------------------------------------------- batch
+def cmd_batch(args) -> int:
+    from pydiag import batch
+
+    if Path(args.out).exists():
+        raise UsageError(f"{args.out} exists; choose another name")
+    paths = batch.find_measurements(args.measurements)
+    estimator = dict(n_particles=args.particles, iterations=args.iterations, seed=args.seed,
+                     polish_evaluations=args.polish, feature_mode=args.features)
+    tasks = [batch.BatchTask(p, args.fmu, estimator, tuple(args.column) if args.column else None,
+                             args.sample_rate) for p in paths]
+    bar = None
+    if not args.quiet:
+        from tqdm import tqdm
+        bar = tqdm(total=len(tasks), desc="batch", unit="meas", file=sys.stderr, leave=False)
+    try:
+        rows = batch.run_batch(tasks, args.scheduler, args.workers,
+                               (lambda done, total: bar.update(done - bar.n)) if bar else None)
+    finally:
+        if bar:
+            bar.close()
+    batch.write_results(rows, args.out)
+    failed = [r for r in rows if r["status"] != "ok"]
+    print(f"wrote {args.out}: {len(rows)} measurements, {len(rows) - len(failed)} diagnosed, "
+          f"{len(failed)} failed")
+    for r in failed:
+        print(f"  {r['measurement']}: {r['message']}")
+    return 0
+
+
 # ---------------------------------------------------------------------- regress
 def cmd_regress(args) -> int:
     from pydiag import regress
@@ -201,7 +231,8 @@ def _add_optimiser_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--polish", type=int, default=150,
                    help="Nelder-Mead polish evaluations, 0 to skip (default 150)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--workers", type=int, default=None, help="worker processes (default: cores)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker processes (default: cores); batch: measurements in parallel")
     p.add_argument("--features", choices=("lines", "paper"), default="lines",
                    help="every synchronous line in the bands, or the paper's band maxima")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -233,6 +264,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", help="write the result as JSON here")
     _add_optimiser_args(p)
     p.set_defaults(func=cmd_diagnose)
+
+    p = sub.add_parser("batch", help="diagnose many measurements (locally or on Dask)")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--measurements", required=True, help="folder of CSV files, or a glob")
+    p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
+    p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
+    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
+    p.add_argument("--sample-rate", type=float, default=None, help="Hz, if CSVs have no time_s")
+    _add_optimiser_args(p)
+    p.set_defaults(func=cmd_batch)
 
     p = sub.add_parser("regress", help="check an FMU against golden spectra")
     p.add_argument("--fmu", required=True)

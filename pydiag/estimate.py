@@ -73,7 +73,7 @@ class PlantSpec:
     sensors: tuple[str, ...]
     sample_rate_hz: float
     fixed_values: dict = field(default_factory=dict)
-    relative_tolerance: float = 1e-6
+    relative_tolerance: float | None = None
 
     def open(self) -> FmuPlant:
         return FmuPlant(self.fmu_path, self.sensors, self.sample_rate_hz,
@@ -178,7 +178,7 @@ class FaultEstimator:
                  iterations: int = 20, seed: int = 0, polish_evaluations: int = 150,
                  polish_starts: int = 3,
                  feature_mode: str = "lines", warmup_s: float = 0.05,
-                 n_workers: int | None = None, relative_tolerance: float = 1e-6,
+                 n_workers: int | None = None, relative_tolerance: float | None = None,
                  progress: Callable[[int, int, float], None] | None = None) -> None:
         if n_particles < 2 or iterations < 1:
             raise EstimationError("need at least 2 particles and 1 iteration")

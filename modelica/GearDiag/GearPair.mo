@@ -44,8 +44,9 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   Real contact = 1 "Contact factor, 1 while the teeth touch (effects)";
 
   // ---- states and internal variables ----
-  Real x(unit="m", start=x_static, fixed=true) "Mesh displacement along the line of action";
-  Real v(unit="m/s", start=0, fixed=true) "Mesh velocity";
+  // Nominals set the solvers' absolute tolerance (fmpy's CVode: atol = rtol*nominal).
+  Real x(unit="m", start=x_static, fixed=true, nominal=1e-5) "Mesh displacement along the line of action";
+  Real v(unit="m/s", start=0, fixed=true, nominal=1e-3) "Mesh velocity";
   Real toothIndex "Index of the pinion tooth in mesh, 0 is the faulty one";
   Real a "Stiffness variation amplitude of the tooth in mesh";
   Real sigma "Normalised stiffness wave";
