@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
 
+from pydiag.adapter import AdapterError, load_adapter
 from pydiag.estimate import EstimationError, FaultEstimator
 from pydiag.measurement import MeasurementError, read_measurement
 from pydiag.plant import PlantError
@@ -33,6 +34,7 @@ class BatchTask:
     estimator: dict = field(default_factory=dict)
     columns: tuple[str, ...] | None = None
     sample_rate_hz: float | None = None
+    adapter: str | None = None  # path of an adapter TOML
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -51,11 +53,13 @@ def diagnose_task(task: BatchTask) -> dict:
     try:
         m = read_measurement(task.measurement, task.sample_rate_hz,
                              list(task.columns) if task.columns else None)
-        result = FaultEstimator(task.fmu, n_workers=1, **task.estimator).fit(m)
+        adapter = load_adapter(task.adapter) if task.adapter else None
+        result = FaultEstimator(task.fmu, adapter=adapter, n_workers=1, **task.estimator).fit(m)
         row.update(status="ok", message="", fault_mode=result.fault_mode,
                    severity=result.severity, error=result.error,
                    evaluations=result.evaluations, **result.parameters)
-    except (MeasurementError, EstimationError, PlantError, ValueError, OSError) as err:
+    except (MeasurementError, EstimationError, PlantError, AdapterError, ValueError,
+            OSError) as err:
         row.update(status="error", message=str(err))
     except Exception as err:  # a broken FMU must not take the batch down
         row.update(status="error", message=f"{type(err).__name__}: {err}")

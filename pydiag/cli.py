@@ -1,4 +1,4 @@
-"""Command line: pydiag simulate | diagnose | batch | regress | demo.
+"""Command line: pydiag simulate | diagnose | batch | regress | inspect | demo.
 
 Library modules never print; this module does. Known failures end with one line on
 stderr and exit status 2; a failed regression check exits 1.
@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pydiag.adapter import Adapter, AdapterError, load_adapter
 from pydiag.estimate import EstimationError, FaultEstimator
 from pydiag.measurement import Measurement, MeasurementError, read_measurement, write_measurement
 from pydiag.noise import add_white_noise
@@ -24,7 +25,7 @@ from pydiag.plant import FmuPlant, PlantError
 #: for the once-per-turn transmission error (see docs/method.md for the measurement).
 DEFAULT_SENSORS = ("acc", "disp")
 DEFAULT_WARMUP_S = 0.05
-KNOWN_ERRORS = (PlantError, MeasurementError, EstimationError, ValueError, OSError)
+KNOWN_ERRORS = (PlantError, MeasurementError, EstimationError, AdapterError, ValueError, OSError)
 
 
 class UsageError(Exception):
@@ -63,16 +64,34 @@ def _outputs_of(fmu: str) -> list[str]:
 # ---------------------------------------------------------------------- simulate
 def simulate_measurement(fmu: str, values: dict[str, float], duration_s: float | None,
                          sample_rate_hz: float, snr: float | None, seed: int,
-                         sensors: tuple[str, ...] | None, warmup_s: float = DEFAULT_WARMUP_S
-                         ) -> Measurement:
-    sensors = sensors or _default_sensors(_outputs_of(fmu))
-    with FmuPlant(fmu, sensors, sample_rate_hz) as plant:
-        try:
-            kin = plant.kinematics()
-        except PlantError:
-            kin = None
+                         sensors: tuple[str, ...] | None, warmup_s: float = DEFAULT_WARMUP_S,
+                         adapter: Adapter | None = None) -> Measurement:
+    """A (noisy) record of the FMU; channels named by the adapter, else by the outputs."""
+    if adapter is not None:
+        if sensors:
+            raise UsageError("give the sensors in the adapter or with --sensor, not both")
+        channels = [(s.channel, s.scale) for s in adapter.sensors]
+        sensors = tuple(s.variable for s in adapter.sensors)
+        warmup_s = adapter.warmup_s
+    else:
+        sensors = sensors or _default_sensors(_outputs_of(fmu))
+        channels = [(s, 1.0) for s in sensors]
+    with FmuPlant(fmu, sensors, sample_rate_hz,
+                  adapter.relative_tolerance if adapter else None,
+                  adapter.start_values if adapter else None,
+                  adapter.engine if adapter else "auto") as plant:
+        if adapter is not None:
+            from pydiag.adapter import check_against_fmu
+            check_against_fmu(adapter, plant.variables)
+            kin = adapter.resolve_kinematics({**plant.parameters(), **values})
+        else:
+            try:
+                kin = plant.kinematics()
+            except PlantError:
+                kin = None
         if duration_s is None:
-            duration_s = 10 * kin.period_s if kin else 1.0
+            duration_s = (10 * kin.period_s if kin else
+                          adapter.window_s if adapter and adapter.window_s else 1.0)
         if not duration_s > 0:
             raise UsageError(f"--duration must be positive, got {duration_s}")
         y = plant.simulate(values, duration_s, warmup_s)
@@ -81,14 +100,21 @@ def simulate_measurement(fmu: str, values: dict[str, float], duration_s: float |
         if kin:
             meta["kinematics"] = {"Np": kin.n_pinion, "Ng": kin.n_gear, "f_pinion": kin.f_pinion_hz}
     rng = np.random.default_rng(seed)
-    channels = {s: (add_white_noise(y[i], snr, rng) if snr else y[i]) for i, s in enumerate(sensors)}
-    return Measurement(channels, sample_rate_hz, meta)
+    signals = {}
+    for i, (name, scale) in enumerate(channels):
+        clean = scale * y[i]
+        signals[name] = add_white_noise(clean, snr, rng) if snr else clean
+    return Measurement(signals, sample_rate_hz, meta)
+
+
+def _adapter(args) -> Adapter | None:
+    return load_adapter(args.adapter) if getattr(args, "adapter", None) else None
 
 
 def cmd_simulate(args) -> int:
     values = _parse_set(args.set)
     m = simulate_measurement(args.fmu, values, args.duration, args.sample_rate, args.snr, args.seed,
-                             tuple(args.sensor) if args.sensor else None)
+                             tuple(args.sensor) if args.sensor else None, adapter=_adapter(args))
     write_measurement(args.out, m, overwrite=args.force)
     if not args.quiet:
         print(f"wrote {args.out}: {m.n_samples} samples at {m.sample_rate_hz:g} Hz, "
@@ -131,7 +157,8 @@ def format_result(result, truth: dict | None = None) -> str:
 
 def run_diagnosis(fmu: str, measurement: Measurement, args):
     update, close = _progress_bar(args.quiet)
-    est = FaultEstimator(fmu, n_particles=args.particles, iterations=args.iterations,
+    est = FaultEstimator(fmu, adapter=_adapter(args), n_particles=args.particles,
+                         iterations=args.iterations,
                          seed=args.seed, polish_evaluations=args.polish,
                          feature_mode=args.features, n_workers=args.workers, progress=update)
     try:
@@ -165,8 +192,10 @@ def cmd_batch(args) -> int:
     paths = batch.find_measurements(args.measurements)
     estimator = dict(n_particles=args.particles, iterations=args.iterations, seed=args.seed,
                      polish_evaluations=args.polish, feature_mode=args.features)
+    if args.adapter:
+        load_adapter(args.adapter)  # fail early, once, on a bad adapter
     tasks = [batch.BatchTask(p, args.fmu, estimator, tuple(args.column) if args.column else None,
-                             args.sample_rate) for p in paths]
+                             args.sample_rate, args.adapter) for p in paths]
     bar = None
     if not args.quiet:
         from tqdm import tqdm
@@ -189,10 +218,17 @@ def cmd_batch(args) -> int:
 # ---------------------------------------------------------------------- regress
 def cmd_regress(args) -> int:
     from pydiag import regress
+    adapter = _adapter(args)
     if args.bless:
-        sensors = tuple(args.sensor) if args.sensor else _default_sensors(_outputs_of(args.fmu))
-        with FmuPlant(args.fmu, sensors, args.sample_rate) as plant:
-            path = regress.bless(plant, args.golden)
+        if adapter is not None:
+            sensors = tuple(s.variable for s in adapter.sensors)
+        else:
+            sensors = tuple(args.sensor) if args.sensor else _default_sensors(_outputs_of(args.fmu))
+        with FmuPlant(args.fmu, sensors, args.sample_rate,
+                      adapter.relative_tolerance if adapter else None,
+                      adapter.start_values if adapter else None,
+                      adapter.engine if adapter else "auto") as plant:
+            path = regress.bless(plant, args.golden, adapter=adapter)
         print(f"blessed {path}")
         return 0
     report = regress.check(args.fmu, args.golden, args.rtol)
@@ -203,6 +239,17 @@ def cmd_regress(args) -> int:
     print(f"{status}: {report.cases} cases x {len(report.sensors)} sensors, worst deviation "
           f"{report.worst_relative:.2e} of the largest line (tolerance {report.rtol:.1e})")
     return 0 if report.passed else 1
+
+
+# ---------------------------------------------------------------------- inspect
+def cmd_inspect(args) -> int:
+    from pydiag.inspect_fmu import describe, format_info
+
+    for i, fmu in enumerate(args.fmu):
+        if i:
+            print()
+        print(format_info(describe(fmu), args.all))
+    return 0
 
 
 # ---------------------------------------------------------------------- demo
@@ -251,6 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--snr", type=float, default=None, help="signal/noise power ratio per channel")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--sensor", action="append", help="output to record (repeat; default acc, disp)")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU (sensors, start values)")
     p.add_argument("--out", required=True, help="CSV file to write")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
     p.add_argument("--quiet", action="store_true")
@@ -262,6 +310,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
     p.add_argument("--sample-rate", type=float, default=None, help="Hz, if the CSV has no time_s")
     p.add_argument("--json", help="write the result as JSON here")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
     _add_optimiser_args(p)
     p.set_defaults(func=cmd_diagnose)
 
@@ -270,6 +319,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--measurements", required=True, help="folder of CSV files, or a glob")
     p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
     p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
     p.add_argument("--sample-rate", type=float, default=None, help="Hz, if CSVs have no time_s")
     _add_optimiser_args(p)
@@ -283,7 +333,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="tolerance, fraction of the largest line (default 2e-3)")
     p.add_argument("--sensor", action="append", help="output to check when blessing (repeat)")
     p.add_argument("--sample-rate", type=float, default=10_000.0, help="Hz when blessing")
+    p.add_argument("--adapter", help="adapter TOML (sensors, start values, kinematics) for --bless")
     p.set_defaults(func=cmd_regress)
+
+    p = sub.add_parser("inspect", help="describe an FMU: version, interfaces, settable variables")
+    p.add_argument("fmu", nargs="+")
+    p.add_argument("--all", action="store_true", help="list every variable, not only the interface")
+    p.set_defaults(func=cmd_inspect)
 
     p = sub.add_parser("demo", help="simulate a Table 1 case at SNR 10 and diagnose it")
     p.add_argument("--fmu", required=True)

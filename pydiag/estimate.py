@@ -1,21 +1,24 @@
 """Estimate fault parameters by particle swarm optimisation of the spectral error.
 
-Each evaluation simulates the FMU for a start-up ``warmup_s`` plus one fundamental
-period (the model is periodic, so one period holds all its lines exactly) and
-compares its features with the measurement's, channel by channel. The measurement
-may be long: its features average the noise over all of its whole periods.
+Each evaluation simulates the FMU for a start-up ``warmup_s`` plus the analysed window
+(one fundamental period for gear models: the model is periodic, so one period holds all
+its lines exactly) and compares its features with the measurement's, channel by
+channel. The measurement may be long: its features average the noise over all of its
+whole periods.
 
 The swarm (pyswarms GlobalBestPSO, seeded, Clerc's constriction coefficients) finds
 candidate basins; a bounded trust-region least-squares polish (scipy
 ``least_squares``, method "trf") on the residuals of Eq. (12) then converges in each of
 the best few distinct personal-best positions, and the lowest error wins. Measured on
 Table 1 case 2: polishing only the global best converged to f_f = 0 (E = 0.50, the
-truth scores 0.066). Measured on Table 1 case 5: the swarm alone (16 x 20)
-stopped at E = 0.157 while the true parameters score 0.040, and a Nelder-Mead polish
-of 150 evaluations did not close the gap: the valley is narrow in f_ate (displacement
-channel) and shallow in a_f, f_f, which a Gauss-Newton step handles and a simplex does
-not. The Jacobian is by forward differences, its columns simulated in parallel.
+truth scores 0.066). Measured on case 5: the swarm alone (16 x 20) stopped at E = 0.157
+while the true parameters score 0.040, and a Nelder-Mead polish of 150 evaluations did
+not close the gap: the valley is narrow in f_ate (displacement channel) and shallow in
+a_f, f_f, which a Gauss-Newton step handles and a simplex does not. The Jacobian is by
+forward differences, its columns simulated in parallel.
 
+What the FMU is (which variables are fault parameters and sensors, its kinematics) comes
+from an :class:`~pydiag.adapter.Adapter`; without one, the GearDiag conventions apply.
 Particles and Jacobian columns are evaluated in worker processes, each with its own
 FMU instance; the result does not depend on the number of workers.
 """
@@ -32,8 +35,9 @@ from typing import Callable
 import numpy as np
 import scipy.optimize
 
+from pydiag.adapter import CANONICAL_ROLES, Adapter, AdapterError, check_against_fmu, gear_default
 from pydiag.classify import classify
-from pydiag.features import Features, max_band_freq_hz, signal_features
+from pydiag.features import Features, KinematicFeaturizer, SpectrumFeaturizer
 from pydiag.kinematics import GearKinematics
 from pydiag.measurement import Measurement
 from pydiag.objective import spectral_residuals
@@ -46,11 +50,17 @@ class EstimationError(Exception):
 
 @dataclass(frozen=True)
 class FaultParameter:
-    """A parameter to estimate and its search bounds."""
+    """A parameter to estimate (``name`` is its role), its FMU variable and bounds."""
 
     name: str
     low: float
     high: float
+    variable: str | None = None  # defaults to name
+    scale: float = 1.0  # FMU value = scale * estimate
+
+    @property
+    def fmu_variable(self) -> str:
+        return self.variable or self.name
 
 
 #: The paper's four fault parameters (a0 = 0.1 is known) with their physical ranges.
@@ -74,10 +84,11 @@ class PlantSpec:
     sample_rate_hz: float
     fixed_values: dict = field(default_factory=dict)
     relative_tolerance: float | None = None
+    engine: str = "auto"
 
     def open(self) -> FmuPlant:
         return FmuPlant(self.fmu_path, self.sensors, self.sample_rate_hz,
-                        self.relative_tolerance, self.fixed_values)
+                        self.relative_tolerance, self.fixed_values, self.engine)
 
 
 @dataclass
@@ -99,25 +110,27 @@ class DiagnosisResult:
 
 
 class SpectralObjective:
-    """Parameter vector -> spectral error against fixed reference features."""
+    """Parameter vector -> Eq. (12) residuals against fixed reference features."""
 
-    def __init__(self, spec: PlantSpec, kinematics: GearKinematics, names: list[str],
-                 reference: dict[str, Features], feature_mode: str, warmup_s: float) -> None:
+    def __init__(self, spec: PlantSpec, channels: list[str], scales: list[float],
+                 parameters: list[FaultParameter], reference: dict[str, Features],
+                 featurizer, warmup_s: float) -> None:
         self.spec = spec
-        self.kinematics = kinematics
-        self.names = names
+        self.channels = channels
+        self.scales = scales
+        self.parameters = parameters
         self.reference = reference
-        self.feature_mode = feature_mode
+        self.featurizer = featurizer
         self.warmup_s = warmup_s
         self._plant: FmuPlant | None = None
 
     def model_features(self, x: np.ndarray) -> dict[str, Features]:
         if self._plant is None:
             self._plant = self.spec.open()
-        values = dict(zip(self.names, map(float, x)))
-        y = self._plant.simulate(values, self.kinematics.period_s, self.warmup_s)
-        return {s: signal_features(y[i], self.spec.sample_rate_hz, self.kinematics,
-                                   self.feature_mode) for i, s in enumerate(self.spec.sensors)}
+        values = {p.fmu_variable: p.scale * float(v) for p, v in zip(self.parameters, x)}
+        y = self._plant.simulate(values, self.featurizer.duration_s, self.warmup_s)
+        return {c: self.featurizer(self.scales[i] * y[i], self.spec.sample_rate_hz)
+                for i, c in enumerate(self.channels)}
 
     def residuals(self, x: np.ndarray) -> np.ndarray | None:
         """Eq. (12) residuals of every channel, concatenated; None if the simulation fails."""
@@ -125,9 +138,9 @@ class SpectralObjective:
             model = self.model_features(x)
         except PlantError:
             return None
-        return np.concatenate([spectral_residuals(model[s].amplitude, self.reference[s].amplitude,
-                                                  self.reference[s].noise_power)
-                               for s in self.spec.sensors])
+        return np.concatenate([spectral_residuals(model[c].amplitude, self.reference[c].amplitude,
+                                                  self.reference[c].noise_power)
+                               for c in self.channels])
 
     def __call__(self, x: np.ndarray) -> float:
         """Root-sum-square of the per-channel Eq. (12) errors; inf if the simulation fails."""
@@ -159,36 +172,41 @@ class FaultEstimator:
 
     Args:
         fmu_path: the plant FMU
-        kinematics: gear kinematics; read from the FMU's Np, Ng, f_pinion when None
-        parameters: what to estimate, with bounds
-        fixed_values: FMU start values set in every run (not estimated)
+        adapter: what the FMU is; None: GearDiag conventions (paper parameter names,
+            channels named as outputs, kinematics from Np, Ng, f_pinion)
+        kinematics: override the adapter's gear kinematics
+        parameters: override the adapter's fault parameters and bounds
+        fixed_values: FMU start values set in every run, on top of the adapter's
         n_particles, iterations: swarm size and iterations
         seed: seed of the swarm; the same seed gives the same answer
         polish_evaluations: simulation budget of each least-squares polish (0 disables it)
         polish_starts: how many distinct swarm positions to polish from
-        feature_mode: "lines" or "paper" (see :mod:`pydiag.features`)
-        warmup_s: simulated start-up time discarded before the analysed period
+        feature_mode: "lines" or "paper" (see :mod:`pydiag.features`), gear models only
+        warmup_s: simulated start-up discarded before the analysed window (default: adapter's)
         n_workers: worker processes (default: all cores); 1 evaluates in this process
+        relative_tolerance, engine: simulation settings (default: adapter's)
         progress: called as progress(done, total, best_error) after each batch
     """
 
-    def __init__(self, fmu_path: str, kinematics: GearKinematics | None = None,
-                 parameters: tuple[FaultParameter, ...] = GEAR_FAULT_PARAMETERS,
+    def __init__(self, fmu_path: str, adapter: Adapter | None = None,
+                 kinematics: GearKinematics | None = None,
+                 parameters: tuple[FaultParameter, ...] | None = None,
                  fixed_values: dict[str, float] | None = None, n_particles: int = 16,
                  iterations: int = 20, seed: int = 0, polish_evaluations: int = 150,
-                 polish_starts: int = 3,
-                 feature_mode: str = "lines", warmup_s: float = 0.05,
-                 n_workers: int | None = None, relative_tolerance: float | None = None,
+                 polish_starts: int = 3, feature_mode: str = "lines",
+                 warmup_s: float | None = None, n_workers: int | None = None,
+                 relative_tolerance: float | None = None, engine: str | None = None,
                  progress: Callable[[int, int, float], None] | None = None) -> None:
         if n_particles < 2 or iterations < 1:
             raise EstimationError("need at least 2 particles and 1 iteration")
-        for p in parameters:
+        for p in parameters or ():
             if not p.low < p.high:
                 raise EstimationError(f"bounds of '{p.name}' must satisfy low < high, "
                                       f"got [{p.low}, {p.high}]")
         self.fmu_path = str(fmu_path)
+        self.adapter = adapter
         self.kinematics = kinematics
-        self.parameters = tuple(parameters)
+        self.parameters = tuple(parameters) if parameters else None
         self.fixed_values = dict(fixed_values or {})
         self.n_particles = n_particles
         self.iterations = iterations
@@ -199,40 +217,70 @@ class FaultEstimator:
         self.warmup_s = warmup_s
         self.n_workers = n_workers or os.cpu_count() or 1
         self.relative_tolerance = relative_tolerance
+        self.engine = engine
         self.progress = progress
 
     # ------------------------------------------------------------------ set-up
+    def _adapter_for(self, measurement: Measurement) -> Adapter:
+        if self.adapter is not None:
+            return self.adapter
+        return gear_default(list(measurement.channels))
+
     def objective_for(self, measurement: Measurement) -> SpectralObjective:
         """The objective this estimator minimises for ``measurement`` (for checks and plots)."""
-        spec = PlantSpec(self.fmu_path, tuple(measurement.channels), measurement.sample_rate_hz,
-                         self.fixed_values, self.relative_tolerance)
-        kin = self.kinematics
-        if kin is None:
-            try:
-                with spec.open() as plant:
-                    kin = plant.kinematics()
-            except PlantError as err:
-                raise EstimationError(str(err)) from None
-        top = max_band_freq_hz(kin)
+        adapter = self._adapter_for(measurement)
+        maps = [s for s in adapter.sensors if s.channel in measurement.channels]
+        missing = [s.channel for s in adapter.sensors if s.channel not in measurement.channels]
+        if self.adapter is not None and missing:
+            raise EstimationError(f"the measurement lacks channel(s) {', '.join(missing)} that "
+                                  f"the adapter names; it has: {', '.join(measurement.channels)}")
+        parameters = self.parameters or tuple(
+            FaultParameter(p.role, p.low, p.high, p.variable, p.scale)
+            for p in adapter.fault_parameters)
+        spec = PlantSpec(self.fmu_path, tuple(s.variable for s in maps), measurement.sample_rate_hz,
+                         {**adapter.start_values, **self.fixed_values},
+                         self.relative_tolerance or adapter.relative_tolerance,
+                         self.engine or adapter.engine)
+        try:
+            with spec.open() as plant:
+                check_against_fmu(adapter, plant.variables)
+                for p in parameters:
+                    if p.fmu_variable not in plant.variables:
+                        raise EstimationError(f"fault parameter '{p.fmu_variable}' is not in "
+                                              f"{plant.fmu_path.name}")
+                kin = self.kinematics or adapter.resolve_kinematics(
+                    {**plant.parameters(), **spec.fixed_values})
+        except (PlantError, AdapterError) as err:
+            raise EstimationError(str(err)) from None
+        if kin is not None:
+            featurizer = KinematicFeaturizer(kin, self.feature_mode)
+            top = featurizer.max_freq_hz
+            what = "the highest band edge"
+        else:
+            featurizer = SpectrumFeaturizer(adapter.window_s, adapter.max_freq_hz)
+            top = adapter.max_freq_hz
+            what = "the adapter's max_freq_hz"
         if measurement.sample_rate_hz < 2 * top:
             raise EstimationError(
-                f"sample rate {measurement.sample_rate_hz:g} Hz is below twice the highest band "
-                f"edge ({top:g} Hz): need at least {2 * top:g} Hz")
-        if measurement.duration_s < kin.period_s:
-            raise EstimationError(
-                f"measurement of {measurement.duration_s:.4g} s is shorter than one fundamental "
-                f"period ({kin.period_s:.4g} s = {kin.n_assembly_phases} pinion turns)")
-        reference = {name: signal_features(sig, measurement.sample_rate_hz, kin, self.feature_mode)
-                     for name, sig in measurement.channels.items()}
-        return SpectralObjective(spec, kin, [p.name for p in self.parameters], reference,
-                                 self.feature_mode, self.warmup_s)
+                f"sample rate {measurement.sample_rate_hz:g} Hz is below twice {what} "
+                f"({top:g} Hz): need at least {2 * top:g} Hz")
+        if measurement.duration_s < featurizer.duration_s:
+            raise EstimationError(f"measurement of {measurement.duration_s:.4g} s is shorter than "
+                                  f"{featurizer.describe_duration()}")
+        scales = [s.scale for s in maps]
+        reference = {s.channel: featurizer(measurement.channels[s.channel], measurement.sample_rate_hz)
+                     for s in maps}
+        warmup = self.warmup_s if self.warmup_s is not None else adapter.warmup_s
+        return SpectralObjective(spec, [s.channel for s in maps], scales, list(parameters),
+                                 reference, featurizer, warmup)
 
     # ------------------------------------------------------------------ fit
     def fit(self, measurement: Measurement) -> DiagnosisResult:
         started = time.perf_counter()
         objective = self.objective_for(measurement)
-        lows = np.array([p.low for p in self.parameters])
-        highs = np.array([p.high for p in self.parameters])
+        params = objective.parameters
+        lows = np.array([p.low for p in params])
+        highs = np.array([p.high for p in params])
         total = self.n_particles * self.iterations + self.polish_evaluations * self.polish_starts
         counter = {"n": 0, "best": float("inf")}
         history: list[float] = []
@@ -268,13 +316,16 @@ class FaultEstimator:
             objective.close()
         if not np.isfinite(best_cost):
             raise EstimationError("every simulation of the plant failed")
-        params = {p.name: float(v) for p, v in zip(self.parameters, best_x)}
-        cls = classify({**self.fixed_values, **params})
-        return DiagnosisResult(params, cls.fault_mode, cls.severity, cls.tooth_severity,
-                               cls.te_severity, best_cost, counter["n"],
+        estimate = {p.name: float(v) for p, v in zip(params, best_x)}
+        if any(role in estimate for role in CANONICAL_ROLES):
+            cls = classify({**self.fixed_values, **estimate})
+            labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
+        else:
+            labels = ("not_classified",) + ("unknown",) * 3
+        return DiagnosisResult(estimate, *labels, best_cost, counter["n"],
                                time.perf_counter() - started, history)
 
-    def _swarm(self, residuals, lows, highs, history) -> tuple[np.ndarray, float]:
+    def _swarm(self, residuals, lows, highs, history) -> tuple[list, list]:
         from pyswarms.single import GlobalBestPSO
 
         def batch(xs: np.ndarray) -> np.ndarray:
@@ -314,28 +365,27 @@ class FaultEstimator:
         return starts, chosen
 
     def _polish(self, residuals, x0, cost0, lows, highs) -> tuple[np.ndarray, float]:
-        """Bounded trust-region least squares from the swarm's best, parallel FD Jacobian."""
+        """Bounded trust-region least squares from a swarm position, parallel FD Jacobian."""
         n = x0.size
         step = 1e-3 * (highs - lows)
         cache: dict[bytes, np.ndarray] = {}
-        failed = None
+        last = None
 
         def fun(x: np.ndarray) -> np.ndarray:
-            nonlocal failed
+            nonlocal last
             key = np.asarray(x, dtype=float).tobytes()
             if key not in cache:
                 r = residuals(x)[0]
                 if r is None:  # a failed simulation: a large, finite residual keeps trf going
-                    r = np.full(failed.size if failed is not None else 1, 1e3)
+                    r = np.full(last.size if last is not None else 1, 1e3)
                 cache[key] = r
-                failed = r
+                last = r
             return cache[key]
 
         def jac(x: np.ndarray) -> np.ndarray:
             r0 = fun(x)
             h = np.where(x + step <= highs, step, -step)
-            shifted = x + np.diag(h)
-            cols = residuals(shifted)
+            cols = residuals(x + np.diag(h))
             return np.column_stack([((c if c is not None else r0) - r0) / h[j]
                                     for j, c in enumerate(cols)])
 

@@ -84,3 +84,58 @@ def signal_features(signal: np.ndarray, sample_rate_hz: float, kin: GearKinemati
     """Features of a time signal sampled at ``sample_rate_hz``."""
     spec = sync_spectrum(signal, sample_rate_hz, kin.period_s, max_freq_hz=max_band_freq_hz(kin))
     return features_from_spectrum(spec, kin, mode)
+
+
+# ---------------------------------------------------------------------- featurizers
+class KinematicFeaturizer:
+    """Gear models: features at the kinematic lines of one fundamental period."""
+
+    def __init__(self, kinematics: GearKinematics, mode: str = "lines") -> None:
+        if mode not in FEATURE_MODES:
+            raise ValueError(f"feature mode must be one of {FEATURE_MODES}, got {mode!r}")
+        self.kinematics = kinematics
+        self.mode = mode
+        self.duration_s = kinematics.period_s
+
+    @property
+    def max_freq_hz(self) -> float:
+        return max_band_freq_hz(self.kinematics)
+
+    def describe_duration(self) -> str:
+        k = self.kinematics
+        return (f"one fundamental period ({k.period_s:.4g} s = {k.n_assembly_phases} pinion "
+                "turns)")
+
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
+        return signal_features(signal, sample_rate_hz, self.kinematics, self.mode)
+
+
+class SpectrumFeaturizer:
+    """Any model: Hann-windowed FFT magnitudes of the first ``window_s`` up to ``max_freq_hz``.
+
+    The noise power per bin is estimated from the bins between ``max_freq_hz`` and the
+    Nyquist frequency (median power / ln 2, the mean of an exponential distribution), so a
+    band-limited signal's lines do not inflate it.
+    """
+
+    def __init__(self, window_s: float, max_freq_hz: float) -> None:
+        self.duration_s = window_s
+        self.max_freq_hz = max_freq_hz
+
+    def describe_duration(self) -> str:
+        return f"the analysis window ({self.duration_s:.4g} s)"
+
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
+        n = int(round(self.duration_s * sample_rate_hz))
+        signal = np.asarray(signal, dtype=float)
+        if signal.size < n:
+            raise ValueError(f"record of {signal.size / sample_rate_hz:.4g} s is shorter than the "
+                             f"analysis window ({self.duration_s:.4g} s)")
+        x = signal[:n] - np.mean(signal[:n])
+        window = np.hanning(n)
+        amp = 2.0 * np.abs(np.fft.rfft(x * window)) / np.sum(window)
+        freqs = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
+        keep = (freqs > 0) & (freqs <= self.max_freq_hz)
+        high = freqs > self.max_freq_hz
+        noise = float(np.median(amp[high] ** 2) / np.log(2)) if np.count_nonzero(high) > 8 else 0.0
+        return Features(amp[keep], freqs[keep], noise)

@@ -27,6 +27,7 @@ import fmpy
 import numpy as np
 from fmpy.model_description import ModelDescription
 
+from pydiag.fmu_archive import UnsafeArchive, check_binary, safe_extract
 from pydiag.kinematics import GearKinematics
 
 
@@ -110,7 +111,12 @@ class FmuPlant:
                           else "CoSimulation")
         self._unzipdir = tempfile.mkdtemp(prefix="pydiag_fmu_")
         try:
-            fmpy.extract(str(self.fmu_path), unzipdir=self._unzipdir)
+            safe_extract(self.fmu_path, self._unzipdir)
+            check_binary(self._unzipdir, self.model_description, self.fmu_path.name)
+        except UnsafeArchive as err:
+            shutil.rmtree(self._unzipdir, ignore_errors=True)
+            raise PlantError(str(err)) from None
+        try:
             self._instance = fmpy.instantiate_fmu(self._unzipdir, self.model_description,
                                                   fmi_type=self._fmi_type)
         except Exception as err:

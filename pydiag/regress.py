@@ -89,15 +89,27 @@ def _kinematics(plant: FmuPlant) -> GearKinematics | None:
 
 def bless(plant: FmuPlant, golden_path: str | Path, warmup_s: float = 0.05,
           window_s: float = 0.2, max_freq_hz: float = 2000.0,
-          cases: dict[str, dict[str, float]] | None = None) -> Path:
-    """Write (or replace: blessing is the explicit act of accepting new behaviour) the golden file."""
-    kin = _kinematics(plant)
+          cases: dict[str, dict[str, float]] | None = None, adapter=None) -> Path:
+    """Write (or replace: blessing is the explicit act of accepting new behaviour) the golden file.
+
+    With an adapter, its kinematics (or its [spectrum] window) and warm-up apply, and its
+    start values are recorded so that the check sets them too.
+    """
+    if adapter is not None:
+        kin = adapter.resolve_kinematics(plant.parameters())
+        warmup_s = adapter.warmup_s
+        if kin is None:
+            window_s, max_freq_hz = adapter.window_s, adapter.max_freq_hz
+    else:
+        kin = _kinematics(plant)
     cases = cases if cases is not None else default_cases(plant)
     golden = {
         "version": GOLDEN_VERSION,
         "fmu": plant.fmu_path.name,
         "sensors": list(plant.sensors),
         "sample_rate_hz": plant.sample_rate_hz,
+        "start_values": dict(plant.fixed_values),
+        "relative_tolerance": plant.relative_tolerance,
         "warmup_s": warmup_s,
         "window_s": window_s,
         "max_freq_hz": max_freq_hz,
@@ -131,7 +143,8 @@ def load_golden(golden_path: str | Path) -> dict:
 def check(fmu_path: str | Path, golden_path: str | Path, rtol: float = DEFAULT_RTOL) -> RegressionReport:
     """Simulate the golden cases on ``fmu_path`` and compare."""
     golden = load_golden(golden_path)
-    with FmuPlant(fmu_path, tuple(golden["sensors"]), golden["sample_rate_hz"]) as plant:
+    with FmuPlant(fmu_path, tuple(golden["sensors"]), golden["sample_rate_hz"],
+                  golden.get("relative_tolerance"), golden.get("start_values") or None) as plant:
         kin_dict = golden["kinematics"]
         kin = None if kin_dict is None else GearKinematics(kin_dict["Np"], kin_dict["Ng"],
                                                            kin_dict["f_pinion"])

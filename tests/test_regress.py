@@ -34,8 +34,7 @@ def test_changed_model_default_fails_regression(tmp_path, modelica_copy):
 
 def test_bless_and_check_any_fmu_without_gear_parameters(tmp_path):
     """A model with neither fault parameters nor kinematics: one case at its defaults, FFT spectrum."""
-    mo = tmp_path / "Osc.mo"
-    mo.write_text("""model Osc
+    source = """model Osc
   parameter Real w(unit="rad/s") = 300;
   parameter Real d = 0.05;
   Real x(start = 1, fixed = true);
@@ -46,7 +45,9 @@ equation
   der(v) = -w*w*x - 2*d*w*v + 50*sin(700*time);
   y = x;
 end Osc;
-""")
+"""
+    mo = tmp_path / "Osc.mo"
+    mo.write_text(source)
     fmu = build_fmu(mo, "Osc", tmp_path / "Osc.fmu")
     golden = tmp_path / "osc.json"
     res = run_cli("-m", "pydiag", "regress", "--fmu", str(fmu), "--golden", str(golden), "--bless")
@@ -55,10 +56,18 @@ end Osc;
     assert list(data["cases"]) == ["defaults"] and data["kinematics"] is None
     res = run_cli("-m", "pydiag", "regress", "--fmu", str(fmu), "--golden", str(golden))
     assert res.returncode == 0 and res.stdout.startswith("PASS"), res.stdout + res.stderr
-    # a golden made with another damping fails
-    with FmuPlant(fmu, ("y",), 10_000.0, fixed_values={"d": 0.08}) as plant:
+    # a golden blessed from a model whose default damping differs fails
+    (tmp_path / "v2").mkdir()
+    mo2 = tmp_path / "v2" / "Osc.mo"
+    mo2.write_text(source.replace("d = 0.05", "d = 0.08"))
+    with FmuPlant(build_fmu(mo2, "Osc", tmp_path / "v2" / "Osc.fmu"), ("y",)) as plant:
         regress.bless(plant, golden)
     assert not regress.check(fmu, golden).passed
+    # start values recorded at blessing are applied by the check
+    with FmuPlant(fmu, ("y",), fixed_values={"d": 0.08}) as plant:
+        regress.bless(plant, golden)
+    assert json.loads(golden.read_text())["start_values"] == {"d": 0.08}
+    assert regress.check(fmu, golden).passed
 
 
 def test_missing_golden_is_a_clear_error(gear_fmu, tmp_path):

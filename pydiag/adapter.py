@@ -1,0 +1,278 @@
+"""Adapter files: describe any FMU to pydiag, without Python.
+
+An adapter (TOML) says which FMU variables are the fault parameters, which outputs are
+the sensor channels, where the gear kinematics come from, which start values to set
+and how to simulate. Example (see README, "Bring your own FMU")::
+
+    [simulation]
+    relative_tolerance = 1e-8      # optional
+    engine = "auto"                # auto | native | fmpy
+    warmup_s = 0.05                # start-up discarded before the analysed window
+
+    [kinematics]                   # gear models: lines at the kinematic frequencies
+    n_pinion = 14                  # a number, or {parameter = "z1"}
+    n_gear = {parameter = "z2"}
+    f_pinion_hz = {parameter = "n_rpm", scale = 0.016666666666666666}
+
+    [spectrum]                     # other models (no [kinematics]): windowed FFT
+    window_s = 2.0
+    max_freq_hz = 50.0
+
+    [start_values]
+    "load.T" = 50.0
+
+    [[sensor]]
+    channel = "acc"                # the measurement column
+    variable = "housing.a"         # the FMU output
+    scale = 1.0                    # channel = scale * output
+
+    [[fault_parameter]]
+    variable = "tooth.stiffnessAmp"   # the FMU variable to set
+    role = "a_f"                      # a_f, f_f, f_ate, f_dte feed the classification;
+    low = 0.1                         #   any other name is estimated and reported only
+    high = 0.9
+    scale = 1.0                       # FMU value = scale * estimated value
+
+Every mistake is reported as ``AdapterError`` naming the file, the table and the key.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pydiag.kinematics import GearKinematics
+
+CANONICAL_ROLES = ("a_f", "f_f", "f_ate", "f_dte")
+ENGINES = ("auto", "native", "fmpy")
+
+
+class AdapterError(Exception):
+    """An adapter file that cannot be used; the message names the key."""
+
+
+@dataclass(frozen=True)
+class SensorMap:
+    channel: str
+    variable: str
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class FaultParameterMap:
+    role: str
+    variable: str
+    low: float
+    high: float
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A number, or an FMU parameter times a scale."""
+
+    value: float | None = None
+    parameter: str | None = None
+    scale: float = 1.0
+
+    def resolve(self, parameters: dict[str, float], what: str) -> float:
+        if self.parameter is None:
+            return float(self.value)
+        if self.parameter not in parameters:
+            raise AdapterError(f"[kinematics] {what}: the FMU has no parameter "
+                               f"'{self.parameter}' with a start value")
+        return self.scale * float(parameters[self.parameter])
+
+
+@dataclass(frozen=True)
+class Adapter:
+    sensors: tuple[SensorMap, ...]
+    fault_parameters: tuple[FaultParameterMap, ...]
+    kinematics: dict[str, Quantity] | None = None
+    window_s: float | None = None
+    max_freq_hz: float | None = None
+    start_values: dict = field(default_factory=dict)
+    relative_tolerance: float | None = None
+    engine: str = "auto"
+    warmup_s: float = 0.05
+    source: str = "<built-in>"
+
+    def resolve_kinematics(self, parameters: dict[str, float]) -> GearKinematics | None:
+        if self.kinematics is None:
+            return None
+        values = {**parameters, **self.start_values}
+        try:
+            return GearKinematics(
+                int(round(self.kinematics["n_pinion"].resolve(values, "n_pinion"))),
+                int(round(self.kinematics["n_gear"].resolve(values, "n_gear"))),
+                self.kinematics["f_pinion_hz"].resolve(values, "f_pinion_hz"))
+        except ValueError as err:
+            raise AdapterError(f"{self.source}: [kinematics] {err}") from None
+
+    def channel_names(self) -> list[str]:
+        return [s.channel for s in self.sensors]
+
+
+def gear_default(channels: list[str]) -> Adapter:
+    """The conventions of the GearDiag models: paper parameter names, channel = output name."""
+    from pydiag.estimate import GEAR_FAULT_PARAMETERS
+
+    return Adapter(
+        sensors=tuple(SensorMap(c, c) for c in channels),
+        fault_parameters=tuple(FaultParameterMap(p.name, p.name, p.low, p.high)
+                               for p in GEAR_FAULT_PARAMETERS),
+        kinematics={"n_pinion": Quantity(parameter="Np"), "n_gear": Quantity(parameter="Ng"),
+                    "f_pinion_hz": Quantity(parameter="f_pinion")})
+
+
+# ---------------------------------------------------------------------- loading
+def _number(table: dict, key: str, where: str, default=None, positive=False) -> float | None:
+    if key not in table:
+        if default is None:
+            raise AdapterError(f"{where}: '{key}' is required")
+        return default
+    value = table[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise AdapterError(f"{where}: '{key}' must be a number, got {value!r}")
+    if positive and not value > 0:
+        raise AdapterError(f"{where}: '{key}' must be positive, got {value}")
+    return float(value)
+
+
+def _string(table: dict, key: str, where: str) -> str:
+    value = table.get(key)
+    if not isinstance(value, str) or not value:
+        raise AdapterError(f"{where}: '{key}' must be a non-empty string")
+    return value
+
+
+def _quantity(value, where: str) -> Quantity:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return Quantity(value=float(value))
+    if isinstance(value, dict):
+        unknown = set(value) - {"parameter", "scale"}
+        if unknown:
+            raise AdapterError(f"{where}: unknown key(s) {sorted(unknown)}")
+        return Quantity(parameter=_string(value, "parameter", where),
+                        scale=_number(value, "scale", where, default=1.0))
+    raise AdapterError(f"{where}: must be a number or {{parameter = \"name\", scale = ...}}")
+
+
+def _check_keys(table: dict, allowed: set[str], where: str) -> None:
+    unknown = set(table) - allowed
+    if unknown:
+        raise AdapterError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
+
+
+def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
+    _check_keys(data, {"simulation", "kinematics", "spectrum", "start_values", "sensor",
+                       "fault_parameter"}, source)
+    sim = data.get("simulation", {})
+    _check_keys(sim, {"relative_tolerance", "engine", "warmup_s"}, f"{source} [simulation]")
+    engine = sim.get("engine", "auto")
+    if engine not in ENGINES:
+        raise AdapterError(f"{source} [simulation]: engine must be one of {ENGINES}, got {engine!r}")
+    tolerance = sim.get("relative_tolerance")
+    if tolerance is not None:
+        tolerance = _number(sim, "relative_tolerance", f"{source} [simulation]", positive=True)
+    warmup = _number(sim, "warmup_s", f"{source} [simulation]", default=0.05)
+    if warmup < 0:
+        raise AdapterError(f"{source} [simulation]: 'warmup_s' must not be negative")
+
+    sensors = data.get("sensor")
+    if not isinstance(sensors, list) or not sensors:
+        raise AdapterError(f"{source}: at least one [[sensor]] table is required")
+    sensor_maps = []
+    for i, s in enumerate(sensors):
+        where = f"{source} [[sensor]] #{i + 1}"
+        _check_keys(s, {"channel", "variable", "scale"}, where)
+        variable = _string(s, "variable", where)
+        sensor_maps.append(SensorMap(s.get("channel", variable) or variable, variable,
+                                     _number(s, "scale", where, default=1.0)))
+    channels = [s.channel for s in sensor_maps]
+    if len(set(channels)) != len(channels):
+        raise AdapterError(f"{source}: [[sensor]] channels must be unique, got {channels}")
+
+    params = data.get("fault_parameter")
+    if not isinstance(params, list) or not params:
+        raise AdapterError(f"{source}: at least one [[fault_parameter]] table is required")
+    param_maps = []
+    for i, p in enumerate(params):
+        where = f"{source} [[fault_parameter]] #{i + 1}"
+        _check_keys(p, {"variable", "role", "low", "high", "scale"}, where)
+        variable = _string(p, "variable", where)
+        low, high = _number(p, "low", where), _number(p, "high", where)
+        if not low < high:
+            raise AdapterError(f"{where}: need low < high, got [{low}, {high}]")
+        scale = _number(p, "scale", where, default=1.0)
+        if scale == 0:
+            raise AdapterError(f"{where}: 'scale' must not be 0")
+        param_maps.append(FaultParameterMap(p.get("role", variable), variable, low, high, scale))
+    roles = [p.role for p in param_maps]
+    if len(set(roles)) != len(roles):
+        raise AdapterError(f"{source}: [[fault_parameter]] roles must be unique, got {roles}")
+
+    kin = None
+    if "kinematics" in data:
+        k = data["kinematics"]
+        _check_keys(k, {"n_pinion", "n_gear", "f_pinion_hz"}, f"{source} [kinematics]")
+        missing = {"n_pinion", "n_gear", "f_pinion_hz"} - set(k)
+        if missing:
+            raise AdapterError(f"{source} [kinematics]: missing {sorted(missing)}")
+        kin = {name: _quantity(k[name], f"{source} [kinematics] {name}") for name in k}
+    window = max_freq = None
+    if "spectrum" in data:
+        s = data["spectrum"]
+        _check_keys(s, {"window_s", "max_freq_hz"}, f"{source} [spectrum]")
+        window = _number(s, "window_s", f"{source} [spectrum]", positive=True)
+        max_freq = _number(s, "max_freq_hz", f"{source} [spectrum]", positive=True)
+    if kin is None and window is None:
+        raise AdapterError(f"{source}: give [kinematics] (gear models) or [spectrum] (others)")
+    if kin is not None and window is not None:
+        raise AdapterError(f"{source}: give either [kinematics] or [spectrum], not both")
+
+    starts = data.get("start_values", {})
+    for name, value in starts.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise AdapterError(f"{source} [start_values]: '{name}' must be a number")
+    return Adapter(tuple(sensor_maps), tuple(param_maps), kin, window, max_freq,
+                   {k: float(v) for k, v in starts.items()}, tolerance, engine, warmup, source)
+
+
+def load_adapter(path: str | Path) -> Adapter:
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as err:
+        raise AdapterError(f"cannot read adapter {path}: {err.strerror or err}") from None
+    except tomllib.TOMLDecodeError as err:
+        raise AdapterError(f"{path}: not valid TOML: {err}") from None
+    return parse_adapter(data, str(path))
+
+
+def check_against_fmu(adapter: Adapter, variables: dict) -> None:
+    """Every name the adapter uses exists in the FMU with a usable causality."""
+    src = adapter.source
+    for s in adapter.sensors:
+        v = variables.get(s.variable)
+        if v is None:
+            raise AdapterError(f"{src}: sensor variable '{s.variable}' is not in the FMU")
+    for p in [*adapter.fault_parameters]:
+        _settable(variables, p.variable, f"{src}: fault parameter")
+    for name in adapter.start_values:
+        _settable(variables, name, f"{src}: start value")
+
+
+def _settable(variables: dict, name: str, what: str) -> None:
+    v = variables.get(name)
+    if v is None:
+        raise AdapterError(f"{what} '{name}' is not in the FMU")
+    if v.causality == "calculatedParameter":
+        raise AdapterError(f"{what} '{name}' is a calculatedParameter: the FMU computes it from "
+                           "other parameters, so setting it has no effect; set those instead")
+    if v.causality not in ("parameter", "input"):
+        raise AdapterError(f"{what} '{name}' has causality '{v.causality}'; only parameters "
+                           "and inputs can be set")
+    if v.variability == "constant":
+        raise AdapterError(f"{what} '{name}' is a constant in the FMU and cannot be changed")

@@ -1,0 +1,261 @@
+"""Bring your own FMU: adapters, other exporters (CasADi direct, pythonfmu, OpenModelica),
+inspect, and safe archives. Every FMU here is built or fetched by the test run."""
+
+import io
+import json
+import stat
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+from fmus import casadi_gear, pythonfmu_gear
+from pydiag.adapter import AdapterError, check_against_fmu, load_adapter, parse_adapter
+from pydiag.estimate import FaultEstimator
+from pydiag.fmu_archive import UnsafeArchive, safe_extract
+from pydiag.inspect_fmu import describe
+from pydiag.measurement import read_measurement
+from pydiag.plant import FmuPlant, PlantError
+
+# ---------------------------------------------------------------------- adapters
+
+MINIMAL = {"sensor": [{"variable": "y"}], "fault_parameter": [{"variable": "k", "low": 0, "high": 1}],
+           "spectrum": {"window_s": 1.0, "max_freq_hz": 10.0}}
+
+
+@pytest.mark.parametrize("change,message", [
+    ({"extra": 1}, "unknown key"),
+    ({"sensor": []}, r"at least one \[\[sensor\]\]"),
+    ({"fault_parameter": [{"variable": "k", "low": 1, "high": 1}]}, "low < high"),
+    ({"fault_parameter": [{"variable": "k", "low": "a", "high": 1}]}, "'low' must be a number"),
+    ({"simulation": {"engine": "turbo"}}, "engine must be one of"),
+    ({"kinematics": {"n_pinion": 14, "n_gear": 21, "f_pinion_hz": 25}}, "not both"),
+    ({"spectrum": None}, r"give \[kinematics\]"),
+    ({"start_values": {"k": "x"}}, "must be a number"),
+    ({"sensor": [{"variable": "y"}, {"variable": "y"}]}, "channels must be unique"),
+])
+def test_adapter_validation_names_the_key(change, message):
+    data = {**MINIMAL, **change}
+    data = {k: v for k, v in data.items() if v is not None}
+    with pytest.raises(AdapterError, match=message):
+        parse_adapter(data, "a.toml")
+
+
+def test_adapter_file_errors(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[sensor\n")
+    with pytest.raises(AdapterError, match="not valid TOML"):
+        load_adapter(bad)
+    with pytest.raises(AdapterError, match="cannot read adapter"):
+        load_adapter(tmp_path / "missing.toml")
+
+
+# ---------------------------------------------------------------------- CasADi, other names
+
+@pytest.fixture(scope="module")
+def vendor_gear(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("vendor_gear")
+    fmu = casadi_gear.build(folder / "VendorGear.fmu")
+    adapter = folder / "vendor.toml"
+    adapter.write_text(casadi_gear.ADAPTER)
+    return fmu, adapter
+
+
+def test_casadi_vendor_gear_diagnosed_through_its_adapter(vendor_gear, tmp_path):
+    fmu, adapter = vendor_gear
+    meas = tmp_path / "m.csv"
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(fmu), "--adapter", str(adapter),
+                  "--set", "tooth_amp=0.35", "--set", "runout_um=10", "--snr", "10",
+                  "--out", str(meas), "--quiet")
+    assert res.returncode == 0, res.stderr
+    m = read_measurement(meas)
+    assert list(m.channels) == ["acc", "disp"]
+    assert 5e-6 < np.mean(m.channels["disp"]) < 1e-5  # probe in um, channel in m (scale 1e-6)
+    out = tmp_path / "r.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(fmu), "--adapter", str(adapter),
+                  "--measurement", str(meas), "--json", str(out), "--particles", "8",
+                  "--iterations", "6", "--polish", "60", "--quiet")
+    assert res.returncode == 0, res.stderr
+    result = json.loads(out.read_text())
+    assert abs(result["parameters"]["a_f"] - 0.35) <= 0.03
+    assert abs(result["parameters"]["f_ate"] - 0.2) <= 0.03  # runout 10 um = 0.2 x 50 um
+    assert result["fault_mode"] == "combined"
+
+
+def test_adapter_names_must_exist_and_be_settable(vendor_gear, tmp_path):
+    fmu, _ = vendor_gear
+    with FmuPlant(fmu, ("housing_acc",)) as plant:
+        variables = plant.variables
+    text = casadi_gear.ADAPTER.replace('variable = "tooth_amp"', 'variable = "no_such"')
+    with pytest.raises(AdapterError, match="fault parameter 'no_such' is not in the FMU"):
+        check_against_fmu(parse_adapter(__import__("tomllib").loads(text)), variables)
+    text = casadi_gear.ADAPTER.replace('variable = "tooth_amp"', 'variable = "housing_acc"')
+    with pytest.raises(AdapterError, match="causality 'output'"):
+        check_against_fmu(parse_adapter(__import__("tomllib").loads(text)), variables)
+
+
+# ---------------------------------------------------------------------- pythonfmu, FMI 2 CS
+
+@pytest.fixture(scope="module")
+def pythonfmu_fmu(tmp_path_factory):
+    pytest.importorskip("pythonfmu")
+    folder = tmp_path_factory.mktemp("pyfmu")
+    fmu = pythonfmu_gear.build(folder)
+    adapter = folder / "pygear.toml"
+    adapter.write_text(pythonfmu_gear.ADAPTER)
+    return fmu, adapter
+
+
+def test_pythonfmu_cosimulation_gear_diagnosed(pythonfmu_fmu):
+    fmu, adapter_path = pythonfmu_fmu
+    info = describe(fmu)
+    assert info.fmi_version == "2.0" and info.interfaces == ["CoSimulation"]
+    adapter = load_adapter(adapter_path)
+    with FmuPlant(fmu, ("Accel",)) as plant:
+        assert plant.engine == "fmpy"  # CS: the native engine does not apply
+        y = plant.simulate({"Fault_Amplitude": 0.4}, 0.36, 0.02)[0]
+    rng = np.random.default_rng(3)
+    from pydiag.measurement import Measurement
+    from pydiag.noise import add_white_noise
+    m = Measurement({"acc": add_white_noise(y, 10.0, rng)}, 10_000.0)
+    r = FaultEstimator(str(fmu), adapter=adapter, n_particles=4, iterations=3,
+                       polish_evaluations=16, polish_starts=1, seed=0).fit(m)
+    assert abs(r.parameters["a_f"] - 0.4) <= 0.03
+    assert r.fault_mode == "tooth_fault"
+
+
+# ---------------------------------------------------------------------- OpenModelica (vendor)
+
+@pytest.fixture(scope="module")
+def openmodelica_fmus(tmp_path_factory):
+    """Linux FMUs exported by OpenModelica 1.19-1.21, from the gemseo-fmu wheel (LGPL)."""
+    folder = tmp_path_factory.mktemp("gemseo")
+    res = subprocess.run([sys.executable, "-m", "pip", "download", "--quiet", "--no-deps",
+                          "--disable-pip-version-check", "-d", str(folder), "gemseo-fmu==3.1.1"],
+                         capture_output=True, text=True, timeout=300)
+    wheels = list(folder.glob("gemseo_fmu-*.whl"))
+    if res.returncode != 0 or not wheels:
+        pytest.skip(f"cannot download gemseo-fmu from PyPI: {res.stderr.strip()[-200:]}")
+    fmus = {}
+    with zipfile.ZipFile(wheels[0]) as z:
+        for name in z.namelist():
+            if name.startswith("gemseo_fmu/problems/fmu_files/linux/") and name.endswith(".fmu"):
+                target = folder / Path(name).name
+                target.write_bytes(z.read(name))
+                fmus[target.stem] = target
+    return fmus
+
+
+def test_inspect_runs_on_every_vendor_fmu(openmodelica_fmus):
+    """The wheel holds OpenModelica FMI 2.0 FMUs and one PythonFMU3 FMI 3.0 CS FMU."""
+    assert {"Mass_Damper", "MassSpringSystem", "FMU3Model"} <= set(openmodelica_fmus)
+    for name, fmu in openmodelica_fmus.items():
+        res = run_cli("-m", "pydiag", "inspect", str(fmu))
+        assert res.returncode == 0, res.stderr
+        expected = "FMI 3.0, CoSimulation" if name == "FMU3Model" else "OpenModelica"
+        assert expected in res.stdout, res.stdout
+    info = describe(openmodelica_fmus["Mass_Damper"])
+    settable = {v.name: (v.settable, v.note) for v in info.variables}
+    assert settable["spring.c"][0] == "before init"
+    assert settable["damper.flange_b.s"][0] == "no" and "calculatedParameter" in settable["damper.flange_b.s"][1]
+
+
+def test_openmodelica_spring_constant_recovered_with_an_adapter(openmodelica_fmus, tmp_path):
+    fmu = openmodelica_fmus["MassSpringSystem"]
+    adapter = tmp_path / "msd.toml"
+    adapter.write_text("""
+[simulation]
+warmup_s = 0.0
+relative_tolerance = 1e-8
+
+[spectrum]
+window_s = 40.0
+max_freq_hz = 2.0
+
+[[sensor]]
+channel = "x1"
+variable = "x1"
+
+[[fault_parameter]]
+variable = "k1"
+role = "k1"
+low = 0.3
+high = 3.0
+""")
+    meas = tmp_path / "m.csv"
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(fmu), "--adapter", str(adapter),
+                  "--set", "k1=1.7", "--sample-rate", "20", "--snr", "100", "--out", str(meas),
+                  "--quiet")
+    assert res.returncode == 0, res.stderr
+    out = tmp_path / "r.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(fmu), "--adapter", str(adapter),
+                  "--measurement", str(meas), "--json", str(out), "--particles", "6",
+                  "--iterations", "4", "--polish", "30", "--quiet")
+    assert res.returncode == 0, res.stderr
+    result = json.loads(out.read_text())
+    assert result["parameters"]["k1"] == pytest.approx(1.7, abs=0.02)
+    assert result["fault_mode"] == "not_classified"
+
+
+def test_adapter_refuses_calculated_parameter(openmodelica_fmus):
+    with FmuPlant(openmodelica_fmus["Mass_Damper"], ("y",)) as plant:
+        variables = plant.variables
+    data = {**MINIMAL, "sensor": [{"variable": "y"}],
+            "fault_parameter": [{"variable": "damper.flange_b.s", "low": 0, "high": 1}]}
+    with pytest.raises(AdapterError, match="calculatedParameter.*set those instead"):
+        check_against_fmu(parse_adapter(data), variables)
+
+
+# ---------------------------------------------------------------------- safe archives
+
+def make_zip(path, entries):
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data, mode in entries:
+            info = zipfile.ZipInfo(name)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            if mode is not None:
+                info.external_attr = mode << 16
+            z.writestr(info, data)
+    return path
+
+
+@pytest.mark.parametrize("entries,message", [
+    ([("/etc/evil", b"x", None)], "absolute path"),
+    ([("binaries/../../evil", b"x", None)], r"outside the archive \('\.\.'\)"),
+    ([("link", b"/etc/passwd", stat.S_IFLNK | 0o777)], "symbolic link"),
+    ([("bomb.bin", b"\0" * (64 << 20), None)], "zip bomb"),
+])
+def test_hostile_archives_are_rejected_before_writing(tmp_path, entries, message):
+    fmu = make_zip(tmp_path / "evil.fmu", entries)
+    dest = tmp_path / "out"
+    dest.mkdir()
+    with pytest.raises(UnsafeArchive, match=message):
+        safe_extract(fmu, dest)
+    assert list(dest.iterdir()) == []
+    assert not (tmp_path / "evil").exists()
+
+
+def test_total_size_limit(tmp_path):
+    fmu = make_zip(tmp_path / "big.fmu", [(f"f{i}", bytes(1000), None) for i in range(20)])
+    with pytest.raises(UnsafeArchive, match="more than the limit"):
+        safe_extract(fmu, tmp_path / "out", max_total_bytes=10_000)
+
+
+def test_missing_platform_binary_names_what_the_fmu_has(gear_fmu, tmp_path):
+    windows_only = tmp_path / "WinOnly.fmu"
+    with zipfile.ZipFile(gear_fmu) as src, zipfile.ZipFile(windows_only, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            name = item.filename.replace("x86_64-linux", "x86_64-windows").replace(".so", ".dll")
+            dst.writestr(name, data)
+    with pytest.raises(PlantError, match=r"no binary for this platform \(x86_64-linux\); it has: "
+                                         r"x86_64-windows"):
+        FmuPlant(windows_only, ("acc",))
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(windows_only), "--out",
+                  str(tmp_path / "m.csv"))
+    assert res.returncode == 2 and "x86_64-windows" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
