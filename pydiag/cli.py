@@ -152,6 +152,9 @@ def format_result(result, truth: dict | None = None) -> str:
               f"transmission error: {result.te_severity})",
               f"error      : {result.error:.5f} (Eq. 12, relative, summed over channels)",
               f"evaluations: {result.evaluations} in {result.elapsed_s:.1f} s"]
+    if result.failed_evaluations:
+        lines.append(f"failed     : {result.failed_evaluations} simulations, penalised: " + "; ".join(
+            f"{n} x {reason}" for reason, n in result.failure_reasons.items()))
     return "\n".join(lines)
 
 
@@ -178,6 +181,8 @@ def cmd_diagnose(args) -> int:
                "severity": result.severity, "tooth_severity": result.tooth_severity,
                "te_severity": result.te_severity, "error": result.error,
                "evaluations": result.evaluations, "elapsed_s": result.elapsed_s,
+               "failed_evaluations": result.failed_evaluations,
+               "failure_reasons": result.failure_reasons,
                "channels": list(m.channels), "measurement": str(args.measurement)}
         Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
     return 0

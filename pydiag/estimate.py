@@ -38,6 +38,7 @@ import scipy.optimize
 from pydiag.adapter import CANONICAL_ROLES, Adapter, AdapterError, check_against_fmu, gear_default
 from pydiag.classify import classify
 from pydiag.features import Features, KinematicFeaturizer, SpectrumFeaturizer
+from pydiag.isolation import IsolatedPool, TooManyFailures
 from pydiag.kinematics import GearKinematics
 from pydiag.measurement import Measurement
 from pydiag.objective import spectral_residuals
@@ -104,6 +105,8 @@ class DiagnosisResult:
     evaluations: int
     elapsed_s: float
     best_error_history: list[float]
+    failed_evaluations: int = 0
+    failure_reasons: dict[str, int] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -135,9 +138,13 @@ class SpectralObjective:
     def residuals(self, x: np.ndarray) -> np.ndarray | None:
         """Eq. (12) residuals of every channel, concatenated; None if the simulation fails."""
         try:
-            model = self.model_features(x)
+            return self.residuals_or_raise(x)
         except PlantError:
             return None
+
+    def residuals_or_raise(self, x: np.ndarray) -> np.ndarray:
+        """As :meth:`residuals`, but a failed simulation raises PlantError with its cause."""
+        model = self.model_features(x)
         return np.concatenate([spectral_residuals(model[c].amplitude, self.reference[c].amplitude,
                                                   self.reference[c].noise_power)
                                for c in self.channels])
@@ -153,18 +160,14 @@ class SpectralObjective:
             self._plant = None
 
 
-# One objective per worker process, created by the pool initializer.
-_WORKER_OBJECTIVE: SpectralObjective | None = None
+class _Strict:
+    """What a worker runs: failures raise, so the pool can report their cause."""
 
+    def __init__(self, objective: SpectralObjective) -> None:
+        self.objective = objective
 
-def _init_worker(objective: SpectralObjective) -> None:
-    global _WORKER_OBJECTIVE
-    _WORKER_OBJECTIVE = objective
-
-
-def _residuals_in_worker(x: np.ndarray) -> np.ndarray | None:
-    assert _WORKER_OBJECTIVE is not None
-    return _WORKER_OBJECTIVE.residuals(x)
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        return self.objective.residuals_or_raise(x)
 
 
 class FaultEstimator:
@@ -183,7 +186,11 @@ class FaultEstimator:
         polish_starts: how many distinct swarm positions to polish from
         feature_mode: "lines" or "paper" (see :mod:`pydiag.features`), gear models only
         warmup_s: simulated start-up discarded before the analysed window (default: adapter's)
-        n_workers: worker processes (default: all cores); 1 evaluates in this process
+        n_workers: worker processes (default: all cores). The FMU always runs in workers
+            (:mod:`pydiag.isolation`), except inside a daemonic process (a Dask worker),
+            which may not start children: there it runs in-process.
+        eval_timeout_s: wall-time limit of one simulation; a longer one is killed, penalised
+        max_consecutive_failures: failed simulations in a row that stop the fit
         relative_tolerance, engine: simulation settings (default: adapter's)
         progress: called as progress(done, total, best_error) after each batch
     """
@@ -196,6 +203,7 @@ class FaultEstimator:
                  polish_starts: int = 3, feature_mode: str = "lines",
                  warmup_s: float | None = None, n_workers: int | None = None,
                  relative_tolerance: float | None = None, engine: str | None = None,
+                 eval_timeout_s: float = 60.0, max_consecutive_failures: int = 20,
                  progress: Callable[[int, int, float], None] | None = None) -> None:
         if n_particles < 2 or iterations < 1:
             raise EstimationError("need at least 2 particles and 1 iteration")
@@ -218,6 +226,8 @@ class FaultEstimator:
         self.n_workers = n_workers or os.cpu_count() or 1
         self.relative_tolerance = relative_tolerance
         self.engine = engine
+        self.eval_timeout_s = eval_timeout_s
+        self.max_consecutive_failures = max_consecutive_failures
         self.progress = progress
 
     # ------------------------------------------------------------------ set-up
@@ -286,13 +296,13 @@ class FaultEstimator:
         history: list[float] = []
 
         pool = None
-        if self.n_workers > 1:
-            pool = mp.get_context("fork").Pool(self.n_workers, _init_worker, (objective,))
+        if not mp.current_process().daemon:
+            pool = IsolatedPool(_Strict(objective), self.n_workers, self.eval_timeout_s,
+                                self.max_consecutive_failures)
 
         def residuals(xs: np.ndarray) -> list[np.ndarray | None]:
             xs = np.clip(np.atleast_2d(xs), lows, highs)
-            out = (pool.map(_residuals_in_worker, list(xs)) if pool
-                   else [objective.residuals(x) for x in xs])
+            out = (pool.map(xs) if pool else [objective.residuals(x) for x in xs])
             costs = [np.inf if r is None else float(np.linalg.norm(r)) for r in out]
             counter["n"] += len(xs)
             counter["best"] = min(counter["best"], min(costs))
@@ -309,11 +319,13 @@ class FaultEstimator:
                         x, c = self._polish(residuals, x0, c0, lows, highs)
                         if c < best_cost:
                             best_x, best_cost = x, c
+        except TooManyFailures as err:
+            raise EstimationError(f"stopped: {err}") from None
         finally:
             if pool is not None:
-                pool.terminate()
-                pool.join()
+                pool.close()
             objective.close()
+        failures = pool.failures if pool is not None else None
         if not np.isfinite(best_cost):
             raise EstimationError("every simulation of the plant failed")
         estimate = {p.name: float(v) for p, v in zip(params, best_x)}
@@ -323,7 +335,9 @@ class FaultEstimator:
         else:
             labels = ("not_classified",) + ("unknown",) * 3
         return DiagnosisResult(estimate, *labels, best_cost, counter["n"],
-                               time.perf_counter() - started, history)
+                               time.perf_counter() - started, history,
+                               failures.count if failures else 0,
+                               dict(failures.reasons) if failures else {})
 
     def _swarm(self, residuals, lows, highs, history) -> tuple[list, list]:
         from pyswarms.single import GlobalBestPSO

@@ -207,9 +207,11 @@ class FmuPlant:
         except Exception as err:
             raise PlantError(f"simulation of {self.fmu_path.name} failed with "
                              f"{values}: {err}") from None
+        if len(result) < first + n:
+            reached = float(result["time"][-1]) if len(result) else 0.0
+            raise PlantError(f"simulation of {self.fmu_path.name} stopped at t = {reached:.6g} s "
+                             f"of {stop:.6g} s with {values}: a failed or discarded step")
         y = np.array([result[s][first:first + n] for s in self.sensors], dtype=float)
-        if y.shape[1] < n:
-            raise PlantError(f"simulation returned {y.shape[1]} samples, expected {n}")
         if not np.all(np.isfinite(y)):
             raise PlantError(f"simulation of {self.fmu_path.name} gave non-finite output "
                              f"with {values}")

@@ -1,0 +1,58 @@
+"""A crashing, hanging, NaN-producing, step-failing FMU: penalised, restarted, reported."""
+
+import numpy as np
+import pytest
+
+from fmus import hostile
+from pydiag.adapter import parse_adapter
+from pydiag.estimate import EstimationError, FaultEstimator
+from pydiag.measurement import Measurement
+from pydiag.plant import FmuPlant, PlantError
+
+import tomllib
+
+
+@pytest.fixture(scope="module")
+def hostile_fmu(tmp_path_factory):
+    pytest.importorskip("pythonfmu")
+    return hostile.build(tmp_path_factory.mktemp("hostile"))
+
+
+def adapter(low, high):
+    return parse_adapter(tomllib.loads(hostile.ADAPTER.format(low=low, high=high)), "hostile.toml")
+
+
+def measurement(fmu, k):
+    with FmuPlant(fmu, ("y",), sample_rate_hz=100.0) as plant:
+        y = plant.simulate({"k": k}, 1.0, 0.0)[0]
+    return Measurement({"y": y + np.random.default_rng(0).normal(0, 0.01, y.size)}, 100.0)
+
+
+def test_plant_reports_nan_and_failed_step(hostile_fmu):
+    with FmuPlant(hostile_fmu, ("y",), sample_rate_hz=100.0) as plant:
+        with pytest.raises(PlantError, match="non-finite"):
+            plant.simulate({"k": 1.3}, 0.1, 0.0)
+        with pytest.raises(PlantError, match="failed"):
+            plant.simulate({"k": 1.1}, 0.1, 0.0)
+        assert np.isfinite(plant.simulate({"k": 0.5}, 0.1, 0.0)).all()  # still usable
+
+
+def test_fit_survives_crashes_hangs_nans_and_failed_steps(hostile_fmu):
+    est = FaultEstimator(str(hostile_fmu), adapter=adapter(0.0, 2.0), n_particles=8,
+                         iterations=4, polish_evaluations=10, polish_starts=1, seed=2,
+                         n_workers=2, eval_timeout_s=2.0)
+    r = est.fit(measurement(hostile_fmu, 0.4))
+    assert abs(r.parameters["k"] - 0.4) < 0.02
+    assert r.failed_evaluations > 0
+    reasons = " | ".join(r.failure_reasons)
+    assert "SIGSEGV" in reasons, reasons
+    assert r.evaluations > r.failed_evaluations
+
+
+@pytest.mark.parametrize("low,high,cause", [(1.65, 2.0, "SIGSEGV"), (1.45, 1.55, "exceeded")])
+def test_consecutive_failures_stop_with_the_cause(hostile_fmu, low, high, cause):
+    est = FaultEstimator(str(hostile_fmu), adapter=adapter(low, high), n_particles=4,
+                         iterations=3, polish_evaluations=0, n_workers=2, eval_timeout_s=1.0,
+                         max_consecutive_failures=4)
+    with pytest.raises(EstimationError, match=rf"4 evaluations failed in a row; last: .*{cause}"):
+        est.fit(measurement(hostile_fmu, 0.4))
