@@ -50,6 +50,15 @@ def _default_sensors(plant_outputs: list[str]) -> tuple[str, ...]:
     return chosen or tuple(plant_outputs)
 
 
+def _warn_validation(fmu: str) -> None:
+    """Print fmpy's schema complaints as warnings: many vendor FMUs fail it yet run."""
+    from pydiag.plant import read_model_description
+    if Path(fmu).is_file():
+        _, warnings = read_model_description(Path(fmu))
+        for w in warnings:
+            print(f"pydiag: warning: {Path(fmu).name}: {w}", file=sys.stderr)
+
+
 def _outputs_of(fmu: str) -> list[str]:
     from pydiag.plant import read_model_description
     if not Path(fmu).is_file():
@@ -361,6 +370,8 @@ def main(argv: list[str] | None = None) -> int:
         from pydiag.regress import DEFAULT_RTOL
         args.rtol = DEFAULT_RTOL
     try:
+        if args.command in ("simulate", "diagnose", "batch", "regress", "demo"):
+            _warn_validation(args.fmu)
         return args.func(args)
     except (UsageError, *KNOWN_ERRORS) as err:
         print(f"pydiag {args.command}: error: {err}", file=sys.stderr)

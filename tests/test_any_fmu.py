@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import ROOT, run_cli
 from fmus import casadi_gear, pythonfmu_gear
 from pydiag.adapter import AdapterError, check_against_fmu, load_adapter, parse_adapter
 from pydiag.estimate import FaultEstimator
@@ -63,6 +63,17 @@ def vendor_gear(tmp_path_factory):
     adapter = folder / "vendor.toml"
     adapter.write_text(casadi_gear.ADAPTER)
     return fmu, adapter
+
+
+def test_inspect_runs_on_every_fmu_the_tests_build(gear_fmu, vendor_gear, pythonfmu_fmu,
+                                                  tmp_path):
+    from fmus import hostile
+    fmus = [gear_fmu, vendor_gear[0], pythonfmu_fmu[0], hostile.build(tmp_path)]
+    res = run_cli("-m", "pydiag", "inspect", *map(str, fmus))
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.count("platforms:") == 4
+    for made_by in ("CasADi", "PythonFMU"):
+        assert made_by in res.stdout
 
 
 def test_casadi_vendor_gear_diagnosed_through_its_adapter(vendor_gear, tmp_path):
@@ -164,28 +175,11 @@ def test_inspect_runs_on_every_vendor_fmu(openmodelica_fmus):
     assert settable["damper.flange_b.s"][0] == "no" and "calculatedParameter" in settable["damper.flange_b.s"][1]
 
 
-def test_openmodelica_spring_constant_recovered_with_an_adapter(openmodelica_fmus, tmp_path):
+def test_openmodelica_spring_constant_recovered_with_the_readme_adapter(openmodelica_fmus,
+                                                                        tmp_path):
+    """The README's 'bring your own FMU' commands, with examples/mass_spring.toml."""
     fmu = openmodelica_fmus["MassSpringSystem"]
-    adapter = tmp_path / "msd.toml"
-    adapter.write_text("""
-[simulation]
-warmup_s = 0.0
-relative_tolerance = 1e-8
-
-[spectrum]
-window_s = 40.0
-max_freq_hz = 2.0
-
-[[sensor]]
-channel = "x1"
-variable = "x1"
-
-[[fault_parameter]]
-variable = "k1"
-role = "k1"
-low = 0.3
-high = 3.0
-""")
+    adapter = ROOT / "examples" / "mass_spring.toml"
     meas = tmp_path / "m.csv"
     res = run_cli("-m", "pydiag", "simulate", "--fmu", str(fmu), "--adapter", str(adapter),
                   "--set", "k1=1.7", "--sample-rate", "20", "--snr", "100", "--out", str(meas),
@@ -243,6 +237,26 @@ def test_total_size_limit(tmp_path):
     fmu = make_zip(tmp_path / "big.fmu", [(f"f{i}", bytes(1000), None) for i in range(20)])
     with pytest.raises(UnsafeArchive, match="more than the limit"):
         safe_extract(fmu, tmp_path / "out", max_total_bytes=10_000)
+
+
+def test_schema_problems_are_warnings_and_the_fmu_still_runs(gear_fmu, tmp_path):
+    """Vendor FMUs often fail fmpy's validation yet run (here: units without UnitDefinitions)."""
+    import re
+    broken = tmp_path / "NoUnits.fmu"
+    with zipfile.ZipFile(gear_fmu) as src, zipfile.ZipFile(broken, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == "modelDescription.xml":
+                data = re.sub(rb"\s*<UnitDefinitions>.*?</UnitDefinitions>", b"", data, flags=re.S)
+            dst.writestr(item, data)
+    with FmuPlant(broken, ("acc",)) as plant:
+        assert any("is not defined" in w for w in plant.validation_warnings)
+        assert np.isfinite(plant.simulate({}, 0.01, 0.0)).all()
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(broken), "--duration", "0.12",
+                  "--out", str(tmp_path / "m.csv"))
+    assert res.returncode == 0, res.stderr
+    assert "warning:" in res.stderr and "is not defined" in res.stderr
+    assert (tmp_path / "m.csv").exists()
 
 
 def test_missing_platform_binary_names_what_the_fmu_has(gear_fmu, tmp_path):
