@@ -8,6 +8,7 @@ and how to simulate. Example (see README, "Bring your own FMU")::
     relative_tolerance = 1e-8      # optional
     engine = "auto"                # auto | native | fmpy
     warmup_s = 0.05                # start-up discarded before the analysed window
+    cs_step_s = 1e-5               # Co-Simulation communication step (default: 1/(20 f_top))
 
     [kinematics]                   # gear models: lines at the kinematic frequencies
     n_pinion = 14                  # a number, or {parameter = "z1"}
@@ -97,6 +98,7 @@ class Adapter:
     engine: str = "auto"
     warmup_s: float = 0.05
     source: str = "<built-in>"
+    cs_step_s: float | None = None
 
     def resolve_kinematics(self, parameters: dict[str, float]) -> GearKinematics | None:
         if self.kinematics is None:
@@ -169,7 +171,11 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
     _check_keys(data, {"simulation", "kinematics", "spectrum", "start_values", "sensor",
                        "fault_parameter"}, source)
     sim = data.get("simulation", {})
-    _check_keys(sim, {"relative_tolerance", "engine", "warmup_s"}, f"{source} [simulation]")
+    _check_keys(sim, {"relative_tolerance", "engine", "warmup_s", "cs_step_s"},
+                f"{source} [simulation]")
+    cs_step = None
+    if "cs_step_s" in sim:
+        cs_step = _number(sim, "cs_step_s", f"{source} [simulation]", positive=True)
     engine = sim.get("engine", "auto")
     if engine not in ENGINES:
         raise AdapterError(f"{source} [simulation]: engine must be one of {ENGINES}, got {engine!r}")
@@ -237,7 +243,8 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise AdapterError(f"{source} [start_values]: '{name}' must be a number")
     return Adapter(tuple(sensor_maps), tuple(param_maps), kin, window, max_freq,
-                   {k: float(v) for k, v in starts.items()}, tolerance, engine, warmup, source)
+                   {k: float(v) for k, v in starts.items()}, tolerance, engine, warmup, source,
+                   cs_step)
 
 
 def load_adapter(path: str | Path) -> Adapter:

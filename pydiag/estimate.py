@@ -25,6 +25,7 @@ FMU instance; the result does not depend on the number of workers.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import multiprocessing as mp
 import os
@@ -86,10 +87,11 @@ class PlantSpec:
     fixed_values: dict = field(default_factory=dict)
     relative_tolerance: float | None = None
     engine: str = "auto"
+    cs_step_s: float | None = None
 
     def open(self) -> FmuPlant:
         return FmuPlant(self.fmu_path, self.sensors, self.sample_rate_hz,
-                        self.relative_tolerance, self.fixed_values, self.engine)
+                        self.relative_tolerance, self.fixed_values, self.engine, self.cs_step_s)
 
 
 @dataclass
@@ -277,6 +279,9 @@ class FaultEstimator:
         if measurement.duration_s < featurizer.duration_s:
             raise EstimationError(f"measurement of {measurement.duration_s:.4g} s is shorter than "
                                   f"{featurizer.describe_duration()}")
+        # Co-Simulation: at least 20 communication steps per period of the highest frequency
+        # analysed, unless the adapter says otherwise.
+        spec = dataclasses.replace(spec, cs_step_s=adapter.cs_step_s or 1.0 / (20.0 * top))
         scales = [s.scale for s in maps]
         reference = {s.channel: featurizer(measurement.channels[s.channel], measurement.sample_rate_hz)
                      for s in maps}

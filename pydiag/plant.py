@@ -77,12 +77,15 @@ class FmuPlant:
         relative_tolerance: solver tolerance; None: 1e-6 native, 1e-8 fmpy (see above)
         fixed_values: start values applied to every run (e.g. from an adapter)
         engine: "auto", "native" or "fmpy" (see the module docstring)
+        cs_step_s: Co-Simulation only: largest communication step; runs sub-step between
+            output samples when it is smaller than 1/sample_rate_hz
     """
 
     def __init__(self, fmu_path: str | Path, sensors: tuple[str, ...] = ("acc",),
                  sample_rate_hz: float = 10_000.0,
                  relative_tolerance: float | None = None,
-                 fixed_values: dict[str, float] | None = None, engine: str = "auto") -> None:
+                 fixed_values: dict[str, float] | None = None, engine: str = "auto",
+                 cs_step_s: float | None = None) -> None:
         if engine not in ("auto", "native", "fmpy"):
             raise PlantError(f"engine must be auto, native or fmpy, got {engine!r}")
         self.fmu_path = Path(fmu_path)
@@ -123,6 +126,9 @@ class FmuPlant:
             shutil.rmtree(self._unzipdir, ignore_errors=True)
             raise PlantError(f"cannot instantiate {self.fmu_path.name}: {err}") from None
         self._fresh = True
+        self.substeps = 1
+        if self._fmi_type == "CoSimulation" and cs_step_s:
+            self.substeps = max(1, int(np.ceil((1.0 / self.sample_rate_hz) / cs_step_s - 1e-9)))
         self._native = None
         if engine != "fmpy":
             self._native = self._native_runner(required=engine == "native")
@@ -197,25 +203,39 @@ class FmuPlant:
         if not self._fresh:
             self._instance.reset()
         self._fresh = False
+        step = 1.0 / (self.sample_rate_hz * self.substeps)
         try:
             result = fmpy.simulate_fmu(
                 self._unzipdir, validate=False, start_time=0.0, stop_time=stop,
-                output_interval=1.0 / self.sample_rate_hz,
+                output_interval=step,
                 relative_tolerance=self.relative_tolerance, start_values=values,
                 output=list(self.sensors), model_description=self.model_description,
                 fmu_instance=self._instance, fmi_type=self._fmi_type)
         except Exception as err:
             raise PlantError(f"simulation of {self.fmu_path.name} failed with "
                              f"{values}: {err}") from None
+        result = result[::self.substeps]
         if len(result) < first + n:
             reached = float(result["time"][-1]) if len(result) else 0.0
             raise PlantError(f"simulation of {self.fmu_path.name} stopped at t = {reached:.6g} s "
                              f"of {stop:.6g} s with {values}: a failed or discarded step")
-        y = np.array([result[s][first:first + n] for s in self.sensors], dtype=float)
+        full = np.array([result[s][:first + n] for s in self.sensors], dtype=float)
+        self._check_divergence(full, values, step)
+        return full[:, first:first + n]
+
+    def _check_divergence(self, y: np.ndarray, values: dict, step: float) -> None:
+        """Non-finite output, or output that grows a millionfold over the run: diverged."""
+        cs = (f" (Co-Simulation communication step {step:.3g} s: try a smaller cs_step_s)"
+              if self._fmi_type == "CoSimulation" else "")
         if not np.all(np.isfinite(y)):
-            raise PlantError(f"simulation of {self.fmu_path.name} gave non-finite output "
-                             f"with {values}")
-        return y
+            raise PlantError(f"simulation of {self.fmu_path.name} gave non-finite output with "
+                             f"{values}: diverged{cs}")
+        quarter = max(1, y.shape[1] // 4)
+        early = np.max(np.abs(y[:, :quarter]), axis=1)
+        late = np.max(np.abs(y[:, -quarter:]), axis=1)
+        if np.any((late > 1e6 * early) & (late > 1e-300)):
+            raise PlantError(f"simulation of {self.fmu_path.name} output grows without bound "
+                             f"with {values}: diverged{cs}")
 
     def _simulate_native(self, values: dict[str, float], first: int, n: int) -> np.ndarray:
         if not self._fresh:

@@ -56,3 +56,46 @@ def test_consecutive_failures_stop_with_the_cause(hostile_fmu, low, high, cause)
                          max_consecutive_failures=4)
     with pytest.raises(EstimationError, match=rf"4 evaluations failed in a row; last: .*{cause}"):
         est.fit(measurement(hostile_fmu, 0.4))
+
+
+def test_cosimulation_divergence_is_detected_and_the_step_chosen_from_bands(tmp_path):
+    """Explicit Euler inside doStep: stable at 1e-5 s steps, explodes at 1e-4 s (lambda*h = 3)."""
+    pytest.importorskip("pythonfmu")
+    import subprocess
+    import sys
+    from pathlib import Path
+    src = tmp_path / "Stiff.py"
+    src.write_text('''
+import math
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+
+
+class Stiff(Fmi2Slave):
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.lam = 30000.0
+        self.y = 0.0
+        self.x = 0.0
+        self.register_variable(Real("lam", causality=Fmi2Causality.parameter,
+                                    variability=Fmi2Variability.tunable))
+        self.register_variable(Real("y", causality=Fmi2Causality.output))
+
+    def do_step(self, t, dt):
+        u = math.sin(2 * math.pi * 50 * t)
+        self.x += dt * self.lam * (u - self.x)
+        self.y = self.x
+        return True
+''')
+    exe = Path(sys.executable).with_name("pythonfmu")
+    subprocess.run([str(exe), "build", "-f", str(src), "-d", str(tmp_path)], check=True,
+                   capture_output=True)
+    fmu = tmp_path / "Stiff.fmu"
+    with FmuPlant(fmu, ("y",), sample_rate_hz=10_000.0) as plant:
+        with pytest.raises(PlantError, match=r"diverged \(Co-Simulation communication step 0.0001"):
+            plant.simulate({}, 0.05, 0.0)
+    # the estimator's rule, 20 steps per period of the highest analysed frequency (500 Hz):
+    with FmuPlant(fmu, ("y",), sample_rate_hz=10_000.0, cs_step_s=1 / (20 * 500.0)) as plant:
+        assert plant.substeps == 1  # 1e-4 s already meets 20 x 500 Hz: still unstable
+    with FmuPlant(fmu, ("y",), sample_rate_hz=10_000.0, cs_step_s=1e-5) as plant:
+        y = plant.simulate({}, 0.05, 0.0)[0]
+        assert plant.substeps == 10 and np.max(np.abs(y)) < 1.1
