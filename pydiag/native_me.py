@@ -4,7 +4,7 @@ fmpy's ``simulate_fmu`` calls back into Python for every right-hand side and out
 point. Here fmpy still instantiates, sets parameters and initialises, but the whole
 integration (Dormand-Prince 5(4), steps landing on the output grid) and the output
 sampling run in ``native/me_driver.c`` through the FMU's own ``fmi3*`` function
-pointers. The driver is compiled with the system C compiler on first use and cached
+pointers, with DOP853 (8th order, the default) or Dormand-Prince 5(4). The driver is compiled with the system C compiler on first use and cached
 under ``$XDG_CACHE_HOME/pydiag`` (``~/.cache/pydiag``) by source hash.
 
 Only FMI 3.0 ME FMUs without event indicators qualify; :func:`supports` says which.
@@ -23,9 +23,11 @@ from pathlib import Path
 import numpy as np
 
 SOURCE = Path(__file__).with_name("native") / "me_driver.c"
+HEADER = SOURCE.with_name("dop853_coefficients.h")
+METHODS = {"dop853": 8, "dopri5": 5}
 ERRORS = {-1: "an FMI call failed", -2: "the step size underflowed",
           -3: "non-finite derivatives or outputs", -4: "too many steps",
-          -5: "out of memory", -6: "the FMU asked to terminate"}
+          -5: "out of memory", -6: "the FMU asked to terminate", -7: "unknown method"}
 
 
 class NativeUnavailable(Exception):
@@ -51,7 +53,7 @@ def load_driver() -> ctypes.CDLL:
     global _LIBRARY
     if _LIBRARY is not None:
         return _LIBRARY
-    source = SOURCE.read_bytes()
+    source = SOURCE.read_bytes() + HEADER.read_bytes()
     lib_path = _cache_dir() / f"me_driver-{hashlib.sha256(source).hexdigest()[:16]}.so"
     if not lib_path.exists():
         cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
@@ -60,8 +62,8 @@ def load_driver() -> ctypes.CDLL:
         lib_path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=lib_path.parent) as tmp:
             tmp_lib = Path(tmp) / lib_path.name
-            res = subprocess.run([cc, "-O2", "-shared", "-fPIC", "-o", str(tmp_lib), str(SOURCE),
-                                  "-lm"], capture_output=True, text=True)
+            res = subprocess.run([cc, "-O2", "-shared", "-fPIC", "-I", str(SOURCE.parent), "-o",
+                                  str(tmp_lib), str(SOURCE), "-lm"], capture_output=True, text=True)
             if res.returncode != 0:
                 raise NativeUnavailable(f"compiling the driver failed: {res.stderr.strip()[:300]}")
             os.replace(tmp_lib, lib_path)  # atomic: parallel workers may race here
@@ -71,7 +73,7 @@ def load_driver() -> ctypes.CDLL:
     f.argtypes = [vp, vp, vp, vp, vp, vp, ctypes.c_int, dp, ctypes.c_double, ctypes.c_double,
                   ctypes.c_double, ctypes.c_int, ctypes.c_int, ctypes.POINTER(ctypes.c_uint32),
                   dp, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_long,
-                  ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_long)]
+                  ctypes.c_int, ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_long)]
     f.restype = ctypes.c_int
     _LIBRARY = lib
     return lib
@@ -85,10 +87,14 @@ class NativeMeRunner:
         model_description: its model description
         output_refs: value references of the Float64 outputs to sample
         relative_tolerance: error tolerance of the integrator
+        method: "dop853" or "dopri5"
     """
 
     def __init__(self, instance, model_description, output_refs: list[int],
-                 relative_tolerance: float) -> None:
+                 relative_tolerance: float, method: str = "dop853") -> None:
+        if method not in METHODS:
+            raise NativeUnavailable(f"method must be one of {list(METHODS)}, got {method!r}")
+        self.method = METHODS[method]
         if not supports(model_description):
             raise NativeUnavailable("only FMI 3.0 Model-Exchange FMUs without event indicators")
         self.lib = load_driver()
@@ -132,7 +138,8 @@ class NativeMeRunner:
         rc = self.lib.pd_integrate(
             inst.component, *self.pointers, self.nx, x.ctypes.data_as(dptr), 0.0,
             first_output_s, interval_s, n_out, self.ny, self.refs, out.ctypes.data_as(dptr),
-            self.rtol, 1e-12, interval_s, 10_000_000, ctypes.byref(n_rhs), ctypes.byref(n_steps))
+            self.rtol, 1e-12, interval_s, 10_000_000, self.method, ctypes.byref(n_rhs),
+            ctypes.byref(n_steps))
         self.n_rhs += n_rhs.value
         self.n_steps += n_steps.value
         inst.terminate()
