@@ -135,10 +135,12 @@ class NativeMeRunner:
         out = np.empty((n_out, self.ny))
         n_rhs, n_steps = ctypes.c_long(0), ctypes.c_long(0)
         dptr = ctypes.POINTER(ctypes.c_double)
+        # DOP853 interpolates outputs, so its steps are free; Dormand-Prince lands on the grid.
+        h_max = interval_s if self.method == 5 else first_output_s + n_out * interval_s
         rc = self.lib.pd_integrate(
             inst.component, *self.pointers, self.nx, x.ctypes.data_as(dptr), 0.0,
             first_output_s, interval_s, n_out, self.ny, self.refs, out.ctypes.data_as(dptr),
-            self.rtol, 1e-12, interval_s, 10_000_000, self.method, ctypes.byref(n_rhs),
+            self.rtol, 1e-12, h_max, 10_000_000, self.method, ctypes.byref(n_rhs),
             ctypes.byref(n_steps))
         self.n_rhs += n_rhs.value
         self.n_steps += n_steps.value

@@ -24,5 +24,15 @@ lines = [
     f"static const double DOP853_C[{N}] = {row(c.C[:N])};",
     f"static const double DOP853_E3[{N + 1}] = {row(c.E3)};",
     f"static const double DOP853_E5[{N + 1}] = {row(c.E5)};",
+    "/* dense output: three extra stages and the interpolation coefficients */",
+    f"#define DOP853_STAGES_EXTENDED {c.N_STAGES_EXTENDED}",
+    f"#define DOP853_INTERPOLATOR_POWER {c.INTERPOLATOR_POWER}",
+    f"static const double DOP853_A_EXTRA[{c.N_STAGES_EXTENDED - N - 1}][{c.N_STAGES_EXTENDED}] = {{",
+    *[f"    {row(c.A[i])}," for i in range(N + 1, c.N_STAGES_EXTENDED)],
+    "};",
+    f"static const double DOP853_C_EXTRA[{c.N_STAGES_EXTENDED - N - 1}] = {row(c.C[N + 1:])};",
+    f"static const double DOP853_D[{c.D.shape[0]}][{c.D.shape[1]}] = {{",
+    *[f"    {row(r)}," for r in c.D],
+    "};",
 ]
 Path(__file__).with_name("dop853_coefficients.h").write_text("\n".join(lines) + "\n")

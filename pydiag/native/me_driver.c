@@ -5,9 +5,10 @@
  * The caller (pydiag/native_me.py) instantiates, parameterises and initialises the FMU
  * with fmpy, enters continuous-time mode, then passes the instance and the addresses
  * of five fmi3 functions. Integration: an explicit embedded Runge-Kutta pair with
- * adaptive steps, each step clipped to land on the output grid (no interpolation):
- * method 8 is DOP853 (Hairer's 8(5,3), coefficients generated from scipy), method 5 is
- * Dormand-Prince 5(4). Only FMUs without event indicators qualify (the Python side
+ * adaptive steps. Method 8 is DOP853 (Hairer's 8(5,3), coefficients generated from
+ * scipy) with its 7th-order dense output: steps run freely and outputs are evaluated at
+ * interpolated states. Method 5 is Dormand-Prince 5(4) with steps clipped to land on the
+ * output grid. Only FMUs without event indicators qualify (the Python side
  * checks).
  *
  * Error scale per state: atol + rtol * max(|x_i|, |x_new_i|, peak_i), where peak_i is
@@ -69,6 +70,132 @@ static int rhs(const Model *m, double t, const double *x, double *dx) {
     return PD_OK;
 }
 
+static double scale_of(double atol, double rtol, double a, double b, double peak) {
+    return atol + rtol * fmax(fmax(fabs(a), fabs(b)), peak);
+}
+
+/* DOP853 with dense output. */
+static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed, double *x,
+                           double t0, double t_first_out, double h_out, int n_out, size_t ny,
+                           const uint32_t *vr, double *out, double rtol, double atol,
+                           double h_max, long max_steps, long *n_steps) {
+    const int S = DOP853_STAGES, SE = DOP853_STAGES_EXTENDED, P = DOP853_INTERPOLATOR_POWER;
+    size_t nx = m->nx, n = nx ? nx : 1;
+    double *w = calloc((size_t)(SE + P + 4) * n, sizeof(double));
+    if (!w) return PD_NO_MEMORY;
+    double *K = w, *F = K + (size_t)SE * n, *xs = F + (size_t)P * n, *xn = xs + n,
+           *peak = xn + n, *sc = peak + n;
+    int rc = PD_OK;
+    double t = t0, t_end = t_first_out + (n_out - 1) * h_out;
+    int k = 0;
+    for (size_t i = 0; i < nx; i++) peak[i] = fabs(x[i]);
+    if (nx) rc = rhs(m, t, x, K);
+    double h = fmin(h_out, h_max) * 0.1;
+    /* outputs at or before the start */
+    while (rc == PD_OK && k < n_out && t_first_out + k * h_out <= t + 1e-12 * fmax(1.0, fabs(t))) {
+        double tk = t_first_out + k * h_out;
+        if (!FMI_OK(m->set_time(m->inst, tk)) || (nx && !FMI_OK(m->set_states(m->inst, x, nx)))
+            || !FMI_OK(get_f64(m->inst, vr, ny, out + (size_t)k * ny, ny))) rc = PD_FMI_ERROR;
+        k++;
+    }
+    while (rc == PD_OK && k < n_out && nx) {
+        if (*n_steps >= max_steps) { rc = PD_MAX_STEPS; break; }
+        double hh = fmin(h, h_max);
+        if (t + hh > t_end) hh = t_end - t;  /* never integrate past the last output */
+        for (int s = 1; s < S && rc == PD_OK; s++) {
+            for (size_t i = 0; i < nx; i++) {
+                double acc = 0.0;
+                for (int j = 0; j < s; j++) acc += DOP853_A[s][j] * K[j * n + i];
+                xs[i] = x[i] + hh * acc;
+            }
+            rc = rhs(m, t + DOP853_C[s] * hh, xs, K + s * n);
+        }
+        if (rc) break;
+        for (size_t i = 0; i < nx; i++) {
+            double acc = 0.0;
+            for (int j = 0; j < S; j++) acc += DOP853_B[j] * K[j * n + i];
+            xn[i] = x[i] + hh * acc;
+        }
+        if ((rc = rhs(m, t + hh, xn, K + S * n))) break;
+        double e5 = 0.0, e3 = 0.0;
+        for (size_t i = 0; i < nx; i++) {
+            sc[i] = scale_of(atol, rtol, x[i], xn[i], peak[i]);
+            double a5 = 0.0, a3 = 0.0;
+            for (int j = 0; j <= S; j++) {
+                a5 += DOP853_E5[j] * K[j * n + i];
+                a3 += DOP853_E3[j] * K[j * n + i];
+            }
+            e5 += (a5 / sc[i]) * (a5 / sc[i]);
+            e3 += (a3 / sc[i]) * (a3 / sc[i]);
+        }
+        double norm = (e5 == 0.0 && e3 == 0.0) ? 0.0 : fabs(hh) * e5 / sqrt((e5 + 0.01 * e3) * (double)nx);
+        if (!isfinite(norm)) { rc = PD_NOT_FINITE; break; }
+        double factor = norm > 0 ? 0.9 * pow(norm, -1.0 / 8) : 10.0;
+        factor = fmin(10.0, fmax(0.2, factor));
+        if (norm > 1.0) {
+            h = hh * fmax(0.2, factor);
+            if (h < 1e-14 * fmax(1.0, fabs(t))) { rc = PD_STEP_UNDERFLOW; break; }
+            continue;
+        }
+        double t_new = t + hh;
+        bool last = t_new >= t_end - 1e-12 * fmax(1.0, fabs(t_end));
+        if (last) t_new = t_end;
+        /* outputs inside (t, t_new]: interpolate */
+        if (k < n_out && t_first_out + k * h_out <= t_new + 1e-12 * fmax(1.0, fabs(t_new))) {
+            for (int e = 0; e < SE - S - 1 && rc == PD_OK; e++) {
+                int s = S + 1 + e;
+                for (size_t i = 0; i < nx; i++) {
+                    double acc = 0.0;
+                    for (int j = 0; j < s; j++) acc += DOP853_A_EXTRA[e][j] * K[j * n + i];
+                    xs[i] = x[i] + hh * acc;
+                }
+                rc = rhs(m, t + DOP853_C_EXTRA[e] * hh, xs, K + s * n);
+            }
+            if (rc) break;
+            for (size_t i = 0; i < nx; i++) {
+                double dy = xn[i] - x[i];
+                F[0 * n + i] = dy;
+                F[1 * n + i] = hh * K[i] - dy;
+                F[2 * n + i] = 2 * dy - hh * (K[S * n + i] + K[i]);
+                for (int r = 0; r < P - 3; r++) {
+                    double acc = 0.0;
+                    for (int j = 0; j < SE; j++) acc += DOP853_D[r][j] * K[j * n + i];
+                    F[(3 + r) * n + i] = hh * acc;
+                }
+            }
+            while (k < n_out && t_first_out + k * h_out <= t_new + 1e-12 * fmax(1.0, fabs(t_new))) {
+                double tk = t_first_out + k * h_out;
+                double u = (tk - t) / hh;
+                for (size_t i = 0; i < nx; i++) {
+                    double y = 0.0;
+                    for (int r = P - 1, q = 0; r >= 0; r--, q++) {
+                        y += F[r * n + i];
+                        y *= (q % 2 == 0) ? u : 1.0 - u;
+                    }
+                    xs[i] = x[i] + y;
+                }
+                if (!FMI_OK(m->set_time(m->inst, tk)) || !FMI_OK(m->set_states(m->inst, xs, nx))
+                    || !FMI_OK(get_f64(m->inst, vr, ny, out + (size_t)k * ny, ny))) { rc = PD_FMI_ERROR; break; }
+                for (size_t j = 0; j < ny; j++)
+                    if (!isfinite(out[(size_t)k * ny + j])) rc = PD_NOT_FINITE;
+                k++;
+            }
+            if (rc) break;
+        }
+        t = t_new;
+        memcpy(x, xn, nx * sizeof(double));
+        memcpy(K, K + S * n, nx * sizeof(double)); /* first same as last */
+        for (size_t i = 0; i < nx; i++) peak[i] = fmax(peak[i], fabs(x[i]));
+        ++*n_steps;
+        bool enter_event = false, terminate = false;
+        if (!FMI_OK(completed(m->inst, true, &enter_event, &terminate))) { rc = PD_FMI_ERROR; break; }
+        if (terminate) { rc = PD_TERMINATED; break; }
+        h = hh * factor;
+    }
+    free(w);
+    return rc;
+}
+
 int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_derivs,
                  void *p_get_f64, void *p_completed, int nx_, double *x, double t0,
                  double t_first_out, double h_out, int n_out, int ny_, const uint32_t *vr,
@@ -82,9 +209,12 @@ int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_d
     int stages;
     const double *A, *B, *C;
     double exponent;
-    if (method == 8) {
-        stages = DOP853_STAGES; A = &DOP853_A[0][0]; B = DOP853_B; C = DOP853_C; exponent = -1.0 / 8;
-    } else if (method == 5) {
+    *n_rhs = 0;
+    *n_steps = 0;
+    if (method == 8)
+        return integrate_dense(&m, get_f64, completed, x, t0, t_first_out, h_out, n_out, ny, vr,
+                               out, rtol, atol, h_max, max_steps, n_steps);
+    if (method == 5) {
         stages = DP5_STAGES; A = &DP5_A[0][0]; B = DP5_B; C = DP5_C; exponent = -1.0 / 5;
     } else {
         return PD_BAD_METHOD;
