@@ -5,12 +5,13 @@ PYTHON_BOOT ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-MODELS := GearPair
-FMUS := $(patsubst %,build/%.fmu,$(MODELS))
+EFFECTS := GearEccentricity GearToothFault SecondPinionToothFault Backlash BearingOuterRace \
+           BearingInnerRace LoadFluctuation
+FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)
 
-.PHONY: venv fmu demo test test-slow regress bless bench clean
+.PHONY: venv fmu demo test test-slow regress bless bench loop clean
 
 venv: $(STAMP)
 
@@ -29,6 +30,9 @@ fmu: $(FMUS)
 build/GearPair.fmu: $(MODELICA) $(BRIDGE) $(STAMP)
 	$(PY) -m fmu_build modelica/GearDiag/GearPair.mo --model GearDiag.GearPair -o $@
 
+build/effects/%.fmu: $(MODELICA) $(BRIDGE) $(STAMP)
+	$(PY) -m fmu_build modelica/GearDiag/Effects/$*.mo --model GearDiag.Effects.$* -o $@
+
 demo: fmu
 	$(PY) -m pydiag demo --fmu build/GearPair.fmu
 
@@ -46,6 +50,10 @@ bless: fmu
 
 bench: fmu
 	$(PY) bench/paper_cases.py
+
+# docs/loop.md, end to end: a measurement with a bearing defect the base model lacks
+loop: fmu
+	bash docs/loop.sh
 
 clean:
 	rm -rf build

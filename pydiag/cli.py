@@ -1,4 +1,4 @@
-"""Command line: pydiag simulate | diagnose | batch | regress | inspect | demo.
+"""Command line: pydiag simulate | diagnose | compare | history | batch | regress | inspect | demo.
 
 Library modules never print; this module does. Known failures end with one line on
 stderr and exit status 2; a failed regression check exits 1.
@@ -255,6 +255,85 @@ def cmd_regress(args) -> int:
     return 0 if report.passed else 1
 
 
+# ---------------------------------------------------------------------- compare, history
+def _bearing(text: str | None):
+    from pydiag.kinematic_map import Bearing
+    if not text:
+        return None
+    try:
+        parts = [float(v) for v in text.split(",")]
+        n, d_mm, pitch_mm = parts[:3]
+        angle = parts[3] if len(parts) > 3 else 0.0
+    except ValueError:
+        raise UsageError(f"--bearing takes N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG], got '{text}'") from None
+    return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, np.radians(angle))
+
+
+def cmd_compare(args) -> int:
+    from pydiag import history
+    from pydiag.compare import compare
+    from pydiag.plant import read_model_description
+
+    if args.json and Path(args.json).resolve() == Path(args.measurement).resolve():
+        raise UsageError("--json would overwrite the measurement file")
+    from pydiag.compare import refit_with_effect
+    from pydiag.effects import EFFECTS
+
+    effect = None
+    if args.effect:
+        if args.effect not in EFFECTS:
+            raise UsageError(f"unknown effect '{args.effect}'; known: {', '.join(EFFECTS)}")
+        effect = EFFECTS[args.effect]
+    m = read_measurement(args.measurement, args.sample_rate, args.column)
+    bearing = _bearing(args.bearing)
+    update, close = _progress_bar(args.quiet)
+    # with an effect model, the base fit runs with the effect switched off (lower bounds)
+    neutral = {n: lo for n, lo, _ in effect.parameters} if effect else None
+    est = FaultEstimator(args.fmu, adapter=_adapter(args), fixed_values=neutral,
+                         n_particles=args.particles, iterations=args.iterations, seed=args.seed,
+                         polish_evaluations=args.polish, n_workers=args.workers, progress=update)
+    try:
+        c = compare(args.fmu, m, est, bearing, args.false_alarm_rate)
+        if effect is not None:
+            c = refit_with_effect(args.fmu, m, c, effect, bearing, args.seed, args.workers)
+    finally:
+        close()
+    md, _ = read_model_description(Path(args.fmu))
+    run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
+    print(f"error      : {c.error:.5f} (Eq. 12 on {c.n_error_bins} bins: synchronous lines and "
+          f"the measurement's peaks; {c.n_periods} periods, {c.bin_hz:.3g} Hz bins)")
+    print("parameters : " + ", ".join(f"{k}={v:.4g}" for k, v in c.parameters.items()))
+    print(f"peaks      : {len(c.peaks)} unexplained above the noise floor "
+          f"(false-alarm rate {c.false_alarm_rate:g})")
+    for i, p in enumerate(c.peaks[:10], 1):
+        print(f"  {i:2d}. {p.channel:<5} {p.freq_hz:9.2f} Hz  {p.family:<15} {p.label:<24} "
+              f"{100 * p.energy_fraction:5.1f} % of residual energy")
+    shown = [s for s in c.suggested_effects if s.score > 0]
+    print("suggested  : " + ("none" if not shown else ""))
+    for s in shown:
+        flag = "confident" if s.confidence >= 0.5 else "weak"
+        print(f"  {s.effect:<26} confidence {s.confidence:.2f} ({flag}); " + "; ".join(s.evidence[:1]))
+    print(f"recorded as run {run_id} in {args.history}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(c.to_dict(), indent=2) + "\n")
+    return 0
+
+
+def cmd_history(args) -> int:
+    from pydiag import history
+
+    rows = history.runs(args.history)
+    if not rows:
+        raise UsageError(f"no compare runs recorded in {args.history}")
+    print(f"{'run':>4} {'time (UTC)':<20} {'model':<28} {'fmu sha256':<12} {'error':>8} {'peaks':>5}")
+    for r in rows:
+        print(f"{r['id']:4d} {r['time_utc']:<20} {(r['model_name'] or '')[:28]:<28} "
+              f"{r['fmu_sha256'][:12]:<12} {r['error']:8.4f} {r['n_peaks']:5d}")
+    if args.plot:
+        print(f"wrote {history.plot(rows, args.plot)}")
+    return 0
+
+
 # ---------------------------------------------------------------------- inspect
 def cmd_inspect(args) -> int:
     from pydiag.inspect_fmu import describe, format_info
@@ -350,6 +429,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--adapter", help="adapter TOML (sensors, start values, kinematics) for --bless")
     p.set_defaults(func=cmd_regress)
 
+    p = sub.add_parser("compare", help="fit, then show where the model fails and which effect is missing")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--measurement", required=True)
+    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
+    p.add_argument("--sample-rate", type=float, default=None, help="Hz, if the CSV has no time_s")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
+    p.add_argument("--bearing", help="pinion bearing N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG] "
+                                     "for BPFO/BPFI/BSF/FTF")
+    p.add_argument("--false-alarm-rate", type=float, default=0.01,
+                   help="chance of any false peak on a perfect model (default 0.01)")
+    p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
+    p.add_argument("--history", default="pydiag_history.sqlite", help="SQLite run history")
+    p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
+    p.add_argument("--effect", help="the FMU is this catalogue effect's model (e.g. "
+                                    "bearing_outer_race): also fit the effect's parameters")
+    _add_optimiser_args(p)
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
+    p.add_argument("--history", default="pydiag_history.sqlite")
+    p.add_argument("--plot", help="PNG file for the error history")
+    p.set_defaults(func=cmd_history)
+
     p = sub.add_parser("inspect", help="describe an FMU: version, interfaces, settable variables")
     p.add_argument("fmu", nargs="+")
     p.add_argument("--all", action="store_true", help="list every variable, not only the interface")
@@ -370,7 +472,7 @@ def main(argv: list[str] | None = None) -> int:
         from pydiag.regress import DEFAULT_RTOL
         args.rtol = DEFAULT_RTOL
     try:
-        if args.command in ("simulate", "diagnose", "batch", "regress", "demo"):
+        if args.command in ("simulate", "diagnose", "batch", "regress", "demo", "compare"):
             _warn_validation(args.fmu)
         return args.func(args)
     except (UsageError, *KNOWN_ERRORS) as err:

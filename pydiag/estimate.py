@@ -194,6 +194,8 @@ class FaultEstimator:
         eval_timeout_s: wall-time limit of one simulation; a longer one is killed, penalised
         max_consecutive_failures: failed simulations in a row that stop the fit
         relative_tolerance, engine: simulation settings (default: adapter's)
+        featurizer: override the features (an object with ``duration_s``, ``max_freq_hz``,
+            ``describe_duration()`` and ``__call__(signal, rate) -> Features``)
         progress: called as progress(done, total, best_error) after each batch
     """
 
@@ -206,7 +208,7 @@ class FaultEstimator:
                  warmup_s: float | None = None, n_workers: int | None = None,
                  relative_tolerance: float | None = None, engine: str | None = None,
                  eval_timeout_s: float = 60.0, max_consecutive_failures: int = 20,
-                 progress: Callable[[int, int, float], None] | None = None) -> None:
+                 featurizer=None, progress: Callable[[int, int, float], None] | None = None) -> None:
         if n_particles < 2 or iterations < 1:
             raise EstimationError("need at least 2 particles and 1 iteration")
         for p in parameters or ():
@@ -228,6 +230,7 @@ class FaultEstimator:
         self.n_workers = n_workers or os.cpu_count() or 1
         self.relative_tolerance = relative_tolerance
         self.engine = engine
+        self.featurizer = featurizer
         self.eval_timeout_s = eval_timeout_s
         self.max_consecutive_failures = max_consecutive_failures
         self.progress = progress
@@ -264,7 +267,11 @@ class FaultEstimator:
                     {**plant.parameters(), **spec.fixed_values})
         except (PlantError, AdapterError) as err:
             raise EstimationError(str(err)) from None
-        if kin is not None:
+        if self.featurizer is not None:
+            featurizer = self.featurizer
+            top = featurizer.max_freq_hz
+            what = "the highest analysed frequency"
+        elif kin is not None:
             featurizer = KinematicFeaturizer(kin, self.feature_mode)
             top = featurizer.max_freq_hz
             what = "the highest band edge"

@@ -139,3 +139,46 @@ class SpectrumFeaturizer:
         high = freqs > self.max_freq_hz
         noise = float(np.median(amp[high] ** 2) / np.log(2)) if np.count_nonzero(high) > 8 else 0.0
         return Features(amp[keep], freqs[keep], noise)
+
+
+class FullSpectrumFeaturizer:
+    """Full-resolution amplitudes of ``n_periods`` whole periods, at selected bins.
+
+    Used by ``compare``: ``bins`` is a boolean mask over the bins from 1/(n_periods T0) to
+    ``max_freq_hz``; the measurement defines it (synchronous lines plus its own peaks), so
+    every model is scored on the same bins. The noise power is the median power of the
+    bins between synchronous lines over ln 2 (the mean of an exponential distribution),
+    robust to the non-synchronous peaks a missing effect leaves there.
+    """
+
+    def __init__(self, kinematics: GearKinematics, n_periods: int, max_freq_hz: float,
+                 bins: np.ndarray | None = None) -> None:
+        self.kinematics = kinematics
+        self.n_periods = n_periods
+        self.max_freq_hz = max_freq_hz
+        self.duration_s = n_periods * kinematics.period_s
+        self.bins = bins
+
+    def describe_duration(self) -> str:
+        return f"{self.n_periods} fundamental periods ({self.duration_s:.4g} s)"
+
+    def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """(freq_hz, amplitude, noise_power) over all bins up to max_freq_hz."""
+        n = int(round(self.duration_s * sample_rate_hz))
+        signal = np.asarray(signal, dtype=float)
+        if signal.size < n:
+            raise ValueError(f"record of {signal.size / sample_rate_hz:.4g} s is shorter than "
+                             f"{self.describe_duration()}")
+        x = signal[:n] - np.mean(signal[:n])
+        amp = 2.0 * np.abs(np.fft.rfft(x)) / n
+        freqs = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
+        keep = (freqs > 0) & (freqs <= self.max_freq_hz)
+        idx = np.flatnonzero(keep)
+        off = idx[idx % self.n_periods != 0]
+        noise = float(np.median(amp[off] ** 2) / np.log(2)) if off.size else 0.0
+        return freqs[keep], amp[keep], noise
+
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
+        freqs, amp, noise = self.spectrum(signal, sample_rate_hz)
+        mask = self.bins if self.bins is not None else np.ones(freqs.size, dtype=bool)
+        return Features(amp[mask], freqs[mask], noise)
