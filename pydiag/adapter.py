@@ -167,6 +167,17 @@ def _check_keys(table: dict, allowed: set[str], where: str) -> None:
         raise AdapterError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
 
 
+def _tables(data: dict, key: str, allowed: set[str], source: str):
+    """(where, table) for each [[key]] table; at least one is required."""
+    tables = data.get(key)
+    if not isinstance(tables, list) or not tables:
+        raise AdapterError(f"{source}: at least one [[{key}]] table is required")
+    for i, table in enumerate(tables):
+        where = f"{source} [[{key}]] #{i + 1}"
+        _check_keys(table, allowed, where)
+        yield where, table
+
+
 def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
     _check_keys(data, {"simulation", "kinematics", "spectrum", "start_values", "sensor",
                        "fault_parameter"}, source)
@@ -186,13 +197,8 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
     if warmup < 0:
         raise AdapterError(f"{source} [simulation]: 'warmup_s' must not be negative")
 
-    sensors = data.get("sensor")
-    if not isinstance(sensors, list) or not sensors:
-        raise AdapterError(f"{source}: at least one [[sensor]] table is required")
     sensor_maps = []
-    for i, s in enumerate(sensors):
-        where = f"{source} [[sensor]] #{i + 1}"
-        _check_keys(s, {"channel", "variable", "scale"}, where)
+    for where, s in _tables(data, "sensor", {"channel", "variable", "scale"}, source):
         variable = _string(s, "variable", where)
         sensor_maps.append(SensorMap(s.get("channel", variable) or variable, variable,
                                      _number(s, "scale", where, default=1.0)))
@@ -200,13 +206,9 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
     if len(set(channels)) != len(channels):
         raise AdapterError(f"{source}: [[sensor]] channels must be unique, got {channels}")
 
-    params = data.get("fault_parameter")
-    if not isinstance(params, list) or not params:
-        raise AdapterError(f"{source}: at least one [[fault_parameter]] table is required")
     param_maps = []
-    for i, p in enumerate(params):
-        where = f"{source} [[fault_parameter]] #{i + 1}"
-        _check_keys(p, {"variable", "role", "low", "high", "scale"}, where)
+    for where, p in _tables(data, "fault_parameter", {"variable", "role", "low", "high", "scale"},
+                            source):
         variable = _string(p, "variable", where)
         low, high = _number(p, "low", where), _number(p, "high", where)
         if not low < high:

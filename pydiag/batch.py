@@ -79,12 +79,7 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
     if scheduler == "local":
         workers = n_workers or os.cpu_count() or 1
         if workers == 1:
-            rows = []
-            for i, t in enumerate(tasks):
-                rows.append(diagnose_task(t))
-                if progress:
-                    progress(i + 1, len(tasks))
-            return rows
+            return _collect(tasks, diagnose_task, progress)
         with ProcessPoolExecutor(workers) as pool:
             futures = [pool.submit(diagnose_task, t) for t in tasks]
             return _collect(futures, lambda f: f.result(), progress)
@@ -97,12 +92,13 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
             client.close()
 
 
-def _collect(futures, result, progress) -> list[dict]:
+def _collect(items, result, progress) -> list[dict]:
+    """``result(item)`` for each item in order, reporting progress."""
     rows = []
-    for i, fut in enumerate(futures):
-        rows.append(result(fut))
+    for i, item in enumerate(items):
+        rows.append(result(item))
         if progress:
-            progress(i + 1, len(futures))
+            progress(i + 1, len(items))
     return rows
 
 

@@ -87,6 +87,15 @@ def signal_features(signal: np.ndarray, sample_rate_hz: float, kin: GearKinemati
 
 
 # ---------------------------------------------------------------------- featurizers
+def _window(signal: np.ndarray, sample_rate_hz: float, duration_s: float, what: str) -> np.ndarray:
+    """The first ``duration_s`` of ``signal``, mean removed; a shorter record is an error."""
+    n = int(round(duration_s * sample_rate_hz))
+    signal = np.asarray(signal, dtype=float)
+    if signal.size < n:
+        raise ValueError(f"record of {signal.size / sample_rate_hz:.4g} s is shorter than {what}")
+    return signal[:n] - np.mean(signal[:n])
+
+
 class KinematicFeaturizer:
     """Gear models: features at the kinematic lines of one fundamental period."""
 
@@ -126,12 +135,8 @@ class SpectrumFeaturizer:
         return f"the analysis window ({self.duration_s:.4g} s)"
 
     def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
-        n = int(round(self.duration_s * sample_rate_hz))
-        signal = np.asarray(signal, dtype=float)
-        if signal.size < n:
-            raise ValueError(f"record of {signal.size / sample_rate_hz:.4g} s is shorter than the "
-                             f"analysis window ({self.duration_s:.4g} s)")
-        x = signal[:n] - np.mean(signal[:n])
+        x = _window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
+        n = x.size
         window = np.hanning(n)
         amp = 2.0 * np.abs(np.fft.rfft(x * window)) / np.sum(window)
         freqs = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
@@ -164,12 +169,8 @@ class FullSpectrumFeaturizer:
 
     def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, np.ndarray, float]:
         """(freq_hz, amplitude, noise_power) over all bins up to max_freq_hz."""
-        n = int(round(self.duration_s * sample_rate_hz))
-        signal = np.asarray(signal, dtype=float)
-        if signal.size < n:
-            raise ValueError(f"record of {signal.size / sample_rate_hz:.4g} s is shorter than "
-                             f"{self.describe_duration()}")
-        x = signal[:n] - np.mean(signal[:n])
+        x = _window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
+        n = x.size
         amp = 2.0 * np.abs(np.fft.rfft(x)) / n
         freqs = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)

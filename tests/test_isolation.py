@@ -61,11 +61,8 @@ def test_consecutive_failures_stop_with_the_cause(hostile_fmu, low, high, cause)
 def test_cosimulation_divergence_is_detected_and_the_step_chosen_from_bands(tmp_path):
     """Explicit Euler inside doStep: stable at 1e-5 s steps, explodes at 1e-4 s (lambda*h = 3)."""
     pytest.importorskip("pythonfmu")
-    import subprocess
-    import sys
-    from pathlib import Path
-    src = tmp_path / "Stiff.py"
-    src.write_text('''
+    from fmus import build_pythonfmu
+    fmu = build_pythonfmu(tmp_path, "Stiff", '''
 import math
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 
@@ -86,10 +83,6 @@ class Stiff(Fmi2Slave):
         self.y = self.x
         return True
 ''')
-    exe = Path(sys.executable).with_name("pythonfmu")
-    subprocess.run([str(exe), "build", "-f", str(src), "-d", str(tmp_path)], check=True,
-                   capture_output=True)
-    fmu = tmp_path / "Stiff.fmu"
     with FmuPlant(fmu, ("y",), sample_rate_hz=10_000.0) as plant:
         with pytest.raises(PlantError, match=r"diverged \(Co-Simulation communication step 0.0001"):
             plant.simulate({}, 0.05, 0.0)

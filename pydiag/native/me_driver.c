@@ -70,6 +70,24 @@ static int rhs(const Model *m, double t, const double *x, double *dx) {
     return PD_OK;
 }
 
+/* Stages s = first..last-1 of an explicit RK tableau: K[s] = f(t + c_s h, x + h sum_j a_sj K[j]).
+ * Row s of the tableau is A[(s - row0) * lda], its node C[s - row0]. */
+static int stages(const Model *m, const double *A, int lda, const double *C, int row0, int first,
+                  int last, const double *x, double t, double hh, double *K, double *xs) {
+    size_t nx = m->nx, n = nx ? nx : 1;
+    for (int s = first; s < last; s++) {
+        const double *a = A + (size_t)(s - row0) * lda;
+        for (size_t i = 0; i < nx; i++) {
+            double acc = 0.0;
+            for (int j = 0; j < s; j++) acc += a[j] * K[j * n + i];
+            xs[i] = x[i] + hh * acc;
+        }
+        int rc = rhs(m, t + C[s - row0] * hh, xs, K + s * n);
+        if (rc) return rc;
+    }
+    return PD_OK;
+}
+
 static double scale_of(double atol, double rtol, double a, double b, double peak) {
     return atol + rtol * fmax(fmax(fabs(a), fabs(b)), peak);
 }
@@ -102,15 +120,7 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
         if (*n_steps >= max_steps) { rc = PD_MAX_STEPS; break; }
         double hh = fmin(h, h_max);
         if (t + hh > t_end) hh = t_end - t;  /* never integrate past the last output */
-        for (int s = 1; s < S && rc == PD_OK; s++) {
-            for (size_t i = 0; i < nx; i++) {
-                double acc = 0.0;
-                for (int j = 0; j < s; j++) acc += DOP853_A[s][j] * K[j * n + i];
-                xs[i] = x[i] + hh * acc;
-            }
-            rc = rhs(m, t + DOP853_C[s] * hh, xs, K + s * n);
-        }
-        if (rc) break;
+        if ((rc = stages(m, &DOP853_A[0][0], S, DOP853_C, 0, 1, S, x, t, hh, K, xs))) break;
         for (size_t i = 0; i < nx; i++) {
             double acc = 0.0;
             for (int j = 0; j < S; j++) acc += DOP853_B[j] * K[j * n + i];
@@ -142,16 +152,8 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
         if (last) t_new = t_end;
         /* outputs inside (t, t_new]: interpolate */
         if (k < n_out && t_first_out + k * h_out <= t_new + 1e-12 * fmax(1.0, fabs(t_new))) {
-            for (int e = 0; e < SE - S - 1 && rc == PD_OK; e++) {
-                int s = S + 1 + e;
-                for (size_t i = 0; i < nx; i++) {
-                    double acc = 0.0;
-                    for (int j = 0; j < s; j++) acc += DOP853_A_EXTRA[e][j] * K[j * n + i];
-                    xs[i] = x[i] + hh * acc;
-                }
-                rc = rhs(m, t + DOP853_C_EXTRA[e] * hh, xs, K + s * n);
-            }
-            if (rc) break;
+            if ((rc = stages(m, &DOP853_A_EXTRA[0][0], SE, DOP853_C_EXTRA, S + 1, S + 1, SE, x, t,
+                             hh, K, xs))) break;
             for (size_t i = 0; i < nx; i++) {
                 double dy = xn[i] - x[i];
                 F[0 * n + i] = dy;
@@ -196,40 +198,21 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
     return rc;
 }
 
-int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_derivs,
-                 void *p_get_f64, void *p_completed, int nx_, double *x, double t0,
-                 double t_first_out, double h_out, int n_out, int ny_, const uint32_t *vr,
-                 double *out, double rtol, double atol, double h_max, long max_steps,
-                 int method, long *n_rhs, long *n_steps) {
-    Model m = {inst, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
-               (fn_get_derivs)p_get_derivs, (size_t)nx_, n_rhs};
-    fn_get_f64 get_f64 = (fn_get_f64)p_get_f64;
-    fn_completed completed = (fn_completed)p_completed;
-    size_t nx = m.nx, ny = (size_t)ny_;
-    int stages;
-    const double *A, *B, *C;
-    double exponent;
-    *n_rhs = 0;
-    *n_steps = 0;
-    if (method == 8)
-        return integrate_dense(&m, get_f64, completed, x, t0, t_first_out, h_out, n_out, ny, vr,
-                               out, rtol, atol, h_max, max_steps, n_steps);
-    if (method == 5) {
-        stages = DP5_STAGES; A = &DP5_A[0][0]; B = DP5_B; C = DP5_C; exponent = -1.0 / 5;
-    } else {
-        return PD_BAD_METHOD;
-    }
-    size_t n = nx ? nx : 1;
-    /* K: stages + 1 rows (the last is f at the new point, FSAL); xs, xn, peak, sc */
-    double *w = calloc((size_t)(stages + 1 + 4) * n, sizeof(double));
+/* Dormand-Prince 5(4), each step clipped to land on the output grid. */
+static int integrate_grid(Model *m, fn_get_f64 get_f64, fn_completed completed, double *x,
+                          double t0, double t_first_out, double h_out, int n_out, size_t ny,
+                          const uint32_t *vr, double *out, double rtol, double atol,
+                          double h_max, long max_steps, long *n_steps) {
+    const int S = DP5_STAGES;
+    size_t nx = m->nx, n = nx ? nx : 1;
+    /* K: S + 1 rows (the last is f at the new point, FSAL); xs, xn, peak */
+    double *w = calloc((size_t)(S + 1 + 3) * n, sizeof(double));
     if (!w) return PD_NO_MEMORY;
-    double *K = w, *xs = w + (stages + 1) * n, *xn = xs + n, *peak = xn + n, *sc = peak + n;
+    double *K = w, *xs = w + (S + 1) * n, *xn = xs + n, *peak = xn + n;
     int rc = PD_OK;
     double t = t0;
-    *n_rhs = 0;
-    *n_steps = 0;
     for (size_t i = 0; i < nx; i++) peak[i] = fabs(x[i]);
-    if (nx) rc = rhs(&m, t, x, K);
+    if (nx) rc = rhs(m, t, x, K);
     double h = fmin(h_out, h_max) * 0.1;
     for (int k = 0; k < n_out && rc == PD_OK; k++) {
         double target = t_first_out + k * h_out;
@@ -237,58 +220,32 @@ int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_d
             if (*n_steps >= max_steps) { rc = PD_MAX_STEPS; break; }
             double hh = fmin(fmin(h, h_max), target - t);
             bool land = hh >= target - t;
-            for (int s = 1; s < stages && rc == PD_OK; s++) {
-                for (size_t i = 0; i < nx; i++) {
-                    double acc = 0.0;
-                    for (int j = 0; j < s; j++) acc += A[s * stages + j] * K[j * n + i];
-                    xs[i] = x[i] + hh * acc;
-                }
-                rc = rhs(&m, t + C[s] * hh, xs, K + s * n);
-            }
-            if (rc) break;
+            if ((rc = stages(m, &DP5_A[0][0], S, DP5_C, 0, 1, S, x, t, hh, K, xs))) break;
             for (size_t i = 0; i < nx; i++) {
                 double acc = 0.0;
-                for (int j = 0; j < stages; j++) acc += B[j] * K[j * n + i];
+                for (int j = 0; j < S; j++) acc += DP5_B[j] * K[j * n + i];
                 xn[i] = x[i] + hh * acc;
             }
-            if ((rc = rhs(&m, t + hh, xn, K + stages * n))) break;
-            for (size_t i = 0; i < nx; i++)
-                sc[i] = atol + rtol * fmax(fmax(fabs(x[i]), fabs(xn[i])), peak[i]);
-            double norm;
-            if (method == 8) {
-                double e5 = 0.0, e3 = 0.0;
-                for (size_t i = 0; i < nx; i++) {
-                    double a5 = 0.0, a3 = 0.0;
-                    for (int j = 0; j <= stages; j++) {
-                        a5 += DOP853_E5[j] * K[j * n + i];
-                        a3 += DOP853_E3[j] * K[j * n + i];
-                    }
-                    e5 += (a5 / sc[i]) * (a5 / sc[i]);
-                    e3 += (a3 / sc[i]) * (a3 / sc[i]);
-                }
-                norm = (e5 == 0.0 && e3 == 0.0) ? 0.0
-                       : fabs(hh) * e5 / sqrt((e5 + 0.01 * e3) * (double)nx);
-            } else {
-                double e = 0.0;
-                for (size_t i = 0; i < nx; i++) {
-                    double a = 0.0;
-                    for (int j = 0; j <= stages; j++) a += DP5_E[j] * K[j * n + i];
-                    a *= hh / sc[i];
-                    e += a * a;
-                }
-                norm = sqrt(e / (double)nx);
+            if ((rc = rhs(m, t + hh, xn, K + S * n))) break;
+            double e = 0.0;
+            for (size_t i = 0; i < nx; i++) {
+                double a = 0.0;
+                for (int j = 0; j <= S; j++) a += DP5_E[j] * K[j * n + i];
+                a *= hh / scale_of(atol, rtol, x[i], xn[i], peak[i]);
+                e += a * a;
             }
+            double norm = sqrt(e / (double)nx);
             if (!isfinite(norm)) { rc = PD_NOT_FINITE; break; }
-            double factor = norm > 0 ? 0.9 * pow(norm, exponent) : 10.0;
+            double factor = norm > 0 ? 0.9 * pow(norm, -1.0 / 5) : 10.0;
             factor = fmin(10.0, fmax(0.2, factor));
             if (norm <= 1.0) {
                 t = land ? target : t + hh;
                 memcpy(x, xn, nx * sizeof(double));
-                memcpy(K, K + stages * n, nx * sizeof(double)); /* first same as last */
+                memcpy(K, K + S * n, nx * sizeof(double)); /* first same as last */
                 for (size_t i = 0; i < nx; i++) peak[i] = fmax(peak[i], fabs(x[i]));
                 ++*n_steps;
                 bool enter_event = false, terminate = false;
-                if (!FMI_OK(completed(inst, true, &enter_event, &terminate))) { rc = PD_FMI_ERROR; break; }
+                if (!FMI_OK(completed(m->inst, true, &enter_event, &terminate))) { rc = PD_FMI_ERROR; break; }
                 if (terminate) { rc = PD_TERMINATED; break; }
                 if (!land || factor < 1.0) h = hh * factor; /* keep h when only the grid cut it */
             } else {
@@ -298,12 +255,32 @@ int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_d
         }
         if (rc) break;
         /* outputs at the grid point: the FMU holds a stage state, so set the accepted one */
-        if (!FMI_OK(m.set_time(inst, target))) { rc = PD_FMI_ERROR; break; }
-        if (nx && !FMI_OK(m.set_states(inst, x, nx))) { rc = PD_FMI_ERROR; break; }
-        if (!FMI_OK(get_f64(inst, vr, ny, out + (size_t)k * ny, ny))) { rc = PD_FMI_ERROR; break; }
+        if (!FMI_OK(m->set_time(m->inst, target))) { rc = PD_FMI_ERROR; break; }
+        if (nx && !FMI_OK(m->set_states(m->inst, x, nx))) { rc = PD_FMI_ERROR; break; }
+        if (!FMI_OK(get_f64(m->inst, vr, ny, out + (size_t)k * ny, ny))) { rc = PD_FMI_ERROR; break; }
         for (size_t j = 0; j < ny; j++)
             if (!isfinite(out[(size_t)k * ny + j])) { rc = PD_NOT_FINITE; break; }
     }
     free(w);
     return rc;
+}
+
+int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_derivs,
+                 void *p_get_f64, void *p_completed, int nx_, double *x, double t0,
+                 double t_first_out, double h_out, int n_out, int ny_, const uint32_t *vr,
+                 double *out, double rtol, double atol, double h_max, long max_steps,
+                 int method, long *n_rhs, long *n_steps) {
+    Model m = {inst, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
+               (fn_get_derivs)p_get_derivs, (size_t)nx_, n_rhs};
+    *n_rhs = 0;
+    *n_steps = 0;
+    if (method == 8)
+        return integrate_dense(&m, (fn_get_f64)p_get_f64, (fn_completed)p_completed, x, t0,
+                               t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol, atol, h_max,
+                               max_steps, n_steps);
+    if (method == 5)
+        return integrate_grid(&m, (fn_get_f64)p_get_f64, (fn_completed)p_completed, x, t0,
+                              t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol, atol, h_max,
+                              max_steps, n_steps);
+    return PD_BAD_METHOD;
 }

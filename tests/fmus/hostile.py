@@ -7,9 +7,9 @@
     otherwise        y = k sin(2 pi 5 t) + 0.5 sin(2 pi 12 t)
 """
 
-import subprocess
-import sys
 from pathlib import Path
+
+from fmus import build_pythonfmu
 
 SOURCE = '''
 import math
@@ -66,12 +66,4 @@ high = {high}
 
 
 def build(folder: Path) -> Path:
-    folder = Path(folder)
-    script = folder / "Hostile.py"
-    script.write_text(SOURCE)
-    exe = Path(sys.executable).with_name("pythonfmu")
-    res = subprocess.run([str(exe), "build", "-f", str(script), "-d", str(folder)],
-                         capture_output=True, text=True, cwd=folder)
-    if res.returncode != 0:
-        raise RuntimeError(f"pythonfmu build failed: {res.stderr[-500:]}")
-    return folder / "Hostile.fmu"
+    return build_pythonfmu(folder, "Hostile", SOURCE)

@@ -5,9 +5,9 @@ again (fault knob ``Fault_Amplitude``, output ``Accel``). Built by the ``pythonf
 command from SOURCE.
 """
 
-import subprocess
-import sys
 from pathlib import Path
+
+from fmus import build_pythonfmu
 
 SOURCE = '''
 import math
@@ -82,12 +82,4 @@ high = 0.9
 
 
 def build(folder: Path) -> Path:
-    folder = Path(folder)
-    script = folder / "PyGear.py"
-    script.write_text(SOURCE)
-    exe = Path(sys.executable).with_name("pythonfmu")
-    res = subprocess.run([str(exe), "build", "-f", str(script), "-d", str(folder)],
-                         capture_output=True, text=True, cwd=folder)
-    if res.returncode != 0:
-        raise RuntimeError(f"pythonfmu build failed: {res.stderr[-500:]}")
-    return folder / "PyGear.fmu"
+    return build_pythonfmu(folder, "PyGear", SOURCE)
