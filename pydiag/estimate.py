@@ -25,12 +25,14 @@ FMU instance; the result does not depend on the number of workers.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import multiprocessing as mp
 import os
 import time
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -44,6 +46,25 @@ from pydiag.kinematics import GearKinematics
 from pydiag.measurement import Measurement
 from pydiag.objective import spectral_residuals
 from pydiag.plant import FmuPlant, PlantError
+
+
+QUIET_PYSWARMS = Path(__file__).with_name("pyswarms_quiet.yaml")
+
+
+@contextlib.contextmanager
+def _quiet_pyswarms():
+    """pyswarms' Reporter configures the root logger (stderr at INFO, ./report.log) on
+    import and on every swarm, unless $LOG_CFG names a logging config: hand it a no-op one
+    for the duration, then restore the environment."""
+    saved = os.environ.get("LOG_CFG")
+    os.environ["LOG_CFG"] = str(QUIET_PYSWARMS)
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop("LOG_CFG", None)
+        else:
+            os.environ["LOG_CFG"] = saved
 
 
 class EstimationError(Exception):
@@ -352,7 +373,8 @@ class FaultEstimator:
                                dict(failures.reasons) if failures else {})
 
     def _swarm(self, residuals, lows, highs, history) -> tuple[list, list]:
-        from pyswarms.single import GlobalBestPSO
+        with _quiet_pyswarms():
+            from pyswarms.single import GlobalBestPSO
 
         def batch(xs: np.ndarray) -> np.ndarray:
             return np.array([np.inf if r is None else np.linalg.norm(r) for r in residuals(xs)])
@@ -366,9 +388,10 @@ class FaultEstimator:
         level = quiet.level
         quiet.setLevel(logging.WARNING)
         try:
-            pso = GlobalBestPSO(self.n_particles, lows.size,
-                                options={"c1": 1.49618, "c2": 1.49618, "w": 0.7298},
-                                bounds=(lows, highs), init_pos=init)
+            with _quiet_pyswarms():
+                pso = GlobalBestPSO(self.n_particles, lows.size,
+                                    options={"c1": 1.49618, "c2": 1.49618, "w": 0.7298},
+                                    bounds=(lows, highs), init_pos=init)
             pso.optimize(batch, iters=self.iterations, verbose=False)
             history.extend(float(c) for c in pso.cost_history)
         finally:

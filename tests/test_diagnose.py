@@ -86,3 +86,28 @@ def test_paper_case_full_diagnosis(gear_fmu, number):
     r = FaultEstimator(gear_fmu, seed=0).fit(noisy_measurement(gear_fmu, number, 0))
     assert max(abs(r.parameters[n] - c.parameters[n]) for n in NAMES) <= 0.03
     assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
+
+
+def test_fit_writes_no_files_and_leaves_logging_alone(gear_fmu, tmp_path):
+    """pyswarms would add root-logger handlers and write ./report.log; pydiag prevents it."""
+    import subprocess
+    import sys
+    script = f"""
+import logging, numpy as np
+from pydiag.estimate import FaultEstimator
+from pydiag.measurement import Measurement
+from pydiag.plant import FmuPlant
+with FmuPlant({str(gear_fmu)!r}, ("acc",)) as p:
+    y = p.simulate({{}}, 0.24, 0.05)[0]
+FaultEstimator({str(gear_fmu)!r}, n_particles=4, iterations=2, polish_evaluations=0,
+               n_workers=1).fit(Measurement({{"acc": y}}, 1e4))
+print(len(logging.getLogger().handlers))
+"""
+    import os
+    from conftest import ROOT
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    res = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True,
+                         text=True, env=env)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "0"
+    assert list(tmp_path.iterdir()) == []
