@@ -1,4 +1,5 @@
-"""Command line: pydiag simulate | diagnose | compare | history | batch | regress | inspect | demo.
+"""Command line: pydiag simulate | diagnose | compare | discover | history | batch | regress |
+inspect | demo.
 
 Library modules never print; this module does. Known failures end with one line on
 stderr and exit status 2; a failed regression check exits 1.
@@ -300,8 +301,9 @@ def cmd_compare(args) -> int:
         close()
     md, _ = read_model_description(Path(args.fmu))
     run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
-    print(f"error      : {c.error:.5f} (Eq. 12 on {c.n_error_bins} bins: synchronous lines and "
-          f"the measurement's peaks; {c.n_periods} periods, {c.bin_hz:.3g} Hz bins)")
+    print(f"error      : {c.error:.5f} (Eq. 12 less its noise part, {c.error_raw:.5f} raw, on "
+          f"{c.n_error_bins} bins: synchronous lines and the measurement's peaks; "
+          f"{c.n_periods} periods, {c.bin_hz:.3g} Hz bins)")
     print("parameters : " + ", ".join(f"{k}={v:.4g}" for k, v in c.parameters.items()))
     print(f"peaks      : {len(c.peaks)} unexplained above the noise floor "
           f"(false-alarm rate {c.false_alarm_rate:g})")
@@ -316,6 +318,33 @@ def cmd_compare(args) -> int:
     print(f"recorded as run {run_id} in {args.history}")
     if args.json:
         Path(args.json).write_text(json.dumps(c.to_dict(), indent=2) + "\n")
+    return 0
+
+
+def cmd_discover(args) -> int:
+    from pydiag.discover import MODELICA_ROOT, as_dict, discover
+
+    m = read_measurement(args.measurement, args.sample_rate, args.column)
+    est = FaultEstimator(args.fmu, adapter=_adapter(args), n_particles=args.particles,
+                         iterations=args.iterations, seed=args.seed,
+                         polish_evaluations=args.polish, n_workers=args.workers)
+    progress = None if args.quiet else (lambda key: print(f"trying {key} ...", file=sys.stderr))
+    base, found = discover(args.fmu, m, est, _bearing(args.bearing),
+                           args.effects.split(",") if args.effects else None,
+                           Path(args.modelica) if args.modelica else MODELICA_ROOT,
+                           Path(args.build_dir), progress)
+    print(f"base model error {base.error:.5f}; effects ranked by BIC (dBIC < 0: worth its "
+          "parameters)")
+    print(f"{'rank':>4} {'effect':<26} {'dBIC':>10} {'error':>8} {'reduction':>9}  parameters")
+    for i, d in enumerate(found, 1):
+        if d.status != "ok":
+            print(f"{i:4d} {d.effect:<26} {'-':>10} {'-':>8} {'-':>9}  failed: {d.status}")
+            continue
+        params = ", ".join(f"{k}={v:.4g}" for k, v in d.parameters.items())
+        print(f"{i:4d} {d.effect:<26} {d.delta_bic:10.1f} {d.error:8.4f} "
+              f"{100 * d.error_reduction:8.0f}%  {params}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(as_dict(base, found), indent=2) + "\n")
     return 0
 
 
@@ -447,6 +476,20 @@ def build_parser() -> argparse.ArgumentParser:
     _add_optimiser_args(p)
     p.set_defaults(func=cmd_compare)
 
+    p = sub.add_parser("discover", help="try every catalogue effect, rank them by BIC")
+    p.add_argument("--fmu", required=True, help="the base model FMU")
+    p.add_argument("--measurement", required=True)
+    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
+    p.add_argument("--sample-rate", type=float, default=None, help="Hz, if the CSV has no time_s")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
+    p.add_argument("--bearing", help="pinion bearing N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG]")
+    p.add_argument("--effects", help="comma-separated effect keys (default: the whole catalogue)")
+    p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
+    p.add_argument("--build-dir", default="build/effects", help="where effect FMUs are built")
+    p.add_argument("--json", help="write the ranking as JSON here")
+    _add_optimiser_args(p)
+    p.set_defaults(func=cmd_discover)
+
     p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
     p.add_argument("--history", default="pydiag_history.sqlite")
     p.add_argument("--plot", help="PNG file for the error history")
@@ -472,7 +515,8 @@ def main(argv: list[str] | None = None) -> int:
         from pydiag.regress import DEFAULT_RTOL
         args.rtol = DEFAULT_RTOL
     try:
-        if args.command in ("simulate", "diagnose", "batch", "regress", "demo", "compare"):
+        if args.command in ("simulate", "diagnose", "batch", "regress", "demo", "compare",
+                            "discover"):
             _warn_validation(args.fmu)
         return args.func(args)
     except (UsageError, *KNOWN_ERRORS) as err:

@@ -37,3 +37,40 @@ def spectral_residuals(model: np.ndarray, reference: np.ndarray,
 def spectral_error(model: np.ndarray, reference: np.ndarray, noise_power: float = 0.0) -> float:
     """Eq. (12), noise-aware and relative (see the module docstring)."""
     return float(np.linalg.norm(spectral_residuals(model, reference, noise_power)))
+
+
+def rician_mean(amplitude: np.ndarray, noise_power: float) -> np.ndarray:
+    """E|A + n| for a line of amplitude A in complex Gaussian noise of power P per line.
+
+    Rician with nu = A, sigma^2 = P/2: sigma sqrt(pi/2) L_1/2(-q), q = A^2/P, written
+    with exponentially scaled Bessel functions so large q does not overflow.
+    """
+    from scipy.special import i0e, i1e
+
+    a = np.asarray(amplitude, dtype=float)
+    if noise_power <= 0:
+        return np.abs(a)
+    q = a ** 2 / noise_power
+    laguerre = (1 + q) * i0e(q / 2) + q * i1e(q / 2)
+    return np.sqrt(noise_power / 2) * np.sqrt(np.pi / 2) * laguerre
+
+
+def noise_corrected_error(model: np.ndarray, reference: np.ndarray, noise_power: float) -> float:
+    """Eq. (12) with the part that noise alone would produce taken out.
+
+    For a perfect model each measured line is Rician around the model line, so the
+    expected squared term is ``2 S'^2 - 2 S' E|S + n|`` with ``S' = sqrt(S^2 + P)``; the
+    weighted sum of these, relative like Eq. (12), is subtracted from E^2. Expected value
+    0 for a perfect model (up to the noise's spread), whatever the number of bins.
+    """
+    model = np.asarray(model, dtype=float)
+    reference = np.asarray(reference, dtype=float)
+    raw = spectral_error(model, reference, noise_power)
+    expected = np.sqrt(model ** 2 + max(noise_power, 0.0))
+    peak = np.max(expected)
+    weight = (expected / peak + 1.0) ** 2 if peak > 0 else np.ones_like(expected)
+    noise_sq = np.sum(weight * (2 * expected ** 2 - 2 * expected * rician_mean(model, noise_power)))
+    measured_sq = np.sum(reference ** 2) or 1.0
+    residual_sq = raw ** 2 * measured_sq  # the weighted squared residual of Eq. (12)
+    signal_sq = max(measured_sq - reference.size * max(noise_power, 0.0), 1e-3 * measured_sq)
+    return float(np.sqrt(max(residual_sq - noise_sq, 0.0) / signal_sq))
