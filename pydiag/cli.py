@@ -275,8 +275,9 @@ def cmd_compare(args) -> int:
     from pydiag.compare import compare
     from pydiag.plant import read_model_description
 
-    if args.json and Path(args.json).resolve() == Path(args.measurement).resolve():
-        raise UsageError("--json would overwrite the measurement file")
+    for out in (args.json, args.report):
+        if out and Path(out).resolve() == Path(args.measurement).resolve():
+            raise UsageError("--json/--report would overwrite the measurement file")
     from pydiag.compare import refit_with_effect
     from pydiag.effects import EFFECTS
 
@@ -316,6 +317,10 @@ def cmd_compare(args) -> int:
         flag = "confident" if s.confidence >= 0.5 else "weak"
         print(f"  {s.effect:<26} confidence {s.confidence:.2f} ({flag}); " + "; ".join(s.evidence[:1]))
     print(f"recorded as run {run_id} in {args.history}")
+    if args.report:
+        from pydiag.report import write_report
+        write_report(c, args.report, args.measurement, history.runs(args.history))
+        print(f"report     : {args.report}")
     if args.json:
         Path(args.json).write_text(json.dumps(c.to_dict(), indent=2) + "\n")
     return 0
@@ -469,6 +474,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--false-alarm-rate", type=float, default=0.01,
                    help="chance of any false peak on a perfect model (default 0.01)")
     p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
+    p.add_argument("--report", help="write a self-contained HTML report here")
     p.add_argument("--history", default="pydiag_history.sqlite", help="SQLite run history")
     p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
     p.add_argument("--effect", help="the FMU is this catalogue effect's model (e.g. "

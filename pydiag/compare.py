@@ -10,7 +10,8 @@ which missing effect they point to.
    complex Gaussian noise, P(R^2 > P ln(N/alpha)) = alpha/N, so over N bins the chance of
    any false peak is at most alpha (Bonferroni): ``false_alarm_rate``.
 5. Peaks are named by the kinematic map (tolerance: one bin); their energy fraction is
-   their excess power R^2 - S^2 - P over the total excess power of all peaks.
+   their excess power R^2 - S^2 - P, divided by their channel's measured power on the
+   compared bins (channels have different units), over the same sum for all peaks.
 6. Each catalogue effect scores the peak energy its signature covers
    (:mod:`pydiag.effects`); the score is also its confidence, 0 when there is no peak.
 
@@ -84,11 +85,13 @@ class Comparison:
     n_error_bins: int
     fit_error: float | None = None
     spectra: dict[str, ChannelSpectrum] = field(default_factory=dict)
+    markers: list[dict] = field(default_factory=list)  # main kinematic lines, for plots
 
     def to_dict(self, with_spectra: bool = False) -> dict:
         d = asdict(self)
         if not with_spectra:
             d.pop("spectra")
+            d.pop("markers")
         return d
 
 
@@ -167,10 +170,11 @@ def compare(fmu_path: str, measurement: Measurement, estimator: FaultEstimator |
         errors.append(noise_corrected_error(model[setup.bins], meas[setup.bins], noise))
         raw.append(spectral_error(model[setup.bins], meas[setup.bins], noise))
         excess = meas - model
+        channel_power = float(np.sum(meas[setup.bins] ** 2)) or 1.0
         for k in np.flatnonzero(excess > setup.margin[channel]):
             if (k > 0 and excess[k - 1] > excess[k]) or (k + 1 < excess.size and excess[k + 1] > excess[k]):
                 continue  # not a local maximum: leakage of a neighbour
-            power = max(meas[k] ** 2 - model[k] ** 2 - noise, 0.0)
+            power = max(meas[k] ** 2 - model[k] ** 2 - noise, 0.0) / channel_power
             candidates.append((channel, power, match(freqs[k], lines, bin_hz), freqs[k], meas[k],
                                model[k]))
     candidates.sort(key=lambda c: -c[1])
@@ -190,10 +194,13 @@ def compare(fmu_path: str, measurement: Measurement, estimator: FaultEstimator |
                     for _, pk in sorted(support, key=lambda t: -t[0])[:3]]
         suggestions.append(Suggestion(effect.key, score, min(1.0, score), evidence))
     suggestions.sort(key=lambda s: -s.score)
+    orders = {"pinion": 3, "gear": 3, "bpfo": 5, "bpfi": 5, "bsf": 5, "ftf": 5}
+    markers = [{"freq_hz": l.freq_hz, "family": l.family, "label": l.label} for l in lines
+               if l.family == "mesh" or 0 < l.order <= orders.get(l.family, 0)]
     return Comparison(str(fmu_path), float(np.sqrt(np.sum(np.square(errors)))),
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
                       peaks, suggestions, false_alarm_rate, featurizer.n_periods, bin_hz,
-                      int(np.count_nonzero(setup.bins)), fit_error, spectra)
+                      int(np.count_nonzero(setup.bins)), fit_error, spectra, markers)
 
 
 def refit_with_effect(effect_fmu: str, measurement: Measurement, base: Comparison,

@@ -76,6 +76,7 @@ def plot(rows: list[dict], out: str | Path) -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     fig, ax = plt.subplots(figsize=(7, 3.5), dpi=110)
     ax.plot([r["id"] for r in rows], [r["error"] for r in rows], "o-", color="#1f5fa8")
@@ -85,6 +86,7 @@ def plot(rows: list[dict], out: str | Path) -> Path:
     ax.set_xlabel("compare run")
     ax.set_ylabel("spectral error (Eq. 12, relative)")
     ax.set_ylim(bottom=0)
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(out)

@@ -30,3 +30,11 @@ def modelica_copy(tmp_path) -> Path:
 
 def run_cli(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, *args], cwd=cwd, capture_output=True, text=True)
+
+
+def inspected(fmu: Path) -> Path:
+    """Every FMU a test builds goes through `pydiag inspect` too (issue: inspect runs on all)."""
+    from pydiag.inspect_fmu import describe, format_info
+    info = describe(fmu)
+    assert info.interfaces and "platforms:" in format_info(info)
+    return fmu

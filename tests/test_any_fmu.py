@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT, inspected, run_cli
 from fmus import casadi_gear, pythonfmu_gear
 from pydiag.adapter import AdapterError, check_against_fmu, load_adapter, parse_adapter
 from pydiag.estimate import FaultEstimator
@@ -249,6 +249,7 @@ def test_schema_problems_are_warnings_and_the_fmu_still_runs(gear_fmu, tmp_path)
             if item.filename == "modelDescription.xml":
                 data = re.sub(rb"\s*<UnitDefinitions>.*?</UnitDefinitions>", b"", data, flags=re.S)
             dst.writestr(item, data)
+    inspected(broken)
     with FmuPlant(broken, ("acc",)) as plant:
         assert any("is not defined" in w for w in plant.validation_warnings)
         assert np.isfinite(plant.simulate({}, 0.01, 0.0)).all()
@@ -266,6 +267,7 @@ def test_missing_platform_binary_names_what_the_fmu_has(gear_fmu, tmp_path):
             data = src.read(item)
             name = item.filename.replace("x86_64-linux", "x86_64-windows").replace(".so", ".dll")
             dst.writestr(name, data)
+    assert "x86_64-windows" in describe(inspected(windows_only)).platforms
     with pytest.raises(PlantError, match=r"no binary for this platform \(x86_64-linux\); it has: "
                                          r"x86_64-windows"):
         FmuPlant(windows_only, ("acc",))

@@ -6,7 +6,7 @@ import sqlite3
 import numpy as np
 import pytest
 
-from conftest import GEARPAIR_MO, ROOT, run_cli
+from conftest import GEARPAIR_MO, ROOT, inspected, run_cli
 from fmu_build import build_fmu
 from pydiag.compare import compare, refit_with_effect
 from pydiag.effects import EFFECTS
@@ -42,8 +42,8 @@ def test_kinematic_map_names_the_lines():
 @pytest.fixture(scope="module")
 def effect_fmus(tmp_path_factory):
     folder = tmp_path_factory.mktemp("effects")
-    return {key: build_fmu(ROOT / "modelica/GearDiag/Effects" / f"{name}.mo",
-                           f"GearDiag.Effects.{name}", folder / f"{name}.fmu")
+    return {key: inspected(build_fmu(ROOT / "modelica/GearDiag/Effects" / f"{name}.mo",
+                                     f"GearDiag.Effects.{name}", folder / f"{name}.fmu"))
             for key, name in HIDDEN.items()}
 
 
@@ -136,3 +136,34 @@ def test_discover_picks_the_hidden_effect(gear_fmu, effect_fmus, effect, tmp_pat
                            build_dir=tmp_path)
     assert found[0].effect == effect, [(d.effect, round(d.delta_bic, 1)) for d in found]
     assert found[0].delta_bic < 0
+
+
+def test_html_report_renders_in_a_headless_browser(gear_fmu, effect_fmus, tmp_path):
+    import re
+    import shutil
+    import subprocess
+    from PIL import Image
+    from pydiag.report import write_report
+
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("no chromium on this machine (.ci/run installs Debian's)")
+    c = compare(str(gear_fmu), record(effect_fmus["bearing_outer_race"], periods=10),
+                FaultEstimator(str(gear_fmu), **FAST), BEARING)
+    page = write_report(c, tmp_path / "report.html", "hidden-bearing.csv",
+                        [{"id": 1, "error": c.error, "model_name": "GearPair", "fmu": "x.fmu"}])
+    text = page.read_text()
+    assert "bearing_outer_race" in text and text.count("<svg") == len(c.spectra) + 1
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:|//)""", text)  # self-contained
+    shot = tmp_path / "shot.png"
+    res = subprocess.run(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr",
+         "--v=0", "--window-size=1100,1400", f"--screenshot={shot}", page.as_uri()],
+        capture_output=True, text=True, timeout=120)
+    assert shot.exists(), res.stderr[-500:]
+    console = [l for l in res.stderr.splitlines() if "CONSOLE" in l or "Uncaught" in l]
+    assert console == []
+    pixels = np.asarray(Image.open(shot).convert("L"), dtype=float)
+    assert pixels.shape == (1400, 1100) and pixels.std() > 20  # a drawn page, not a blank one

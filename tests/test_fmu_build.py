@@ -10,7 +10,7 @@ import fmpy
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import inspected, run_cli
 from fmu_build import ModelicaBuildError, build_fmu
 from fmu_build.build import ode_system
 from fmu_build.fmu_export import add_unit_definitions
@@ -194,7 +194,7 @@ def test_unit_definitions_are_inserted_before_variables():
 
 def test_build_writes_only_the_requested_file(tmp_path, modelica_copy):
     out = tmp_path / "out" / "G.fmu"
-    build_fmu(modelica_copy / "GearDiag" / "GearPair.mo", "GearDiag.GearPair", out)
+    inspected(build_fmu(modelica_copy / "GearDiag" / "GearPair.mo", "GearDiag.GearPair", out))
     assert sorted(p.name for p in out.parent.iterdir()) == ["G.fmu"]
     names = zipfile.ZipFile(out).namelist()
     assert "modelDescription.xml" in names and any(n.startswith("binaries/") for n in names)

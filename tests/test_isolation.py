@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from conftest import inspected
 from fmus import hostile
 from pydiag.adapter import parse_adapter
 from pydiag.estimate import EstimationError, FaultEstimator
@@ -15,7 +16,7 @@ import tomllib
 @pytest.fixture(scope="module")
 def hostile_fmu(tmp_path_factory):
     pytest.importorskip("pythonfmu")
-    return hostile.build(tmp_path_factory.mktemp("hostile"))
+    return inspected(hostile.build(tmp_path_factory.mktemp("hostile")))
 
 
 def adapter(low, high):
@@ -83,6 +84,7 @@ class Stiff(Fmi2Slave):
         self.y = self.x
         return True
 ''')
+    inspected(fmu)
     with FmuPlant(fmu, ("y",), sample_rate_hz=10_000.0) as plant:
         with pytest.raises(PlantError, match=r"diverged \(Co-Simulation communication step 0.0001"):
             plant.simulate({}, 0.05, 0.0)

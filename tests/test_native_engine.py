@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from conftest import inspected
 from fmu_build import build_fmu
 from pydiag.paper_cases import TABLE1
 from pydiag.plant import FmuPlant, PlantError
@@ -69,7 +70,7 @@ equation
   y = x;
 end Ev;
 """)
-    fmu = build_fmu(mo, "Ev", tmp_path / "Ev.fmu")
+    fmu = inspected(build_fmu(mo, "Ev", tmp_path / "Ev.fmu"))
     with FmuPlant(fmu, ("y",), engine="fmpy") as plant:
         assert plant.engine == "fmpy"
         y = plant.simulate({}, 0.5, 0.0)[0]
@@ -89,7 +90,7 @@ equation
   y = x;
 end Boom;
 """)
-    fmu = build_fmu(mo, "Boom", tmp_path / "Boom.fmu")
+    fmu = inspected(build_fmu(mo, "Boom", tmp_path / "Boom.fmu"))
     with FmuPlant(fmu, ("y",), sample_rate_hz=100.0, engine="native") as plant:
         with pytest.raises(PlantError, match="failed"):
             plant.simulate({}, 2.0, 0.0)  # x = 1/(1 - t) blows up at t = 1

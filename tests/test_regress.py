@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from conftest import run_cli
+from conftest import inspected, run_cli
 from fmu_build import build_fmu
 from pydiag import regress
 from pydiag.plant import FmuPlant
@@ -25,7 +25,7 @@ def test_changed_model_default_fails_regression(tmp_path, modelica_copy):
     text = src.read_text()
     assert 'c(unit="N.s/m") = 1000' in text
     src.write_text(text.replace('c(unit="N.s/m") = 1000', 'c(unit="N.s/m") = 1100'))
-    fmu = build_fmu(src, "GearDiag.GearPair", tmp_path / "Perturbed.fmu")
+    fmu = inspected(build_fmu(src, "GearDiag.GearPair", tmp_path / "Perturbed.fmu"))
     report = regress.check(fmu, GOLDEN)
     assert not report.passed
     res = run_cli("-m", "pydiag", "regress", "--fmu", str(fmu), "--golden", GOLDEN)
@@ -48,7 +48,7 @@ end Osc;
 """
     mo = tmp_path / "Osc.mo"
     mo.write_text(source)
-    fmu = build_fmu(mo, "Osc", tmp_path / "Osc.fmu")
+    fmu = inspected(build_fmu(mo, "Osc", tmp_path / "Osc.fmu"))
     golden = tmp_path / "osc.json"
     res = run_cli("-m", "pydiag", "regress", "--fmu", str(fmu), "--golden", str(golden), "--bless")
     assert res.returncode == 0, res.stderr
@@ -60,7 +60,7 @@ end Osc;
     (tmp_path / "v2").mkdir()
     mo2 = tmp_path / "v2" / "Osc.mo"
     mo2.write_text(source.replace("d = 0.05", "d = 0.08"))
-    with FmuPlant(build_fmu(mo2, "Osc", tmp_path / "v2" / "Osc.fmu"), ("y",)) as plant:
+    with FmuPlant(inspected(build_fmu(mo2, "Osc", tmp_path / "v2" / "Osc.fmu")), ("y",)) as plant:
         regress.bless(plant, golden)
     assert not regress.check(fmu, golden).passed
     # start values recorded at blessing are applied by the check
