@@ -9,7 +9,7 @@ import casadi as ca
 from fmu_build.causalise import Residual, causalise
 from fmu_build.errors import ModelicaBuildError
 from fmu_build.expressions import ExpressionTranslator
-from fmu_build.flatten import FlatModel, Variable
+from fmu_build.flatten import FlatModel
 
 SX = ca.SX
 

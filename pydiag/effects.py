@@ -9,6 +9,7 @@ effect's score is the share of the unexplained peak energy its signature covers.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Callable
 
 from pydiag.kinematic_map import KinematicLine
@@ -101,6 +102,5 @@ EFFECTS = {e.key: e for e in (
 )}
 
 
-def model_file(effect: Effect, modelica_root) -> "Path":
-    from pathlib import Path
+def model_file(effect: Effect, modelica_root) -> Path:
     return Path(modelica_root) / "GearDiag" / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"

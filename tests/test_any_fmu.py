@@ -1,7 +1,6 @@
 """Bring your own FMU: adapters, other exporters (CasADi direct, pythonfmu, OpenModelica),
 inspect, and safe archives. Every FMU here is built or fetched by the test run."""
 
-import io
 import json
 import stat
 import subprocess

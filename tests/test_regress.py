@@ -2,7 +2,6 @@
 
 import json
 
-import pytest
 
 from conftest import inspected, run_cli
 from fmu_build import build_fmu

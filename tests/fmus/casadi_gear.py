@@ -66,7 +66,8 @@ def build(out: Path) -> Path:
     shape = par("tooth_shape", 0.1)
     runout = par("runout_um", 0.0, "um", "pinion runout")
     profile = par("profile_err_um", 0.0, "um")
-    z1, z2 = par("z1", 14.0), par("z2", 21.0)
+    z1 = par("z1", 14.0)
+    par("z2", 21.0)  # read by the adapter's [kinematics]; the equations use n_ap below
     rpm = par("rpm", 1500.0, "rpm")
     m, k0, c = par("mass", 0.5, "kg"), par("k_mesh", 2e8, "N/m"), par("damping", 1000.0, "N.s/m")
     force = par("load", 50 / 0.03, "N")
