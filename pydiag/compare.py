@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from pydiag.effects import EFFECTS, Effect
-from pydiag.estimate import FaultEstimator, FaultParameter
+from pydiag.estimate import EstimationError, FaultEstimator, FaultParameter
 from pydiag.features import FullSpectrumFeaturizer
 from pydiag.kinematic_map import Bearing, kinematic_map, match
 from pydiag.measurement import Measurement
@@ -121,7 +121,11 @@ def _setup(fmu_path: str, measurement: Measurement, estimator: FaultEstimator | 
            false_alarm_rate: float, max_periods: int) -> _Setup:
     estimator = estimator or FaultEstimator(fmu_path)
     objective = estimator.objective_for(measurement)
-    kin = objective.featurizer.kinematics
+    kin = getattr(objective.featurizer, "kinematics", None)
+    if kin is None:
+        objective.close()
+        raise EstimationError("compare names peaks by gear kinematics: give the FMU's Np, Ng, "
+                              "f_pinion, or an adapter with [kinematics]")
     n_periods, _ = whole_periods(measurement.n_samples, measurement.sample_rate_hz, kin.period_s)
     featurizer = FullSpectrumFeaturizer(kin, min(n_periods, max_periods),
                                         objective.featurizer.max_freq_hz)

@@ -274,3 +274,15 @@ def test_missing_platform_binary_names_what_the_fmu_has(gear_fmu, tmp_path):
                   str(tmp_path / "m.csv"))
     assert res.returncode == 2 and "x86_64-windows" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_compare_without_gear_kinematics_is_a_clear_error(openmodelica_fmus, tmp_path):
+    fmu = openmodelica_fmus["MassSpringSystem"]
+    adapter = ROOT / "examples" / "mass_spring.toml"
+    meas = tmp_path / "m.csv"
+    assert run_cli("-m", "pydiag", "simulate", "--fmu", str(fmu), "--adapter", str(adapter),
+                   "--sample-rate", "20", "--out", str(meas), "--quiet").returncode == 0
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(fmu), "--adapter", str(adapter),
+                  "--measurement", str(meas), "--history", str(tmp_path / "h.sqlite"), "--quiet")
+    assert res.returncode == 2 and "gear kinematics" in res.stderr
+    assert "internal error" not in res.stderr
