@@ -10,6 +10,9 @@ Two things the exported FMU would otherwise get wrong, handled here:
   what a user must see as an ``output`` in Modelica.
 - CasADi writes ``unit`` attributes without ``<UnitDefinitions>``; fmpy's validation
   rejects that, so the definitions are added to modelDescription.xml before packing.
+- CasADi's shell compiler passes no optimisation flag, so gcc builds the model at -O0;
+  the right-hand side then costs 2.6x more per call (0.76 vs 0.29 us for GearPair,
+  measured with the native engine). The binary is built with ``COMPILER_FLAGS``.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from fmu_build.errors import ModelicaBuildError
 from fmu_build.ode_system import OdeSystem
 
 MX = ca.MX
+COMPILER_FLAGS = ["-O2"]
 
 
 def fmi_headers_dir() -> str:
@@ -112,7 +116,8 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
             files = dae.export_fmu({"no_warning": True, "with_serialization": False})
             md = Path("modelDescription.xml")
             md.write_text(add_unit_definitions(md.read_text()))
-            files = dae.compile_fmu(files, {"include_dirs": [fmi_headers_dir()]})
+            files = dae.compile_fmu(files, {"include_dirs": [fmi_headers_dir()],
+                                            "compiler_options": {"flags": COMPILER_FLAGS}})
             packed = dae.pack_fmu(files, {"path": "model.fmu"})
         except RuntimeError as err:
             raise ModelicaBuildError(f"CasADi could not export the FMU: "
