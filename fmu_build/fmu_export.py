@@ -6,13 +6,16 @@ Two things the exported FMU would otherwise get wrong, handled here:
   depends on parameters is integrated as ``<name>__delta = <name> - start(p)`` with a
   zero start: setting a parameter moves the start point as the Modelica source says.
 - CasADi's FMU evaluates only state derivatives and outputs; local variables would read
-  back as 0. Algebraic locals and derived parameters are therefore not exported: declare
-  what a user must see as an ``output`` in Modelica.
+  back as 0. Algebraic locals are therefore not exported: declare what a user must see as
+  an ``output`` in Modelica. Derived parameters are exported as calculated parameters,
+  computed once per parameter set (:mod:`fmu_build.parameter_stage`).
 - CasADi writes ``unit`` attributes without ``<UnitDefinitions>``; fmpy's validation
   rejects that, so the definitions are added to modelDescription.xml before packing.
-- CasADi's shell compiler passes no optimisation flag, so gcc builds the model at -O0;
-  the right-hand side then costs 2.6x more per call (0.76 vs 0.29 us for GearPair,
-  measured with the native engine). The binary is built with ``COMPILER_FLAGS``.
+- CasADi's shell compiler passes no optimisation flag, so gcc built the model at -O0 and
+  a right-hand side call cost 2.6x more (0.76 vs 0.29 us for GearPair, measured with the
+  native engine). The binary is compiled here, with ``COMPILER_FLAGS``, each source file
+  its own translation unit (CasADi's amalgamation would clash the static names of two
+  generated files).
 """
 
 from __future__ import annotations
@@ -21,12 +24,16 @@ import contextlib
 import os
 import re
 import shutil
+import subprocess
 import tempfile
 from pathlib import Path
 
 import casadi as ca
+from fmpy import platform_tuple, sharedLibraryExtension
 
+from fmu_build import parameter_stage
 from fmu_build.errors import ModelicaBuildError
+from fmu_build.model_description import add_unit_definitions, complete_for_fmi
 from fmu_build.ode_system import OdeSystem
 
 MX = ca.MX
@@ -47,25 +54,21 @@ def _opts(unit: str | None, description: str | None, **extra) -> dict:
     return opts
 
 
-def add_unit_definitions(model_description: str) -> str:
-    """Insert a <UnitDefinitions> element declaring every unit the variables use."""
-    units = sorted(set(re.findall(r'\bunit="([^"]+)"', model_description)))
-    if not units or "<UnitDefinitions>" in model_description:
-        return model_description
-    block = "    <UnitDefinitions>\n" + "".join(
-        f'        <Unit name="{u}"/>\n' for u in units) + "    </UnitDefinitions>\n"
-    # FMI 3.0 order: ModelExchange/CoSimulation, then UnitDefinitions, ..., ModelVariables.
-    anchor = model_description.index("    <ModelVariables>")
-    return model_description[:anchor] + block + model_description[anchor:]
-
-
 def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
-    model_id = re.sub(r"\W", "_", system.name.split(".")[-1])
+    """The model as a DaeBuilder: free parameters, then derived ones (see parameter_stage)."""
+    model_id = model_identifier(system)
     dae = ca.DaeBuilder(model_id)
     t = dae.add("time", "independent", "continuous", {})
     p = [dae.add(q.name, "parameter", "tunable", _opts(q.unit, q.description, start=q.value))
          for q in system.parameters]
-    taken = {q.name for q in system.parameters} | {s.name for s in system.states}
+    free_values = [q.value for q in system.parameters]
+    stage = ca.Function("stage", [ca.vertcat(*[q.symbol for q in system.parameters])],
+                        [ca.vertcat(*[d.expr for d in system.derived])])
+    d_values = [float(v) for v in ca.DM(stage(free_values)).full().ravel()] if system.derived else []
+    d = [dae.add(q.name, "parameter", "tunable", _opts(q.unit, q.description, start=v))
+         for q, v in zip(system.derived, d_values)]
+    taken = ({q.name for q in system.parameters} | {q.name for q in system.derived}
+             | {s.name for s in system.states})
     x_vars = []  # the symbols the FMU integrates
     physical = []  # the physical state value in terms of those symbols
     delta_states = []
@@ -88,10 +91,10 @@ def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
             physical.append(None)
 
     # One SX function for everything, called on the builder's MX symbols.
-    sx_in = [system.time, *[s.symbol for s in system.states], *[q.symbol for q in system.parameters]]
-    starts = ca.Function("starts", [*[q.symbol for q in system.parameters]],
-                         [s.start for s in system.states])
-    p_mx = list(p)
+    params_sx = [*[q.symbol for q in system.parameters], *[q.symbol for q in system.derived]]
+    sx_in = [system.time, *[s.symbol for s in system.states], *params_sx]
+    starts = ca.Function("starts", params_sx, [s.start for s in system.states])
+    p_mx = [*p, *d]
     for s, i in delta_states:
         physical[i] = x_vars[i] + starts(*p_mx)[i]
     outs = [*system.derivatives, *[o.expr for o in system.outputs]]
@@ -106,21 +109,59 @@ def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
     return dae
 
 
+def model_identifier(system: OdeSystem) -> str:
+    return re.sub(r"\W", "_", system.name.split(".")[-1])
+
+
+def _compile(model_id: str, sources: list[str]) -> str:
+    """Build the FMU's shared library from ``sources``; returns its file name."""
+    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    if cc is None:
+        raise ModelicaBuildError("no C compiler found (set CC or install gcc)")
+    lib = model_id + sharedLibraryExtension
+    res = subprocess.run([cc, *COMPILER_FLAGS, "-shared", "-fPIC", "-I", fmi_headers_dir(), "-I",
+                          ".", "-o", lib, *sources, "-lm"], capture_output=True, text=True)
+    if res.returncode != 0:
+        raise ModelicaBuildError(f"compiling the FMU failed: {res.stderr.strip()[:500]}")
+    return lib
+
+
 def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
-    """Generate C code, compile it with gcc and pack the FMU at ``out_path``."""
+    """Generate C code, compile it with the system C compiler and pack the FMU."""
     out_path = Path(out_path).resolve()
     out_path.parent.mkdir(parents=True, exist_ok=True)
     dae = to_dae_builder(system)
+    model_id = model_identifier(system)
     with tempfile.TemporaryDirectory(prefix="fmu_build_") as work, contextlib.chdir(work):
         try:
             files = dae.export_fmu({"no_warning": True, "with_serialization": False})
-            md = Path("modelDescription.xml")
-            md.write_text(add_unit_definitions(md.read_text()))
-            files = dae.compile_fmu(files, {"include_dirs": [fmi_headers_dir()],
-                                            "compiler_options": {"flags": COMPILER_FLAGS}})
-            packed = dae.pack_fmu(files, {"path": "model.fmu"})
         except RuntimeError as err:
             raise ModelicaBuildError(f"CasADi could not export the FMU: "
+                                     f"{str(err).strip().splitlines()[-1]}") from None
+        md = Path("modelDescription.xml")
+        text = add_unit_definitions(md.read_text())
+        sources = [f for f in files if f.endswith(".c")]
+        if system.derived:
+            names = [q.name for q in system.derived]
+            vrs = parameter_stage.value_references(text, names)
+            text = parameter_stage.mark_calculated(text, names)
+            wrap = Path(f"{model_id}_wrap.c")
+            wrap.write_text(parameter_stage.patch_wrapper(
+                wrap.read_text(), model_id, len(system.parameters), vrs))
+            stage_file = f"{parameter_stage.stage_function_name(model_id)}.c"
+            Path(stage_file).write_text(parameter_stage.stage_source(
+                model_id, [q.symbol for q in system.parameters], [q.expr for q in system.derived]))
+            files[stage_file] = f"sources/{stage_file}"
+            sources.append(stage_file)
+            build = Path("buildDescription.xml")
+            build.write_text(parameter_stage.add_source_file(build.read_text(), stage_file))
+        md.write_text(complete_for_fmi(text))
+        lib = _compile(model_id, sources)
+        files[lib] = f"binaries/{platform_tuple}/{lib}"
+        try:
+            packed = dae.pack_fmu(files, {"path": "model.fmu"})
+        except RuntimeError as err:
+            raise ModelicaBuildError(f"CasADi could not pack the FMU: "
                                      f"{str(err).strip().splitlines()[-1]}") from None
         tmp_out = out_path.with_suffix(".fmu.tmp")
         shutil.move(packed, tmp_out)

@@ -43,8 +43,20 @@ class Computed(Quantity):
 
 
 @dataclass
+class Derived(Computed):
+    """A parameter computed from the free parameters (``expr`` uses free ones only)."""
+
+    symbol: SX = field(default_factory=lambda: SX(0))
+
+
+@dataclass
 class OdeSystem:
-    """dx/dt = f(t, x, p); outputs and locals y = g(t, x, p); derived parameters d = h(p)."""
+    """dx/dt = f(t, x, p, d); outputs and locals y = g(t, x, p, d); derived parameters d = h(p).
+
+    Derivatives, outputs, locals and state starts refer to the derived parameters by their
+    symbols, so an FMU can compute ``h`` once per parameter set instead of on every call
+    (a Modelica tool's parameter stage); :meth:`in_free_parameters` substitutes them.
+    """
 
     name: str
     time: SX
@@ -58,14 +70,22 @@ class OdeSystem:
     def parameter_values(self) -> dict[str, float]:
         return {p.name: p.value for p in self.parameters}
 
+    def in_free_parameters(self, expr: SX) -> SX:
+        """``expr`` with every derived parameter replaced by its expression."""
+        if not self.derived:
+            return expr
+        return ca.substitute([expr], [d.symbol for d in self.derived],
+                             [d.expr for d in self.derived])[0]
+
     def functions(self) -> tuple[ca.Function, ca.Function, ca.Function]:
         """(rhs(t, x, p) -> dx, out(t, x, p) -> y, x0(p) -> x(0)) as CasADi Functions."""
         t = self.time
         x = ca.vertcat(*[s.symbol for s in self.states])
         p = ca.vertcat(*[q.symbol for q in self.parameters])
-        rhs = ca.Function("rhs", [t, x, p], [ca.vertcat(*self.derivatives)])
-        out = ca.Function("out", [t, x, p], [ca.vertcat(*[o.expr for o in self.outputs])])
-        x0 = ca.Function("x0", [p], [ca.vertcat(*[s.start for s in self.states])])
+        free = self.in_free_parameters
+        rhs = ca.Function("rhs", [t, x, p], [free(ca.vertcat(*self.derivatives))])
+        out = ca.Function("out", [t, x, p], [free(ca.vertcat(*[o.expr for o in self.outputs]))])
+        x0 = ca.Function("x0", [p], [free(ca.vertcat(*[s.start for s in self.states]))])
         return rhs, out, x0
 
 
@@ -132,7 +152,6 @@ def build_ode_system(model: FlatModel) -> OdeSystem:
             residuals.append(Residual(sym[var.name] - tr.translate(var.binding, env), var.location))
         if var.role == "state" and var.binding is not None:
             raise ModelicaBuildError(f"state '{var.name}' has a declaration equation", var.location)
-    residuals = [Residual(in_free_params(r.expr), r.location) for r in residuals]
 
     unknowns = {f"der({n})": ders[n] for n in ders}
     unknowns.update({n: sym[n] for n, v in variables.items() if v.role in ("algebraic", "output")})
@@ -142,7 +161,6 @@ def build_ode_system(model: FlatModel) -> OdeSystem:
     for name in ders:
         var = variables[name]
         start = tr.translate(var.start, env) if var.start is not None else SX(0.0)
-        start = in_free_params(start)
         if ca.depends_on(start, ca.vertcat(t, *[sym[n] for n in ders])):
             raise ModelicaBuildError(f"start value of state '{name}' must depend on parameters only",
                                      var.location)
@@ -160,7 +178,7 @@ def build_ode_system(model: FlatModel) -> OdeSystem:
         return [Computed(v.name, v.unit, v.description, solved[v.name])
                 for v in variables.values() if v.role == role]
 
-    derived = [Computed(n, variables[n].unit, variables[n].description, e)
+    derived = [Derived(n, variables[n].unit, variables[n].description, e, sym[n])
                for n, e in dependent.items()]
     return OdeSystem(model.name, t, free, states, [solved[f"der({n})"] for n in ders],
                      computed("output"), computed("algebraic"), derived)

@@ -13,7 +13,7 @@ import pytest
 from conftest import inspected, run_cli
 from fmu_build import ModelicaBuildError, build_fmu
 from fmu_build.build import ode_system
-from fmu_build.fmu_export import add_unit_definitions
+from fmu_build.model_description import add_unit_definitions
 
 FAULT_PARAMETERS = ["a0", "a_f", "f_f", "f_ate", "f_dte"]
 
@@ -38,6 +38,51 @@ def test_gear_fmu_validates_and_exposes_tunable_parameters(gear_fmu):
         assert variables[out].causality == "output"
     units = {u.name for u in md.unitDefinitions}
     assert {"N/m", "kg", "Hz", "m/s2"} <= units
+
+
+def test_gear_fmu_passes_fmpys_full_validation(gear_fmu):
+    """Naming convention, initial unknowns (states, calculated parameters), units."""
+    from fmpy.validation import validate_fmu
+    assert validate_fmu(str(gear_fmu)) == []
+
+
+def test_derived_parameters_are_calculated_and_follow_the_free_ones(gear_fmu):
+    """N_ap, f_mesh, f_fe, x_static are calculated parameters, computed by the FMU's
+    parameter stage: right after each reset with new teeth counts, and again when the
+    parameters return to earlier values (one instance throughout, as the plant uses it)."""
+    md = fmpy.read_model_description(str(gear_fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    derived = ["N_ap", "f_mesh", "f_fe", "x_static"]
+    for name in derived:
+        assert variables[name].causality == "calculatedParameter", name
+        assert variables[name].start is None, name
+    unzipped = fmpy.extract(str(gear_fmu))
+    fmu = fmpy.instantiate_fmu(unzipped, md, fmi_type="ModelExchange")
+    refs = [variables[n].valueReference for n in derived]
+    try:
+        for np_, ng, f_pinion, a_f in ((14, 21, 25.0, 0.1), (14, 28, 25.0, 0.1),
+                                       (15, 20, 30.0, 0.5), (14, 21, 25.0, 0.1)):
+            fmu.reset()
+            fmu.enterInitializationMode()
+            fmu.setFloat64([variables[n].valueReference for n in ("Np", "Ng", "f_pinion", "a_f")],
+                           [np_, ng, f_pinion, a_f])
+            fmu.exitInitializationMode()
+            n_ap = np.lcm(np_, ng) / np_
+            expected = [n_ap, np_ * f_pinion, np_ * f_pinion / n_ap,
+                        50 / 0.03 / (2e8 * (1 + a_f))]
+            assert fmu.getFloat64(refs) == pytest.approx(expected, rel=1e-12), (np_, ng)
+            fmu.terminate()
+    finally:
+        fmu.freeInstance()
+
+
+def test_parameter_stage_refuses_a_wrapper_it_does_not_know():
+    from fmu_build.parameter_stage import patch_wrapper
+    wrapper = "fmi3ValueReference p_vr[N_P] = {1, 2, 3};\nint evaluate(void* m) { return 0; }\n"
+    with pytest.raises(ModelicaBuildError, match="anchor of the parameter stage is missing"):
+        patch_wrapper(wrapper, "M", 2, [3])
+    with pytest.raises(ModelicaBuildError, match="ordered the FMU's parameters unexpectedly"):
+        patch_wrapper(wrapper, "M", 1, [3])
 
 
 def test_start_follows_parameters_static_equilibrium(gear_fmu):
