@@ -1,6 +1,6 @@
 """Export an OdeSystem as an FMI 3.0 Model-Exchange FMU with CasADi's DaeBuilder.
 
-Two things the exported FMU would otherwise get wrong, handled here:
+What CasADi's export would otherwise get wrong or make slow, handled here:
 
 - CasADi's generated C code ignores initial equations, so a state whose start value
   depends on parameters is integrated as ``<name>__delta = <name> - start(p)`` with a
@@ -9,8 +9,9 @@ Two things the exported FMU would otherwise get wrong, handled here:
   back as 0. Algebraic locals are therefore not exported: declare what a user must see as
   an ``output`` in Modelica. Derived parameters are exported as calculated parameters,
   computed once per parameter set (:mod:`fmu_build.parameter_stage`).
-- CasADi writes ``unit`` attributes without ``<UnitDefinitions>``; fmpy's validation
-  rejects that, so the definitions are added to modelDescription.xml before packing.
+- CasADi's modelDescription.xml fails fmpy's validation (undeclared units, helper names
+  the declared naming convention forbids, missing initial unknowns): completed by
+  :mod:`fmu_build.model_description` before packing.
 - CasADi's shell compiler passes no optimisation flag, so gcc built the model at -O0 and
   a right-hand side call cost 2.6x more (0.76 vs 0.29 us for GearPair, measured with the
   native engine). The binary is compiled here, with ``COMPILER_FLAGS``, each source file
@@ -140,21 +141,9 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
                                      f"{str(err).strip().splitlines()[-1]}") from None
         md = Path("modelDescription.xml")
         text = add_unit_definitions(md.read_text())
-        sources = [f for f in files if f.endswith(".c")]
         if system.derived:
-            names = [q.name for q in system.derived]
-            vrs = parameter_stage.value_references(text, names)
-            text = parameter_stage.mark_calculated(text, names)
-            wrap = Path(f"{model_id}_wrap.c")
-            wrap.write_text(parameter_stage.patch_wrapper(
-                wrap.read_text(), model_id, len(system.parameters), vrs))
-            stage_file = f"{parameter_stage.stage_function_name(model_id)}.c"
-            Path(stage_file).write_text(parameter_stage.stage_source(
-                model_id, [q.symbol for q in system.parameters], [q.expr for q in system.derived]))
-            files[stage_file] = f"sources/{stage_file}"
-            sources.append(stage_file)
-            build = Path("buildDescription.xml")
-            build.write_text(parameter_stage.add_source_file(build.read_text(), stage_file))
+            text = parameter_stage.add_to_export(Path("."), model_id, system, files, text)
+        sources = [f for f in files if f.endswith(".c")]
         md.write_text(complete_for_fmi(text))
         lib = _compile(model_id, sources)
         files[lib] = f"binaries/{platform_tuple}/{lib}"

@@ -39,6 +39,27 @@ _COPY_P = "  for (i = 0; i < N_P; ++i) m->p[i] = m->v[p_vr[i]];\n"
 _EVALUATE = "int evaluate(casadi_fmi_memory* m) {\n"
 
 
+def add_to_export(folder: Path, model_id: str, system, files: dict[str, str],
+                  model_description: str) -> str:
+    """Add the stage to the files CasADi's ``export_fmu`` wrote in ``folder``.
+
+    Patches ``<id>_wrap.c`` and ``buildDescription.xml`` in place, writes
+    ``<id>_parameters.c`` and adds it to ``files`` (local name -> archive path); returns
+    ``model_description`` with the derived parameters made calculated parameters.
+    """
+    names = [q.name for q in system.derived]
+    refs = value_references(model_description, names)
+    wrap = folder / f"{model_id}_wrap.c"
+    wrap.write_text(patch_wrapper(wrap.read_text(), model_id, len(system.parameters), refs))
+    stage_file = f"{stage_function_name(model_id)}.c"
+    (folder / stage_file).write_text(stage_source(
+        model_id, [q.symbol for q in system.parameters], [q.expr for q in system.derived]))
+    files[stage_file] = f"sources/{stage_file}"
+    build = folder / "buildDescription.xml"
+    build.write_text(add_source_file(build.read_text(), stage_file))
+    return mark_calculated(model_description, names)
+
+
 def stage_function_name(model_id: str) -> str:
     return f"{model_id}_parameters"
 
