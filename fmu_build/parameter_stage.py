@@ -32,6 +32,7 @@ from pathlib import Path
 import casadi as ca
 
 from fmu_build.errors import ModelicaBuildError
+from fmu_build.ode_system import OdeSystem
 
 _STRUCT_ANCHOR = "  // Has any variable been set since last call\n  int up_to_date;\n"
 _RESET_ANCHOR = "  // Not evaluated\n  m->up_to_date = 0;\n  // Zero index is negative: No event\n"
@@ -39,7 +40,7 @@ _COPY_P = "  for (i = 0; i < N_P; ++i) m->p[i] = m->v[p_vr[i]];\n"
 _EVALUATE = "int evaluate(casadi_fmi_memory* m) {\n"
 
 
-def add_to_export(folder: Path, model_id: str, system, files: dict[str, str],
+def add_to_export(folder: Path, model_id: str, system: OdeSystem, files: dict[str, str],
                   model_description: str) -> str:
     """Add the stage to the files CasADi's ``export_fmu`` wrote in ``folder``.
 

@@ -4,10 +4,12 @@ One extracted FMU and one instance serve every evaluation (the instance is reset
 between runs): re-extracting and re-instantiating per call is slow and, with some
 vendor FMUs, leaks. Not thread-safe; use one plant per process.
 
-Two engines: ``"native"`` integrates FMI 3.0 Model-Exchange FMUs without event
+Two engines: ``"native"`` integrates FMI 2.0 and 3.0 Model-Exchange FMUs without event
 indicators in compiled code (:mod:`pydiag.native_me`); ``"fmpy"`` runs fmpy's
 ``simulate_fmu`` (CVode for ME, the FMU's own solver for CS) and handles every FMU.
-``"auto"`` picks native when it applies and builds, fmpy otherwise.
+``"auto"`` picks native when it applies and builds, fmpy otherwise, and switches to fmpy
+for good if the FMU turns out to have events (a time event, or a step event asked for
+at a completed integrator step).
 
 Default tolerances differ because the solvers do: against a tight reference (fmpy at
 rtol 1e-11), Table 1 case 1's acceleration was off by 26 % of its peak with fmpy/CVode
@@ -130,10 +132,17 @@ class FmuPlant:
         if self._fmi_type == "CoSimulation" and cs_step_s:
             self.substeps = max(1, int(np.ceil((1.0 / self.sample_rate_hz) / cs_step_s - 1e-9)))
         self._native = None
+        self._engine_requested = engine
         if engine != "fmpy":
             self._native = self._native_runner(required=engine == "native")
         self.engine = "native" if self._native is not None else "fmpy"
-        if self.engine == "fmpy" and relative_tolerance is None:
+        if self.engine == "fmpy":
+            self._use_fmpy()
+
+    def _use_fmpy(self) -> None:
+        self._native = None
+        self.engine = "fmpy"
+        if self._requested_tolerance is None:
             self.relative_tolerance = 1e-8
 
     def _native_runner(self, required: bool):
@@ -141,7 +150,8 @@ class FmuPlant:
         try:
             if self._fmi_type != "ModelExchange" or not native_me.supports(self.model_description):
                 raise native_me.NativeUnavailable(
-                    "the native engine runs FMI 3.0 Model-Exchange FMUs without event indicators")
+                    "the native engine runs FMI 2.0/3.0 Model-Exchange FMUs without event "
+                    "indicators")
             refs = [self.model_description_variable(s).valueReference for s in self.sensors]
             return native_me.NativeMeRunner(self._instance, self.model_description, refs,
                                             self.relative_tolerance)
@@ -199,7 +209,14 @@ class FmuPlant:
         first = int(round(start_s * self.sample_rate_hz))
         stop = (first + n) / self.sample_rate_hz
         if self._native is not None:
-            return self._simulate_native(values, first, n)
+            from pydiag.native_me import NeedsEvents
+            try:
+                return self._simulate_native(values, first, n)
+            except NeedsEvents as err:
+                if self._engine_requested == "native":
+                    raise PlantError(f"{self.fmu_path.name}: {err}; the native engine does not "
+                                     "handle events, use engine fmpy") from None
+                self._use_fmpy()
         if not self._fresh:
             self._instance.reset()
         self._fresh = False
@@ -241,8 +258,11 @@ class FmuPlant:
         if not self._fresh:
             self._instance.reset()
         self._fresh = False
+        from pydiag.native_me import NeedsEvents
         try:
             y = self._native.run(values, first / self.sample_rate_hz, 1.0 / self.sample_rate_hz, n)
+        except NeedsEvents:
+            raise
         except Exception as err:
             raise PlantError(f"simulation of {self.fmu_path.name} failed with {values}: "
                              f"{err}") from None

@@ -95,3 +95,95 @@ end Boom;
         with pytest.raises(PlantError, match="failed"):
             plant.simulate({}, 2.0, 0.0)  # x = 1/(1 - t) blows up at t = 1
         assert plant.simulate({"k": -1.0}, 1.0, 0.0)[0, -1] == pytest.approx(1 / 1.99, rel=1e-5)
+
+
+# ---------------------------------------------------------------------- events: fall back
+
+def _toy_model(fmi_version: int, event_after_steps: int | None):
+    """FMI function pointers of a toy model dx/dt = -x, y = x, in Python (ctypes)."""
+    import ctypes as C
+
+    state = {"t": 0.0, "x": 1.0, "steps": 0}
+    boolean = C.c_bool if fmi_version == 3 else C.c_int
+
+    def set_time(inst, t):
+        state["t"] = t
+        return 0
+
+    def set_states(inst, x, n):
+        state["x"] = x[0]
+        return 0
+
+    def get_derivs(inst, dx, n):
+        dx[0] = -state["x"]
+        return 0
+
+    def get_outputs(inst, vr, n, values, *n_values):
+        values[0] = state["x"]
+        return 0
+
+    def completed(inst, no_set_prior, event, terminate):
+        state["steps"] += 1
+        event[0] = event_after_steps is not None and state["steps"] >= event_after_steps
+        terminate[0] = False
+        return 0
+
+    get_outputs_type = (C.CFUNCTYPE(C.c_int, C.c_void_p, C.POINTER(C.c_uint32), C.c_size_t,
+                                    C.POINTER(C.c_double), C.c_size_t) if fmi_version == 3 else
+                        C.CFUNCTYPE(C.c_int, C.c_void_p, C.POINTER(C.c_uint32), C.c_size_t,
+                                    C.POINTER(C.c_double)))
+    return [
+        C.CFUNCTYPE(C.c_int, C.c_void_p, C.c_double)(set_time),
+        C.CFUNCTYPE(C.c_int, C.c_void_p, C.POINTER(C.c_double), C.c_size_t)(set_states),
+        C.CFUNCTYPE(C.c_int, C.c_void_p, C.POINTER(C.c_double), C.c_size_t)(get_derivs),
+        get_outputs_type(get_outputs),
+        C.CFUNCTYPE(C.c_int, C.c_void_p, boolean, C.POINTER(boolean), C.POINTER(boolean))(completed),
+    ]
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+@pytest.mark.parametrize("event_after_steps", [None, 3])
+def test_driver_integrates_and_stops_when_the_fmu_asks_for_an_event(fmi_version,
+                                                                   event_after_steps):
+    """The C driver with FMI 2 and FMI 3 call signatures: exp(-t) without events; the
+    'event' code as soon as CompletedIntegratorStep asks for one."""
+    import ctypes as C
+
+    from pydiag import native_me
+    callbacks = _toy_model(fmi_version, event_after_steps)
+    pointers = [C.cast(f, C.c_void_p).value for f in callbacks]
+    x = np.array([1.0])
+    out = np.zeros(11)
+    refs = (C.c_uint32 * 1)(0)
+    n_rhs, n_steps = C.c_long(0), C.c_long(0)
+    dptr = C.POINTER(C.c_double)
+    rc = native_me.load_driver().pd_integrate(
+        1, fmi_version, *pointers, 1, x.ctypes.data_as(dptr), 0.0, 0.0, 0.1, 11, 1, refs,
+        out.ctypes.data_as(dptr), 1e-8, 1e-12, 1.0, 100_000, 8, C.byref(n_rhs), C.byref(n_steps))
+    if event_after_steps is None:
+        assert rc == 0
+        np.testing.assert_allclose(out, np.exp(-0.1 * np.arange(11)), rtol=1e-7)
+    else:
+        assert rc == native_me.PD_EVENT and n_steps.value == event_after_steps
+
+
+def test_an_fmu_with_events_falls_back_to_fmpy(gear_fmu, monkeypatch):
+    """engine auto: the run that meets an event is redone by fmpy, and fmpy (with its own
+    default tolerance) serves from then on; engine native: a clear error."""
+    from pydiag import native_me
+
+    params = TABLE1[7].parameters
+    with FmuPlant(gear_fmu, SENSORS, engine="fmpy") as reference:
+        expected = reference.simulate(params, 0.02, 0.01)
+
+    def meets_an_event(self, *args):
+        raise native_me.NeedsEvents("the FMU schedules time events")
+
+    monkeypatch.setattr(native_me.NativeMeRunner, "run", meets_an_event)
+    with FmuPlant(gear_fmu, SENSORS) as plant:
+        assert plant.engine == "native"
+        np.testing.assert_array_equal(plant.simulate(params, 0.02, 0.01), expected)
+        assert plant.engine == "fmpy" and plant.relative_tolerance == 1e-8
+    with FmuPlant(gear_fmu, SENSORS, engine="native") as plant:
+        with pytest.raises(PlantError, match="schedules time events.*does not handle events"):
+            plant.simulate(params, 0.02, 0.01)

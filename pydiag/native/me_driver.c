@@ -1,10 +1,14 @@
 /*
- * Integrate an FMI 3.0 Model-Exchange instance and sample its outputs, without
+ * Integrate an FMI 2.0 or 3.0 Model-Exchange instance and sample its outputs, without
  * returning to Python between steps.
  *
  * The caller (pydiag/native_me.py) instantiates, parameterises and initialises the FMU
- * with fmpy, enters continuous-time mode, then passes the instance and the addresses
- * of five fmi3 functions. Integration: an explicit embedded Runge-Kutta pair with
+ * with fmpy, enters continuous-time mode, then passes the instance, the FMI version and
+ * the addresses of five functions: SetTime, SetContinuousStates, GetContinuousState-
+ * Derivatives (fmi2GetDerivatives), GetFloat64 (fmi2GetReal), CompletedIntegratorStep.
+ * Only FMUs without event indicators qualify (the Python side checks); an FMU that asks
+ * for an event at a completed step stops the run with PD_EVENT, and the caller falls
+ * back to an event-handling solver. Integration: an explicit embedded Runge-Kutta pair with
  * adaptive steps. Method 8 is DOP853 (Hairer's 8(5,3), coefficients generated from
  * scipy) with its 7th-order dense output: steps run freely and outputs are evaluated at
  * interpolated states. Method 5 is Dormand-Prince 5(4) with steps clipped to land on the
@@ -29,9 +33,12 @@ typedef int (*fn_set_states)(void *, const double *, size_t);
 typedef int (*fn_get_derivs)(void *, double *, size_t);
 typedef int (*fn_get_f64)(void *, const uint32_t *, size_t, double *, size_t);
 typedef int (*fn_completed)(void *, bool, bool *, bool *);
+typedef int (*fn2_get_real)(void *, const unsigned int *, size_t, double *);
+typedef int (*fn2_completed)(void *, int, int *, int *);
 
 enum { PD_OK = 0, PD_FMI_ERROR = -1, PD_STEP_UNDERFLOW = -2, PD_NOT_FINITE = -3,
-       PD_MAX_STEPS = -4, PD_NO_MEMORY = -5, PD_TERMINATED = -6, PD_BAD_METHOD = -7 };
+       PD_MAX_STEPS = -4, PD_NO_MEMORY = -5, PD_TERMINATED = -6, PD_BAD_METHOD = -7,
+       PD_EVENT = -8, PD_BAD_VERSION = -9 };
 
 /* FMI status codes above fmi3Warning (1) are failures. */
 #define FMI_OK(s) ((s) <= 1)
@@ -53,12 +60,44 @@ static const double DP5_E[DP5_STAGES + 1] = {71.0 / 57600, 0, -71.0 / 16695, 71.
 
 typedef struct {
     void *inst;
+    int fmi_version; /* 2 or 3 */
     fn_set_time set_time;
     fn_set_states set_states;
     fn_get_derivs get_derivs;
+    void *get_outputs; /* fmi3GetFloat64 or fmi2GetReal */
+    void *completed;   /* fmi3/fmi2CompletedIntegratorStep */
     size_t nx;
     long *n_rhs;
 } Model;
+
+/* The outputs vr[0..ny) at the FMU's current time and states. */
+static int get_outputs(const Model *m, const uint32_t *vr, size_t ny, double *out) {
+    int status = m->fmi_version == 3
+        ? ((fn_get_f64)m->get_outputs)(m->inst, vr, ny, out, ny)
+        : ((fn2_get_real)m->get_outputs)(m->inst, (const unsigned int *)vr, ny, out);
+    if (!FMI_OK(status)) return PD_FMI_ERROR;
+    for (size_t j = 0; j < ny; j++)
+        if (!isfinite(out[j])) return PD_NOT_FINITE;
+    return PD_OK;
+}
+
+/* Tell the FMU a step was accepted; it may ask for an event or to terminate. */
+static int completed_step(const Model *m) {
+    bool event = false, terminate = false;
+    int status;
+    if (m->fmi_version == 3) {
+        status = ((fn_completed)m->completed)(m->inst, true, &event, &terminate);
+    } else {
+        int event2 = 0, terminate2 = 0;
+        status = ((fn2_completed)m->completed)(m->inst, 1, &event2, &terminate2);
+        event = event2 != 0;
+        terminate = terminate2 != 0;
+    }
+    if (!FMI_OK(status)) return PD_FMI_ERROR;
+    if (terminate) return PD_TERMINATED;
+    if (event) return PD_EVENT;
+    return PD_OK;
+}
 
 static int rhs(const Model *m, double t, const double *x, double *dx) {
     if (!FMI_OK(m->set_time(m->inst, t))) return PD_FMI_ERROR;
@@ -93,7 +132,7 @@ static double scale_of(double atol, double rtol, double a, double b, double peak
 }
 
 /* DOP853 with dense output. */
-static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed, double *x,
+static int integrate_dense(Model *m, double *x,
                            double t0, double t_first_out, double h_out, int n_out, size_t ny,
                            const uint32_t *vr, double *out, double rtol, double atol,
                            double h_max, long max_steps, long *n_steps) {
@@ -112,8 +151,10 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
     /* outputs at or before the start */
     while (rc == PD_OK && k < n_out && t_first_out + k * h_out <= t + 1e-12 * fmax(1.0, fabs(t))) {
         double tk = t_first_out + k * h_out;
-        if (!FMI_OK(m->set_time(m->inst, tk)) || (nx && !FMI_OK(m->set_states(m->inst, x, nx)))
-            || !FMI_OK(get_f64(m->inst, vr, ny, out + (size_t)k * ny, ny))) rc = PD_FMI_ERROR;
+        if (!FMI_OK(m->set_time(m->inst, tk)) || (nx && !FMI_OK(m->set_states(m->inst, x, nx))))
+            rc = PD_FMI_ERROR;
+        else
+            rc = get_outputs(m, vr, ny, out + (size_t)k * ny);
         k++;
     }
     while (rc == PD_OK && k < n_out && nx) {
@@ -176,10 +217,11 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
                     }
                     xs[i] = x[i] + y;
                 }
-                if (!FMI_OK(m->set_time(m->inst, tk)) || !FMI_OK(m->set_states(m->inst, xs, nx))
-                    || !FMI_OK(get_f64(m->inst, vr, ny, out + (size_t)k * ny, ny))) { rc = PD_FMI_ERROR; break; }
-                for (size_t j = 0; j < ny; j++)
-                    if (!isfinite(out[(size_t)k * ny + j])) rc = PD_NOT_FINITE;
+                if (!FMI_OK(m->set_time(m->inst, tk)) || !FMI_OK(m->set_states(m->inst, xs, nx))) {
+                    rc = PD_FMI_ERROR;
+                    break;
+                }
+                if ((rc = get_outputs(m, vr, ny, out + (size_t)k * ny))) break;
                 k++;
             }
             if (rc) break;
@@ -189,9 +231,7 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
         memcpy(K, K + S * n, nx * sizeof(double)); /* first same as last */
         for (size_t i = 0; i < nx; i++) peak[i] = fmax(peak[i], fabs(x[i]));
         ++*n_steps;
-        bool enter_event = false, terminate = false;
-        if (!FMI_OK(completed(m->inst, true, &enter_event, &terminate))) { rc = PD_FMI_ERROR; break; }
-        if (terminate) { rc = PD_TERMINATED; break; }
+        if ((rc = completed_step(m))) break;
         h = hh * factor;
     }
     free(w);
@@ -199,7 +239,7 @@ static int integrate_dense(Model *m, fn_get_f64 get_f64, fn_completed completed,
 }
 
 /* Dormand-Prince 5(4), each step clipped to land on the output grid. */
-static int integrate_grid(Model *m, fn_get_f64 get_f64, fn_completed completed, double *x,
+static int integrate_grid(Model *m, double *x,
                           double t0, double t_first_out, double h_out, int n_out, size_t ny,
                           const uint32_t *vr, double *out, double rtol, double atol,
                           double h_max, long max_steps, long *n_steps) {
@@ -244,9 +284,7 @@ static int integrate_grid(Model *m, fn_get_f64 get_f64, fn_completed completed, 
                 memcpy(K, K + S * n, nx * sizeof(double)); /* first same as last */
                 for (size_t i = 0; i < nx; i++) peak[i] = fmax(peak[i], fabs(x[i]));
                 ++*n_steps;
-                bool enter_event = false, terminate = false;
-                if (!FMI_OK(completed(m->inst, true, &enter_event, &terminate))) { rc = PD_FMI_ERROR; break; }
-                if (terminate) { rc = PD_TERMINATED; break; }
+                if ((rc = completed_step(m))) break;
                 if (!land || factor < 1.0) h = hh * factor; /* keep h when only the grid cut it */
             } else {
                 h = hh * fmax(0.2, factor);
@@ -257,30 +295,27 @@ static int integrate_grid(Model *m, fn_get_f64 get_f64, fn_completed completed, 
         /* outputs at the grid point: the FMU holds a stage state, so set the accepted one */
         if (!FMI_OK(m->set_time(m->inst, target))) { rc = PD_FMI_ERROR; break; }
         if (nx && !FMI_OK(m->set_states(m->inst, x, nx))) { rc = PD_FMI_ERROR; break; }
-        if (!FMI_OK(get_f64(m->inst, vr, ny, out + (size_t)k * ny, ny))) { rc = PD_FMI_ERROR; break; }
-        for (size_t j = 0; j < ny; j++)
-            if (!isfinite(out[(size_t)k * ny + j])) { rc = PD_NOT_FINITE; break; }
+        if ((rc = get_outputs(m, vr, ny, out + (size_t)k * ny))) break;
     }
     free(w);
     return rc;
 }
 
-int pd_integrate(void *inst, void *p_set_time, void *p_set_states, void *p_get_derivs,
-                 void *p_get_f64, void *p_completed, int nx_, double *x, double t0,
-                 double t_first_out, double h_out, int n_out, int ny_, const uint32_t *vr,
-                 double *out, double rtol, double atol, double h_max, long max_steps,
-                 int method, long *n_rhs, long *n_steps) {
-    Model m = {inst, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
-               (fn_get_derivs)p_get_derivs, (size_t)nx_, n_rhs};
+int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_states,
+                 void *p_get_derivs, void *p_get_outputs, void *p_completed, int nx_, double *x,
+                 double t0, double t_first_out, double h_out, int n_out, int ny_,
+                 const uint32_t *vr, double *out, double rtol, double atol, double h_max,
+                 long max_steps, int method, long *n_rhs, long *n_steps) {
+    Model m = {inst, fmi_version, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
+               (fn_get_derivs)p_get_derivs, p_get_outputs, p_completed, (size_t)nx_, n_rhs};
     *n_rhs = 0;
     *n_steps = 0;
+    if (fmi_version != 2 && fmi_version != 3) return PD_BAD_VERSION;
     if (method == 8)
-        return integrate_dense(&m, (fn_get_f64)p_get_f64, (fn_completed)p_completed, x, t0,
-                               t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol, atol, h_max,
-                               max_steps, n_steps);
+        return integrate_dense(&m, x, t0, t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol,
+                               atol, h_max, max_steps, n_steps);
     if (method == 5)
-        return integrate_grid(&m, (fn_get_f64)p_get_f64, (fn_completed)p_completed, x, t0,
-                              t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol, atol, h_max,
-                              max_steps, n_steps);
+        return integrate_grid(&m, x, t0, t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol,
+                              atol, h_max, max_steps, n_steps);
     return PD_BAD_METHOD;
 }
