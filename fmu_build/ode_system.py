@@ -65,7 +65,7 @@ class OdeSystem:
     derivatives: list[SX]
     outputs: list[Computed]
     locals: list[Computed]
-    derived: list[Computed]
+    derived: list[Derived]
 
     def parameter_values(self) -> dict[str, float]:
         return {p.name: p.value for p in self.parameters}
