@@ -16,9 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import fmpy
@@ -28,15 +26,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.plant import FmuPlant  # noqa: E402
+sys.path.insert(0, str(ROOT / "bench"))
+from timing import median_time  # noqa: E402
 
-
-def median_time(fn, repeat: int) -> tuple[float, np.ndarray]:
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
 
 
 def main() -> int:

@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -36,19 +35,13 @@ from fmu_build.build import ode_system  # noqa: E402
 from pydiag.native_me import NativeMeRunner  # noqa: E402
 from pydiag.paper_cases import case  # noqa: E402
 from pydiag.plant import FmuPlant  # noqa: E402
+sys.path.insert(0, str(ROOT / "bench"))
+from timing import median_time  # noqa: E402
 
 FS = 10_000.0
 WARMUP_S, PERIOD_S = 0.05, 0.12
 SENSORS = ("acc", "disp")
 
-
-def median_time(fn, repeat: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
 
 
 def casadi_reference(params: dict, rtol: float):
