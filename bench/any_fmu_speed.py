@@ -25,7 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag.plant import FmuPlant  # noqa: E402
+from pydiag.fmu.plant import FmuPlant  # noqa: E402
 sys.path.insert(0, str(ROOT / "bench"))
 from timing import median_time  # noqa: E402
 

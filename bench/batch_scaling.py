@@ -1,7 +1,7 @@
 """Batch throughput: the same measurements diagnosed with 1 and with 2 local workers.
 
 Makes --count noisy measurements (Table 1 cases in turn, SNR 10, 10 periods) in a
-temporary folder, runs ``pydiag.batch.run_batch`` with 1 and 2 workers (--repeat times
+temporary folder, runs ``pydiag.app.batch.run_batch`` with 1 and 2 workers (--repeat times
 each, alternating), and prints the median wall time, measurements per minute and the
 speed-up; rows must be identical. Usage:
 
@@ -22,11 +22,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag import batch  # noqa: E402
-from pydiag.measurement import Measurement, write_measurement  # noqa: E402
-from pydiag.noise import add_white_noise  # noqa: E402
-from pydiag.paper_cases import TABLE1  # noqa: E402
-from pydiag.plant import FmuPlant  # noqa: E402
+from pydiag.app import batch  # noqa: E402
+from pydiag.core.measurement import Measurement  # noqa: E402
+from pydiag.io.measurements import write_measurement  # noqa: E402
+from pydiag.signal.noise import add_white_noise  # noqa: E402
+from pydiag.gear.conventions import kinematics_from  # noqa: E402
+from pydiag.gear.paper_cases import TABLE1  # noqa: E402
+from pydiag.fmu.plant import FmuPlant  # noqa: E402
 
 
 def main() -> int:
@@ -38,7 +40,7 @@ def main() -> int:
     estimator = dict(n_particles=16, iterations=20, polish_evaluations=150, seed=0)
     with tempfile.TemporaryDirectory() as tmp:
         with FmuPlant(args.fmu, ("acc", "disp")) as plant:
-            kin = plant.kinematics()
+            kin = kinematics_from(plant.parameters())
             for i in range(args.count):
                 c = TABLE1[i % len(TABLE1)]
                 y = plant.simulate(c.parameters, 10 * kin.period_s, 0.05)

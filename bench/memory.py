@@ -19,7 +19,7 @@ import psutil
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag.plant import FmuPlant  # noqa: E402
+from pydiag.fmu.plant import FmuPlant  # noqa: E402
 
 
 def main() -> int:

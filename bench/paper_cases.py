@@ -23,11 +23,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag.estimate import FaultEstimator  # noqa: E402
-from pydiag.measurement import Measurement  # noqa: E402
-from pydiag.noise import add_white_noise  # noqa: E402
-from pydiag.paper_cases import TABLE1, case  # noqa: E402
-from pydiag.plant import FmuPlant  # noqa: E402
+from pydiag.fit.estimator import FaultEstimator  # noqa: E402
+from pydiag.fit.problem import ProblemObjective, build_problem  # noqa: E402
+from pydiag.gear.conventions import kinematics_from  # noqa: E402
+from pydiag.core.measurement import Measurement  # noqa: E402
+from pydiag.signal.noise import add_white_noise  # noqa: E402
+from pydiag.gear.paper_cases import TABLE1, case  # noqa: E402
+from pydiag.fmu.plant import FmuPlant  # noqa: E402
 
 NAMES = ("a_f", "f_f", "f_ate", "f_dte")
 
@@ -54,7 +56,7 @@ def main() -> int:
               "ok", "E(est)", "E(true)", "evals", "wall s")
     print(" | ".join(header), flush=True)
     with FmuPlant(args.fmu, sensors) as plant:
-        kin = plant.kinematics()
+        kin = kinematics_from(plant.parameters())
         for number in map(int, args.cases.split(",")):
             c = case(number)
             clean = plant.simulate(c.parameters, args.periods * kin.period_s, 0.05)
@@ -62,16 +64,15 @@ def main() -> int:
                 rng = np.random.default_rng(1000 * number + seed)
                 m = Measurement({s: add_white_noise(clean[i], args.snr, rng)
                                  for i, s in enumerate(sensors)}, plant.sample_rate_hz)
-                est = FaultEstimator(args.fmu, n_particles=args.particles,
-                                     iterations=args.iterations, seed=seed,
-                                     polish_evaluations=args.polish, polish_starts=args.starts,
-                                     feature_mode=args.features)
-                objective = est.objective_for(m)
-                e_true = objective(np.array([c.parameters[n] for n in NAMES]))
-                objective.close()
+                est = FaultEstimator(n_particles=args.particles, iterations=args.iterations,
+                                     seed=seed, polish_evaluations=args.polish,
+                                     polish_starts=args.starts)
                 t0 = time.perf_counter()
-                r = est.fit(m)
+                problem = build_problem(args.fmu, m, feature_mode=args.features)
+                r = est.fit(problem)
                 wall = time.perf_counter() - t0
+                with ProblemObjective(problem) as objective:
+                    e_true = objective(np.array([c.parameters[n] for n in NAMES]))
                 err = max(abs(r.parameters[n] - c.parameters[n]) for n in NAMES)
                 ok = (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
                 worst, correct = max(worst, err), correct + ok

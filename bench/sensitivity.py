@@ -20,11 +20,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag.estimate import FaultEstimator  # noqa: E402
-from pydiag.measurement import Measurement  # noqa: E402
-from pydiag.noise import add_white_noise  # noqa: E402
-from pydiag.paper_cases import TABLE1  # noqa: E402
-from pydiag.plant import FmuPlant  # noqa: E402
+from pydiag.fit.problem import ProblemObjective, build_problem  # noqa: E402
+from pydiag.gear.conventions import kinematics_from  # noqa: E402
+from pydiag.core.measurement import Measurement  # noqa: E402
+from pydiag.signal.noise import add_white_noise  # noqa: E402
+from pydiag.gear.paper_cases import TABLE1  # noqa: E402
+from pydiag.fmu.plant import FmuPlant  # noqa: E402
 
 NAMES = ("a_f", "f_f", "f_ate", "f_dte")
 STEP = 0.03
@@ -42,19 +43,19 @@ def main() -> int:
         print(f"{'case':>4} {'E(truth)':>9} {'plain':>7} " + " ".join(f"{n:>8}" for n in NAMES)
               + "   (plain: E(truth) without the noise correction)")
         with FmuPlant(args.fmu, (sensor,)) as plant:
-            kin = plant.kinematics()
+            kin = kinematics_from(plant.parameters())
             for c in TABLE1:
                 clean = plant.simulate(c.parameters, args.periods * kin.period_s, 0.05)[0]
                 m = Measurement({sensor: add_white_noise(clean, 10.0, np.random.default_rng(1))},
                                 plant.sample_rate_hz)
-                objective = FaultEstimator(args.fmu).objective_for(m)
+                problem = build_problem(args.fmu, m)
+                objective = ProblemObjective(problem)
                 truth = np.array([c.parameters[n] for n in NAMES])
                 e0 = objective(truth)
-                noisy_reference = objective.reference
-                objective.reference = {k: dataclasses.replace(v, noise_power=0.0)
-                                       for k, v in noisy_reference.items()}
-                e_plain = objective(truth)
-                objective.reference = noisy_reference
+                plain = dataclasses.replace(problem, reference={
+                    k: dataclasses.replace(v, noise_power=0.0) for k, v in problem.reference.items()})
+                with ProblemObjective(plain) as plain_objective:
+                    e_plain = plain_objective(truth)
                 deltas = []
                 for i in range(len(NAMES)):
                     changes = []

@@ -32,9 +32,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from fmu_build.build import ode_system  # noqa: E402
-from pydiag.native_me import NativeMeRunner  # noqa: E402
-from pydiag.paper_cases import case  # noqa: E402
-from pydiag.plant import FmuPlant  # noqa: E402
+from pydiag.fmu.native_engine import NativeMeRunner  # noqa: E402
+from pydiag.gear.paper_cases import case  # noqa: E402
+from pydiag.fmu.plant import FmuPlant  # noqa: E402
 sys.path.insert(0, str(ROOT / "bench"))
 from timing import median_time  # noqa: E402
 
@@ -152,7 +152,7 @@ def main() -> int:
             print(f"equal accuracy ({bar:g} %): not reached by "
                   f"{'naive fmpy' if not a else 'native'} in the tolerances run")
     # The diagnosis path: native engine in isolated worker processes (one instance each).
-    from pydiag.isolation import IsolatedPool
+    from pydiag.fmu.isolation import IsolatedPool
 
     class Evaluate:
         def __init__(self):

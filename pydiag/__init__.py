@@ -1,6 +1,19 @@
-"""pydiag: diagnose gear faults by fitting an FMU's fault parameters to a vibration spectrum."""
+"""pydiag: diagnose gear faults by fitting an FMU's fault parameters to a vibration spectrum.
 
-from pydiag.kinematics import GearKinematics
-from pydiag.plant import FmuPlant, PlantError
+The package is layered by pipeline stage, lowest first; a module imports only from its
+own stage or lower ones (tests/test_layers.py checks it):
 
-__all__ = ["GearKinematics", "FmuPlant", "PlantError"]
+==========  ==============================================================================
+core        errors, the bounded-parameter type, the measurement record
+signal      amplitude spectra, noise floors, local maxima, synthetic noise, features
+io          measurement files and the output policy for every file pydiag writes
+fmu         FMU archives, descriptions, the plant, the compiled engine, worker isolation
+gear        kinematics, named lines, the paper's features and classes, effect catalogue
+model       adapters (what an FMU is to pydiag) and records simulated from an FMU
+fit         Eq. (12), the fit problem, particle swarm, the estimator
+loop        compare, discover, regress, run history, HTML report
+app         the command line and batch diagnosis
+==========  ==============================================================================
+"""
+
+__version__ = "0.3.0"

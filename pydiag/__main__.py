@@ -1,5 +1,5 @@
 import sys
 
-from pydiag.cli import main
+from pydiag.app.cli import main
 
 sys.exit(main())

@@ -34,7 +34,7 @@ def run_cli(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
 
 def inspected(fmu: Path) -> Path:
     """Every FMU a test builds goes through `pydiag inspect` too (issue: inspect runs on all)."""
-    from pydiag.inspect_fmu import describe, format_info
+    from pydiag.fmu.inspect import describe, format_info
     info = describe(fmu)
     assert info.interfaces and "platforms:" in format_info(info)
     return fmu

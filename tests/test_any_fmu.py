@@ -13,12 +13,16 @@ import pytest
 
 from conftest import ROOT, inspected, run_cli
 from fmus import casadi_gear, pythonfmu_gear
-from pydiag.adapter import AdapterError, check_against_fmu, load_adapter, parse_adapter
-from pydiag.estimate import FaultEstimator
-from pydiag.fmu_archive import UnsafeArchive, safe_extract
-from pydiag.inspect_fmu import describe
-from pydiag.measurement import read_measurement
-from pydiag.plant import FmuPlant, PlantError
+from pydiag.core.errors import AdapterError
+from pydiag.model.adapter import check_against_fmu, load_adapter, parse_adapter
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import build_problem
+from pydiag.core.errors import UnsafeArchive
+from pydiag.fmu.archive import safe_extract
+from pydiag.fmu.inspect import describe
+from pydiag.io.measurements import read_measurement
+from pydiag.core.errors import PlantError
+from pydiag.fmu.plant import FmuPlant
 
 # ---------------------------------------------------------------------- adapters
 
@@ -129,11 +133,11 @@ def test_pythonfmu_cosimulation_gear_diagnosed(pythonfmu_fmu):
         assert plant.engine == "fmpy"  # CS: the native engine does not apply
         y = plant.simulate({"Fault_Amplitude": 0.4}, 0.36, 0.02)[0]
     rng = np.random.default_rng(3)
-    from pydiag.measurement import Measurement
-    from pydiag.noise import add_white_noise
+    from pydiag.core.measurement import Measurement
+    from pydiag.signal.noise import add_white_noise
     m = Measurement({"acc": add_white_noise(y, 10.0, rng)}, 10_000.0)
-    r = FaultEstimator(str(fmu), adapter=adapter, n_particles=4, iterations=3,
-                       polish_evaluations=16, polish_starts=1, seed=0).fit(m)
+    r = FaultEstimator(n_particles=4, iterations=3, polish_evaluations=16, polish_starts=1,
+                       seed=0).fit(build_problem(str(fmu), m, adapter))
     assert abs(r.parameters["a_f"] - 0.4) <= 0.03
     assert r.fault_mode == "tooth_fault"
 

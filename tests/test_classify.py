@@ -1,7 +1,7 @@
 import pytest
 
-from pydiag.classify import classify
-from pydiag.paper_cases import TABLE1
+from pydiag.gear.classify import classify
+from pydiag.gear.paper_cases import TABLE1
 
 
 @pytest.mark.parametrize("case", TABLE1, ids=lambda c: f"case{c.number}")

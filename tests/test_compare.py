@@ -8,14 +8,17 @@ import pytest
 
 from conftest import GEARPAIR_MO, ROOT, inspected, run_cli
 from fmu_build import build_fmu
-from pydiag.compare import compare, refit_with_effect
-from pydiag.effects import EFFECTS
-from pydiag.estimate import FaultEstimator
-from pydiag.kinematic_map import Bearing, kinematic_map, match
-from pydiag.kinematics import GearKinematics
-from pydiag.measurement import Measurement, write_measurement
-from pydiag.noise import add_white_noise
-from pydiag.plant import FmuPlant
+from pydiag.loop.compare import compare, refit_with_effect
+from pydiag.gear.effects import EFFECTS
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import build_problem
+from pydiag.gear.conventions import kinematics_from
+from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.core.measurement import Measurement
+from pydiag.io.measurements import write_measurement
+from pydiag.signal.noise import add_white_noise
+from pydiag.fmu.plant import FmuPlant
 
 BASE = dict(a_f=0.3, f_f=0.6, f_ate=0.1, f_dte=0.1)
 BEARING = Bearing(9, 7.94e-3, 39.04e-3)
@@ -49,7 +52,7 @@ def effect_fmus(tmp_path_factory):
 
 def record(fmu, seed=5, periods=20):
     with FmuPlant(fmu, ("acc", "disp")) as plant:
-        y = plant.simulate(BASE, periods * plant.kinematics().period_s, 0.05)
+        y = plant.simulate(BASE, periods * kinematics_from(plant.parameters()).period_s, 0.05)
     rng = np.random.default_rng(seed)
     return Measurement({s: add_white_noise(y[i], 10.0, rng) for i, s in enumerate(("acc", "disp"))},
                        10_000.0)
@@ -57,7 +60,7 @@ def record(fmu, seed=5, periods=20):
 
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect):
-    c = compare(str(gear_fmu), record(effect_fmus[effect]), FaultEstimator(str(gear_fmu), **FAST),
+    c = compare(build_problem(str(gear_fmu), record(effect_fmus[effect])), FaultEstimator(**FAST),
                 BEARING)
     top = c.suggested_effects[0]
     assert top.effect == effect, [(s.effect, round(s.score, 2)) for s in c.suggested_effects]
@@ -68,7 +71,7 @@ def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect):
 
 def test_no_hidden_effect_no_confident_suggestion(gear_fmu):
     for seed in (5, 6, 7):
-        c = compare(str(gear_fmu), record(gear_fmu, seed), FaultEstimator(str(gear_fmu), **FAST),
+        c = compare(build_problem(str(gear_fmu), record(gear_fmu, seed)), FaultEstimator(**FAST),
                     BEARING)
         assert not [s for s in c.suggested_effects if s.confidence >= 0.5], c.peaks
 
@@ -79,8 +82,10 @@ def test_adding_the_effect_recovers_it_and_explains_the_peaks(gear_fmu, effect_f
     """Measured error ratios (noise-corrected error): 0.20 outer race, 0.025 runout,
     0.13 torque ripple; without the noise correction 0.63, 0.10, 0.53."""
     m = record(effect_fmus[effect])
-    base = compare(str(gear_fmu), m, FaultEstimator(str(gear_fmu), **FAST), BEARING)
-    with_effect = refit_with_effect(str(effect_fmus[effect]), m, base, EFFECTS[effect], BEARING)
+    problem = build_problem(str(gear_fmu), m)
+    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    with_effect = refit_with_effect(problem, base, EFFECTS[effect], str(effect_fmus[effect]),
+                                    bearing=BEARING)
     assert with_effect.error < 0.5 * base.error
     assert not [s for s in with_effect.suggested_effects if s.confidence >= 0.5]
 
@@ -99,7 +104,10 @@ def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
     assert data["suggested_effects"][0]["effect"] == "gear_eccentricity"
     assert set(data["suggested_effects"][0]) == {"effect", "score", "confidence", "evidence"}
     assert {"freq_hz", "amplitude", "family", "energy_fraction"} <= set(data["peaks"][0])
-    res = run_cli(*args)  # a second run appends to the history
+    before = out.read_bytes()
+    res = run_cli(*args)  # an existing output is refused before any work, and kept
+    assert res.returncode == 2 and "exists" in res.stderr and out.read_bytes() == before
+    res = run_cli(*args, "--force")  # a second run appends to the history
     assert res.returncode == 0, res.stderr
     rows = sqlite3.connect(db).execute("SELECT model_name, source_sha256, error FROM runs").fetchall()
     assert len(rows) == 2 and rows[0][0] == "GearPair" and len(rows[0][1]) == 64
@@ -130,9 +138,9 @@ def test_cli_discover_ranks_the_hidden_effect_first(gear_fmu, effect_fmus, tmp_p
 @pytest.mark.slow
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_discover_picks_the_hidden_effect(gear_fmu, effect_fmus, effect, tmp_path):
-    from pydiag.discover import discover
-    base, found = discover(str(gear_fmu), record(effect_fmus[effect], periods=10),
-                           FaultEstimator(str(gear_fmu), **FAST), BEARING,
+    from pydiag.loop.discover import discover
+    base, found = discover(build_problem(str(gear_fmu), record(effect_fmus[effect], periods=10)),
+                           FaultEstimator(**FAST), BEARING,
                            build_dir=tmp_path)
     assert found[0].effect == effect, [(d.effect, round(d.delta_bic, 1)) for d in found]
     assert found[0].delta_bic < 0
@@ -143,13 +151,13 @@ def test_html_report_renders_in_a_headless_browser(gear_fmu, effect_fmus, tmp_pa
     import shutil
     import subprocess
     from PIL import Image
-    from pydiag.report import write_report
+    from pydiag.loop.report import write_report
 
     browser = shutil.which("chromium") or shutil.which("chromium-browser")
     if browser is None:
         pytest.skip("no chromium on this machine (.ci/run installs Debian's)")
-    c = compare(str(gear_fmu), record(effect_fmus["bearing_outer_race"], periods=10),
-                FaultEstimator(str(gear_fmu), **FAST), BEARING)
+    c = compare(build_problem(str(gear_fmu), record(effect_fmus["bearing_outer_race"], periods=10)),
+                FaultEstimator(**FAST), BEARING)
     page = write_report(c, tmp_path / "report.html", "hidden-bearing.csv",
                         [{"id": 1, "error": c.error, "model_name": "GearPair", "fmu": "x.fmu"}])
     text = page.read_text()

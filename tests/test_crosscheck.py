@@ -10,7 +10,7 @@ import pytest
 
 from conftest import GEARPAIR_MO
 from fmu_build.crosscheck import crosscheck
-from pydiag.paper_cases import TABLE1
+from pydiag.gear.paper_cases import TABLE1
 
 SIGNAL_TOL = 0.01
 SPECTRUM_TOL = 0.01

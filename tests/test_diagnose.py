@@ -6,11 +6,13 @@ import numpy as np
 import pytest
 
 from conftest import run_cli
-from pydiag.estimate import FaultEstimator
-from pydiag.measurement import Measurement
-from pydiag.noise import add_white_noise
-from pydiag.paper_cases import TABLE1, case
-from pydiag.plant import FmuPlant
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import ProblemObjective, build_problem
+from pydiag.gear.conventions import kinematics_from
+from pydiag.core.measurement import Measurement
+from pydiag.signal.noise import add_white_noise
+from pydiag.gear.paper_cases import TABLE1, case
+from pydiag.fmu.plant import FmuPlant
 
 NAMES = ("a_f", "f_f", "f_ate", "f_dte")
 SENSORS = ("acc", "disp")
@@ -18,7 +20,7 @@ SENSORS = ("acc", "disp")
 
 def noisy_measurement(fmu, number: int, seed: int, periods: int = 10) -> Measurement:
     with FmuPlant(fmu, SENSORS) as plant:
-        kin = plant.kinematics()
+        kin = kinematics_from(plant.parameters())
         clean = plant.simulate(case(number).parameters, periods * kin.period_s, 0.05)
     rng = np.random.default_rng(1000 * number + seed)
     return Measurement({s: add_white_noise(clean[i], 10.0, rng) for i, s in enumerate(SENSORS)},
@@ -28,7 +30,7 @@ def noisy_measurement(fmu, number: int, seed: int, periods: int = 10) -> Measure
 def test_objective_is_lowest_at_the_truth(gear_fmu):
     """Before trusting an optimiser: the truth must beat every nearby wrong answer."""
     c = case(8)
-    objective = FaultEstimator(gear_fmu).objective_for(noisy_measurement(gear_fmu, 8, 0))
+    objective = ProblemObjective(build_problem(gear_fmu, noisy_measurement(gear_fmu, 8, 0)))
     truth = np.array([c.parameters[n] for n in NAMES])
     e_true = objective(truth)
     for i, name in enumerate(NAMES):
@@ -42,9 +44,9 @@ def test_objective_is_lowest_at_the_truth(gear_fmu):
 @pytest.mark.parametrize("number", [3, 6])
 def test_fast_diagnosis_recovers_parameters_mode_and_severity(gear_fmu, number):
     c = case(number)
-    est = FaultEstimator(gear_fmu, n_particles=8, iterations=6, polish_evaluations=100,
-                         polish_starts=2, seed=1)
-    r = est.fit(noisy_measurement(gear_fmu, number, 0))
+    est = FaultEstimator(n_particles=8, iterations=6, polish_evaluations=100, polish_starts=2,
+                         seed=1)
+    r = est.fit(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)))
     errors = {n: abs(r.parameters[n] - c.parameters[n]) for n in NAMES}
     assert max(errors.values()) <= 0.03, errors
     assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
@@ -53,12 +55,12 @@ def test_fast_diagnosis_recovers_parameters_mode_and_severity(gear_fmu, number):
 
 
 def test_result_does_not_depend_on_worker_count(gear_fmu):
-    m = noisy_measurement(gear_fmu, 5, 0, periods=2)
+    m = build_problem(gear_fmu, noisy_measurement(gear_fmu, 5, 0, periods=2))
     kwargs = dict(n_particles=4, iterations=2, polish_evaluations=10, polish_starts=1, seed=3)
-    one = FaultEstimator(gear_fmu, n_workers=1, **kwargs).fit(m)
-    two = FaultEstimator(gear_fmu, n_workers=2, **kwargs).fit(m)
+    one = FaultEstimator(n_workers=1, **kwargs).fit(m)
+    two = FaultEstimator(n_workers=2, **kwargs).fit(m)
     assert one.parameters == two.parameters and one.error == two.error
-    other_seed = FaultEstimator(gear_fmu, n_workers=2, **{**kwargs, "seed": 4}).fit(m)
+    other_seed = FaultEstimator(n_workers=2, **{**kwargs, "seed": 4}).fit(m)
     assert other_seed.parameters != one.parameters
 
 
@@ -83,24 +85,26 @@ def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
 @pytest.mark.parametrize("number", [c.number for c in TABLE1])
 def test_paper_case_full_diagnosis(gear_fmu, number):
     c = case(number)
-    r = FaultEstimator(gear_fmu, seed=0).fit(noisy_measurement(gear_fmu, number, 0))
+    r = FaultEstimator(seed=0).fit(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)))
     assert max(abs(r.parameters[n] - c.parameters[n]) for n in NAMES) <= 0.03
     assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
 
 
 def test_fit_writes_no_files_and_leaves_logging_alone(gear_fmu, tmp_path):
-    """pyswarms would add root-logger handlers and write ./report.log; pydiag prevents it."""
+    """A fit writes nothing in the current folder and leaves the root logger alone (pyswarms
+    added root-logger handlers and wrote ./report.log; the swarm no longer uses it)."""
     import subprocess
     import sys
     script = f"""
 import logging, numpy as np
-from pydiag.estimate import FaultEstimator
-from pydiag.measurement import Measurement
-from pydiag.plant import FmuPlant
+from pydiag.core.measurement import Measurement
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import build_problem
+from pydiag.fmu.plant import FmuPlant
 with FmuPlant({str(gear_fmu)!r}, ("acc",)) as p:
     y = p.simulate({{}}, 0.24, 0.05)[0]
-FaultEstimator({str(gear_fmu)!r}, n_particles=4, iterations=2, polish_evaluations=0,
-               n_workers=1).fit(Measurement({{"acc": y}}, 1e4))
+FaultEstimator(n_particles=4, iterations=2, polish_evaluations=0, n_workers=1).fit(
+    build_problem({str(gear_fmu)!r}, Measurement({{"acc": y}}, 1e4)))
 print(len(logging.getLogger().handlers))
 """
     import os

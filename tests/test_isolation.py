@@ -5,10 +5,13 @@ import pytest
 
 from conftest import inspected
 from fmus import hostile
-from pydiag.adapter import parse_adapter
-from pydiag.estimate import EstimationError, FaultEstimator
-from pydiag.measurement import Measurement
-from pydiag.plant import FmuPlant, PlantError
+from pydiag.model.adapter import parse_adapter
+from pydiag.core.errors import EstimationError
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import build_problem
+from pydiag.core.measurement import Measurement
+from pydiag.core.errors import PlantError
+from pydiag.fmu.plant import FmuPlant
 
 import tomllib
 
@@ -39,10 +42,9 @@ def test_plant_reports_nan_and_failed_step(hostile_fmu):
 
 
 def test_fit_survives_crashes_hangs_nans_and_failed_steps(hostile_fmu):
-    est = FaultEstimator(str(hostile_fmu), adapter=adapter(0.0, 2.0), n_particles=8,
-                         iterations=4, polish_evaluations=10, polish_starts=1, seed=2,
-                         n_workers=2, eval_timeout_s=2.0)
-    r = est.fit(measurement(hostile_fmu, 0.4))
+    est = FaultEstimator(n_particles=8, iterations=4, polish_evaluations=10, polish_starts=1,
+                         seed=2, n_workers=2, eval_timeout_s=2.0)
+    r = est.fit(build_problem(str(hostile_fmu), measurement(hostile_fmu, 0.4), adapter(0.0, 2.0)))
     assert abs(r.parameters["k"] - 0.4) < 0.02
     assert r.failed_evaluations > 0
     reasons = " | ".join(r.failure_reasons)
@@ -52,11 +54,11 @@ def test_fit_survives_crashes_hangs_nans_and_failed_steps(hostile_fmu):
 
 @pytest.mark.parametrize("low,high,cause", [(1.65, 2.0, "SIGSEGV"), (1.45, 1.55, "exceeded")])
 def test_consecutive_failures_stop_with_the_cause(hostile_fmu, low, high, cause):
-    est = FaultEstimator(str(hostile_fmu), adapter=adapter(low, high), n_particles=4,
-                         iterations=3, polish_evaluations=0, n_workers=2, eval_timeout_s=1.0,
-                         max_consecutive_failures=4)
+    est = FaultEstimator(n_particles=4, iterations=3, polish_evaluations=0, n_workers=2,
+                         eval_timeout_s=1.0, max_consecutive_failures=4)
+    problem = build_problem(str(hostile_fmu), measurement(hostile_fmu, 0.4), adapter(low, high))
     with pytest.raises(EstimationError, match=rf"4 evaluations failed in a row; last: .*{cause}"):
-        est.fit(measurement(hostile_fmu, 0.4))
+        est.fit(problem)
 
 
 def test_cosimulation_divergence_is_detected_and_the_step_chosen_from_bands(tmp_path):

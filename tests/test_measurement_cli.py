@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from conftest import run_cli
-from pydiag.measurement import Measurement, MeasurementError, read_measurement, write_measurement
+from pydiag.core.errors import MeasurementError, OutputError
+from pydiag.core.measurement import Measurement
+from pydiag.io.measurements import read_measurement, write_measurement
 
 
 def write_csv(path, header, rows, meta=None):
@@ -29,7 +31,7 @@ def test_round_trip_keeps_channels_rate_and_metadata(tmp_path):
 def test_existing_file_is_not_overwritten(tmp_path):
     path = tmp_path / "m.csv"
     path.write_text("precious")
-    with pytest.raises(MeasurementError, match="exists"):
+    with pytest.raises(OutputError, match="exists"):
         write_measurement(path, Measurement({"a": np.zeros(3)}, 1.0))
     assert path.read_text() == "precious"
 
@@ -74,7 +76,7 @@ def test_simulate_writes_channels_and_operating_point(short_measurement):
 
 @pytest.mark.parametrize("extra,message", [
     (["--column", "nope"], "not in the measurement"),
-    (["--column", "acc", "--particles", "1"], "at least 2 particles"),
+    (["--column", "acc", "--particles", "1"], "--particles: 1 must be >= 2"),
 ])
 def test_diagnose_rejects_bad_requests(gear_fmu, short_measurement, extra, message):
     res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
@@ -104,5 +106,5 @@ def test_json_may_not_replace_the_measurement(gear_fmu, short_measurement):
     before = short_measurement.read_text()
     res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
                   str(short_measurement), "--json", str(short_measurement), "--quiet")
-    assert res.returncode == 2 and "overwrite the measurement" in res.stderr
+    assert res.returncode == 2 and "would overwrite an input file" in res.stderr
     assert short_measurement.read_text() == before

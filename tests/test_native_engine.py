@@ -5,8 +5,9 @@ import pytest
 
 from conftest import inspected
 from fmu_build import build_fmu
-from pydiag.paper_cases import TABLE1
-from pydiag.plant import FmuPlant, PlantError
+from pydiag.gear.paper_cases import TABLE1
+from pydiag.core.errors import PlantError
+from pydiag.fmu.plant import FmuPlant
 
 SENSORS = ("acc", "disp")
 # Both engines converged (rtol 1e-10): sampled signals agree to 2e-4 of their peak
@@ -149,7 +150,7 @@ def test_driver_integrates_and_stops_when_the_fmu_asks_for_an_event(fmi_version,
     'event' code as soon as CompletedIntegratorStep asks for one."""
     import ctypes as C
 
-    from pydiag import native_me
+    from pydiag.fmu import native_engine as native_me
     callbacks = _toy_model(fmi_version, event_after_steps)
     pointers = [C.cast(f, C.c_void_p).value for f in callbacks]
     x = np.array([1.0])
@@ -170,7 +171,7 @@ def test_driver_integrates_and_stops_when_the_fmu_asks_for_an_event(fmi_version,
 def test_an_fmu_with_events_falls_back_to_fmpy(gear_fmu, monkeypatch):
     """engine auto: the run that meets an event is redone by fmpy, and fmpy (with its own
     default tolerance) serves from then on; engine native: a clear error."""
-    from pydiag import native_me
+    from pydiag.fmu import native_engine as native_me
 
     params = TABLE1[7].parameters
     with FmuPlant(gear_fmu, SENSORS, engine="fmpy") as reference:

@@ -5,8 +5,8 @@ import json
 
 from conftest import inspected, run_cli
 from fmu_build import build_fmu
-from pydiag import regress
-from pydiag.plant import FmuPlant
+from pydiag.loop import regress
+from pydiag.fmu.plant import FmuPlant
 
 GOLDEN = "tests/golden/GearPair.json"
 

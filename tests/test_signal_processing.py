@@ -3,11 +3,13 @@
 import numpy as np
 import pytest
 
-from pydiag.features import features_from_spectrum, paper_bands, signal_features
-from pydiag.kinematics import GearKinematics
-from pydiag.noise import add_white_noise
-from pydiag.objective import spectral_error
-from pydiag.spectrum import sync_spectrum, whole_periods
+from pydiag.core.errors import MeasurementError, UsageError
+
+from pydiag.gear.features import features_from_spectrum, paper_bands, signal_features
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.signal.noise import add_white_noise
+from pydiag.fit.objective import spectral_error
+from pydiag.signal.spectra import sync_spectrum, whole_periods
 
 KIN = GearKinematics(14, 21, 25.0)
 FS = 10_000.0
@@ -21,7 +23,7 @@ def test_kinematics_of_the_default_gear():
     assert KIN.period_s == pytest.approx(0.12)  # 3 pinion turns = 2 gear turns
     hunting = GearKinematics(14, 29, 25.0)  # coprime: every pair meets once per 29 turns
     assert hunting.n_assembly_phases == 29 and hunting.period_s == pytest.approx(29 / 25)
-    with pytest.raises(ValueError, match="teeth counts"):
+    with pytest.raises(UsageError, match="teeth counts"):
         GearKinematics(0, 21, 25.0)
 
 
@@ -42,7 +44,7 @@ def test_sync_spectrum_reads_exact_line_amplitudes():
 def test_sync_spectrum_cuts_to_whole_periods_and_rejects_short_records():
     n = int(2.5 * KIN.period_s * FS)
     assert whole_periods(n, FS, KIN.period_s) == (2, 2400)
-    with pytest.raises(ValueError, match="shorter than one fundamental period"):
+    with pytest.raises(MeasurementError, match="shorter than one fundamental period"):
         sync_spectrum(np.zeros(100), FS, KIN.period_s)
 
 
@@ -68,7 +70,7 @@ def test_snr_is_a_power_ratio():
     clean = 2.0 * np.sin(2 * np.pi * 350 * t)
     noisy = add_white_noise(clean, 10.0, rng)
     assert np.var(clean) / np.var(noisy - clean) == pytest.approx(10.0, rel=0.02)
-    with pytest.raises(ValueError):
+    with pytest.raises(UsageError, match="SNR must be positive"):
         add_white_noise(clean, 0.0, rng)
 
 
@@ -92,7 +94,7 @@ def test_paper_features_are_band_maxima_and_lines_keep_sidebands():
     assert paper.amplitude[0] == pytest.approx(1.0) and paper.freq_hz[0] == pytest.approx(350)
     assert 375.0 in np.round(lines.freq_hz, 6)
     assert lines.amplitude[np.argmin(abs(lines.freq_hz - 375))] == pytest.approx(0.2)
-    with pytest.raises(ValueError, match="feature mode"):
+    with pytest.raises(UsageError, match="feature mode"):
         features_from_spectrum(sync_spectrum(x, FS, KIN.period_s), KIN, "bogus")
 
 
@@ -118,7 +120,7 @@ def test_noise_aware_error_prefers_the_true_line_over_the_noise_floor():
 
 
 def test_rician_mean_and_noise_corrected_error():
-    from pydiag.objective import noise_corrected_error, rician_mean
+    from pydiag.fit.objective import noise_corrected_error, rician_mean
     rng = np.random.default_rng(4)
     p = 0.04
     for a in (0.0, 0.1, 1.0, 30.0):  # from pure noise to a line far above it

@@ -1,0 +1,242 @@
+"""Command line: pydiag simulate | diagnose | compare | discover | history | batch | regress |
+inspect | demo.
+
+This module parses arguments (every number is checked here, before any work), calls the
+command, and maps errors to exit codes: a :class:`~pydiag.core.errors.PydiagError` is the
+user's to fix (one line on stderr, status 2); anything else is an internal error (one
+line, status 3; ``PYDIAG_DEBUG=1`` shows the traceback). A failed regression exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+
+from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_inspect, cmd_regress,
+                                 cmd_simulate, warn_validation)
+from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
+from pydiag.core.errors import PydiagError
+from pydiag.gear.effects import EFFECTS
+from pydiag.gear.features import FEATURE_MODES
+from pydiag.gear.kinematic_map import Bearing
+from pydiag.gear.paper_cases import TABLE1
+from pydiag.loop.regress import DEFAULT_RTOL
+
+DEFAULT_HISTORY = "pydiag_history.sqlite"
+
+
+# ---------------------------------------------------------------------- argument types
+def _number(kind, low=None, high=None, low_open=False, high_open=False):
+    """An argparse type: a finite ``kind`` within the bounds, else a message naming them."""
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not {'an integer' if kind is int else 'a number'}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"'{text}' is not a finite number")
+        if low is not None and (value <= low if low_open else value < low):
+            raise argparse.ArgumentTypeError(f"{text} must be {'>' if low_open else '>='} {low}")
+        if high is not None and (value >= high if high_open else value > high):
+            raise argparse.ArgumentTypeError(f"{text} must be {'<' if high_open else '<='} {high}")
+        return value
+    return parse
+
+
+positive = _number(float, 0, low_open=True)
+rate = _number(float, 0, 1, low_open=True, high_open=True)
+
+
+def parameter_value(text: str) -> tuple[str, float]:
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"takes NAME=VALUE, got '{text}'")
+    return name.strip(), _number(float)(value)
+
+
+def bearing(text: str) -> Bearing:
+    try:
+        parts = [float(v) for v in text.split(",")]
+    except ValueError:
+        parts = []
+    if len(parts) not in (3, 4) or not all(math.isfinite(p) for p in parts):
+        raise argparse.ArgumentTypeError(f"takes N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG], got '{text}'")
+    n, d_mm, pitch_mm = parts[:3]
+    angle = parts[3] if len(parts) > 3 else 0.0
+    if n != int(n) or n < 1:
+        raise argparse.ArgumentTypeError(f"the number of balls must be a positive integer, got {n:g}")
+    if not 0 < d_mm < pitch_mm:
+        raise argparse.ArgumentTypeError(f"need 0 < ball diameter < pitch diameter, got {d_mm:g} "
+                                         f"and {pitch_mm:g} mm")
+    if not 0 <= angle < 90:
+        raise argparse.ArgumentTypeError(f"the contact angle must lie in [0, 90) degrees, got {angle:g}")
+    return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, math.radians(angle))
+
+
+def effect_list(text: str) -> list[str]:
+    keys = [k.strip() for k in text.split(",") if k.strip()]
+    unknown = [k for k in keys if k not in EFFECTS]
+    if unknown or not keys:
+        raise argparse.ArgumentTypeError(f"unknown effect(s) {', '.join(unknown) or '(none)'}; "
+                                         f"known: {', '.join(EFFECTS)}")
+    return keys
+
+
+# ---------------------------------------------------------------------- parser
+class Parser(argparse.ArgumentParser):
+    """Bad arguments end with one line on stderr (and a pointer to --help), status 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _optimiser_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--particles", type=_number(int, 2), help="swarm size (default 16; an "
+                   "effect's refit: 8)")
+    p.add_argument("--iterations", type=_number(int, 1), help="swarm iterations (default 20; "
+                   "an effect's refit: 6)")
+    p.add_argument("--polish", type=_number(int, 0), help="least-squares polish evaluations "
+                   "per start, 0 to skip (default 150; an effect's refit: 60)")
+    p.add_argument("--seed", type=_number(int, 0), help="random seed (default 0)")
+    p.add_argument("--workers", type=_number(int, 1),
+                   help="worker processes (default: cores); batch: measurements in parallel")
+    p.add_argument("--eval-timeout", type=positive, help="seconds one simulation may take "
+                   "before it is killed and penalised (default 60)")
+    p.add_argument("--features", choices=FEATURE_MODES, default="lines",
+                   help="every synchronous line in the bands, or the paper's band maxima")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _measurement_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--measurement", required=True, help="CSV with time_s and sensor columns")
+    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
+    p.add_argument("--sample-rate", type=positive, help="Hz, if the CSV has no time_s")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
+
+
+def _force(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--force", action="store_true", help="replace existing output files")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = Parser(prog="pydiag", description="FMU-based gear diagnosis")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("simulate", help="simulate a measurement CSV from an FMU")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--set", action="append", type=parameter_value, metavar="NAME=VALUE",
+                   help="parameter value (repeat)")
+    p.add_argument("--duration", type=positive, help="seconds of signal (default: 10 "
+                   "fundamental periods)")
+    p.add_argument("--sample-rate", type=positive, default=10_000.0, help="Hz (default 10000)")
+    p.add_argument("--snr", type=positive, help="signal/noise power ratio per channel "
+                   "(default: no noise)")
+    p.add_argument("--seed", type=_number(int, 0), default=0)
+    p.add_argument("--sensor", action="append", help="output to record (repeat; default acc, disp)")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU (sensors, start values)")
+    p.add_argument("--out", required=True, help="CSV file to write")
+    _force(p)
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("diagnose", help="estimate fault parameters from a measurement")
+    p.add_argument("--fmu", required=True)
+    _measurement_args(p)
+    p.add_argument("--json", help="write the result as JSON here")
+    _force(p)
+    _optimiser_args(p)
+    p.set_defaults(func=cmd_diagnose)
+
+    p = sub.add_parser("batch", help="diagnose many measurements (locally or on Dask)")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--measurements", required=True, help="folder of CSV files, or a glob")
+    p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
+    p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
+    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
+    p.add_argument("--sample-rate", type=positive, help="Hz, if CSVs have no time_s")
+    _force(p)
+    _optimiser_args(p)
+    p.set_defaults(func=cmd_batch)
+
+    p = sub.add_parser("regress", help="check an FMU against golden spectra")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--golden", required=True, help="golden JSON file")
+    p.add_argument("--bless", action="store_true", help="write the golden file from this FMU")
+    p.add_argument("--rtol", type=_number(float, 0), default=DEFAULT_RTOL,
+                   help=f"tolerance, fraction of the largest line (default {DEFAULT_RTOL:g})")
+    p.add_argument("--sensor", action="append", help="output to check when blessing (repeat)")
+    p.add_argument("--sample-rate", type=positive, default=10_000.0, help="Hz when blessing")
+    p.add_argument("--adapter", help="adapter TOML (sensors, start values, kinematics) for --bless")
+    p.set_defaults(func=cmd_regress)
+
+    p = sub.add_parser("compare", help="fit, then show where the model fails and which effect is missing")
+    p.add_argument("--fmu", required=True)
+    _measurement_args(p)
+    p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM"
+                   "[,ANGLE_DEG] for BPFO/BPFI/BSF/FTF")
+    p.add_argument("--false-alarm-rate", type=rate, default=0.01,
+                   help="chance of any false peak on a perfect model, in (0, 1) (default 0.01)")
+    p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
+    p.add_argument("--report", help="write a self-contained HTML report here")
+    p.add_argument("--history", default=DEFAULT_HISTORY, help="SQLite run history")
+    p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
+    p.add_argument("--effect", choices=list(EFFECTS), help="the FMU is this catalogue effect's "
+                   "model (e.g. bearing_outer_race): also fit the effect's parameters")
+    _force(p)
+    _optimiser_args(p)
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("discover", help="try every catalogue effect, rank them by BIC")
+    p.add_argument("--fmu", required=True, help="the base model FMU")
+    _measurement_args(p)
+    p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG]")
+    p.add_argument("--effects", type=effect_list, help="comma-separated effect keys (default: "
+                   "the whole catalogue)")
+    p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
+    p.add_argument("--build-dir", default="build/effects", help="where effect FMUs are built")
+    p.add_argument("--json", help="write the ranking as JSON here")
+    _force(p)
+    _optimiser_args(p)
+    p.set_defaults(func=cmd_discover)
+
+    p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
+    p.add_argument("--history", default=DEFAULT_HISTORY)
+    p.add_argument("--plot", help="PNG file for the error history")
+    p.set_defaults(func=cmd_history)
+
+    p = sub.add_parser("inspect", help="describe an FMU: version, interfaces, settable variables")
+    p.add_argument("fmu", nargs="+")
+    p.add_argument("--all", action="store_true", help="list every variable, not only the interface")
+    p.set_defaults(func=cmd_inspect)
+
+    p = sub.add_parser("demo", help="simulate a Table 1 case at SNR 10 and diagnose it")
+    p.add_argument("--fmu", required=True)
+    p.add_argument("--case", type=int, choices=[c.number for c in TABLE1], default=8,
+                   help="Table 1 case number (default 8)")
+    p.add_argument("--snr", type=positive, default=10.0)
+    _optimiser_args(p)
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        if isinstance(getattr(args, "fmu", None), str):
+            warn_validation(args.fmu)
+        return args.func(args)
+    except PydiagError as err:
+        print(f"pydiag {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("pydiag: interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:  # a bug: one line for the user; PYDIAG_DEBUG=1 shows the traceback
+        if os.environ.get("PYDIAG_DEBUG"):
+            raise
+        print(f"pydiag {args.command}: internal error: {type(err).__name__}: {err} "
+              "(a bug in pydiag; set PYDIAG_DEBUG=1 for the traceback)", file=sys.stderr)
+        return 3

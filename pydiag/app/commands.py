@@ -1,0 +1,183 @@
+"""The commands that diagnose and check FMUs: simulate, diagnose, batch, regress, inspect,
+demo. Each parses nothing and computes nothing itself: it calls the library and prints."""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+from pydiag.app import batch
+from pydiag.app.formatting import format_regression, format_result
+from pydiag.core.errors import UsageError
+from pydiag.core.measurement import Measurement
+from pydiag.fit.estimator import DiagnosisResult, FaultEstimator
+from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.fmu.description import read_model_description
+from pydiag.fmu.inspect import describe, format_info
+from pydiag.gear.conventions import DEFAULT_SENSORS
+from pydiag.gear.paper_cases import case
+from pydiag.io.measurements import read_measurement, write_measurement
+from pydiag.io.outputs import check_output, write_text
+from pydiag.loop import regress
+from pydiag.model.adapter import Adapter, load_adapter
+from pydiag.model.simulate import simulate_measurement
+
+#: Optimiser options of the command line -> FaultEstimator settings.
+OPTIMISER_OPTIONS = {"particles": "n_particles", "iterations": "iterations",
+                     "polish": "polish_evaluations", "seed": "seed", "workers": "n_workers"}
+
+
+def warn_validation(fmu: str) -> None:
+    """Print fmpy's schema complaints as warnings: many vendor FMUs fail it yet run."""
+    if Path(fmu).is_file():
+        _, warnings = read_model_description(fmu)
+        for w in warnings:
+            print(f"pydiag: warning: {Path(fmu).name}: {w}", file=sys.stderr)
+
+
+def adapter_of(args) -> Adapter | None:
+    return load_adapter(args.adapter) if getattr(args, "adapter", None) else None
+
+
+def estimator_settings(args) -> dict:
+    """The optimiser options the user gave (the library's defaults fill the rest)."""
+    given = {key: getattr(args, opt) for opt, key in OPTIMISER_OPTIONS.items()
+             if getattr(args, opt, None) is not None}
+    if getattr(args, "eval_timeout", None) is not None:
+        given["eval_timeout_s"] = args.eval_timeout
+    return given
+
+
+def check_outputs(args, *names: str) -> None:
+    """Before any work: every output option can be written, and none is an input."""
+    inputs = [Path(p).resolve() for p in (getattr(args, "measurement", None),
+                                          getattr(args, "fmu", None),
+                                          getattr(args, "adapter", None)) if isinstance(p, str)]
+    for name in names:
+        out = getattr(args, name, None)
+        if out is None:
+            continue
+        if Path(out).resolve() in inputs:
+            raise UsageError(f"--{name.replace('_', '-')} {out} would overwrite an input file")
+        check_output(out, getattr(args, "force", False))
+
+
+def progress_bar(quiet: bool, desc: str = "diagnose"):
+    """(update(done, total, best), close) for a tqdm bar on stderr; no-ops when quiet."""
+    if quiet:
+        return None, lambda: None
+    from tqdm import tqdm
+    bar = tqdm(total=1, desc=desc, unit="sim", file=sys.stderr, leave=False)
+
+    def update(done: int, total: int, best: float) -> None:
+        bar.total = total
+        bar.n = done
+        bar.set_postfix(best_error=f"{best:.4g}", refresh=False)
+        bar.refresh()
+
+    return update, bar.close
+
+
+def read_input(args) -> Measurement:
+    return read_measurement(args.measurement, args.sample_rate, args.column)
+
+
+def problem_of(args, measurement: Measurement, **kwargs) -> FitProblem:
+    return build_problem(args.fmu, measurement, adapter_of(args),
+                         feature_mode=getattr(args, "features", "lines"), **kwargs)
+
+
+def fit(args, problem: FitProblem) -> DiagnosisResult:
+    update, close = progress_bar(args.quiet)
+    try:
+        return FaultEstimator(**estimator_settings(args), progress=update).fit(problem)
+    finally:
+        close()
+
+
+# ---------------------------------------------------------------------- commands
+def cmd_simulate(args) -> int:
+    check_outputs(args, "out")
+    values = dict(args.set or [])
+    m = simulate_measurement(args.fmu, values, args.duration, args.sample_rate, args.snr,
+                             args.seed, tuple(args.sensor) if args.sensor else None,
+                             adapter=adapter_of(args))
+    write_measurement(args.out, m, overwrite=args.force)
+    if not args.quiet:
+        print(f"wrote {args.out}: {m.n_samples} samples at {m.sample_rate_hz:g} Hz, "
+              f"channels {', '.join(m.channels)}")
+    return 0
+
+
+def cmd_diagnose(args) -> int:
+    check_outputs(args, "json")
+    m = read_input(args)
+    result = fit(args, problem_of(args, m))
+    print(format_result(result))
+    if args.json:
+        out = {**result.to_dict(), "channels": list(m.channels), "measurement": str(args.measurement)}
+        write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
+    return 0
+
+
+def cmd_batch(args) -> int:
+    check_outputs(args, "out")
+    paths = batch.find_measurements(args.measurements)
+    if args.adapter:
+        load_adapter(args.adapter)  # fail early, once, on a bad adapter
+    settings = {k: v for k, v in estimator_settings(args).items() if k != "n_workers"}
+    tasks = [batch.BatchTask(p, args.fmu, settings, tuple(args.column) if args.column else None,
+                             args.sample_rate, args.adapter, {"feature_mode": args.features})
+             for p in paths]
+    bar = None
+    if not args.quiet:
+        from tqdm import tqdm
+        bar = tqdm(total=len(tasks), desc="batch", unit="meas", file=sys.stderr, leave=False)
+    try:
+        rows = batch.run_batch(tasks, args.scheduler, args.workers,
+                               (lambda done, total: bar.update(done - bar.n)) if bar else None)
+    finally:
+        if bar:
+            bar.close()
+    batch.write_results(rows, args.out, args.force)
+    failed = [r for r in rows if r["status"] != "ok"]
+    print(f"wrote {args.out}: {len(rows)} measurements, {len(rows) - len(failed)} diagnosed, "
+          f"{len(failed)} failed")
+    for r in failed:
+        print(f"  {r['measurement']}: {r['message']}")
+    return 0
+
+
+def cmd_regress(args) -> int:
+    if args.bless:
+        path = regress.bless_fmu(args.fmu, args.golden, adapter_of(args),
+                                 tuple(args.sensor) if args.sensor else None, args.sample_rate)
+        print(f"blessed {path}")
+        return 0
+    report = regress.check(args.fmu, args.golden, args.rtol)
+    print(format_regression(report))
+    return 0 if report.passed else 1
+
+
+def cmd_inspect(args) -> int:
+    print("\n\n".join(format_info(describe(fmu), args.all) for fmu in args.fmu))
+    return 0
+
+
+def cmd_demo(args) -> int:
+    c = case(args.case)
+    print(f"Table 1 case {c.number} ({c.name}): simulating {', '.join(DEFAULT_SENSORS)} "
+          f"at SNR {args.snr:g} ...")
+    m = simulate_measurement(args.fmu, c.parameters, None, 10_000.0, args.snr, args.seed or 0)
+    with tempfile.TemporaryDirectory() as tmp:  # the record goes through its file format too
+        path = Path(tmp) / "measurement.csv"
+        write_measurement(path, m)
+        m = read_measurement(path)
+    print(f"measurement: {m.duration_s:.2f} s at {m.sample_rate_hz:g} Hz; diagnosing ...")
+    result = fit(args, problem_of(args, m))
+    print(format_result(result, c.parameters))
+    ok = result.fault_mode == c.fault_mode and result.severity == c.severity
+    print(f"\nexpected   : {c.fault_mode}, {c.severity} -> {'correct' if ok else 'WRONG'}")
+    return 0 if ok else 1

@@ -1,0 +1,78 @@
+"""Text for the terminal: results as tables and lines. Pure functions, no printing."""
+
+from __future__ import annotations
+
+from pydiag.fit.estimator import DiagnosisResult
+from pydiag.loop.compare import Comparison
+from pydiag.loop.discover import Discovery
+from pydiag.loop.regress import RegressionReport
+
+
+def format_result(result: DiagnosisResult, truth: dict | None = None) -> str:
+    head = f"{'parameter':<10} {'estimate':>9}" + (f" {'true':>7} {'abs.err':>8}" if truth else "")
+    lines = [head, "-" * len(head)]
+    for name, value in result.parameters.items():
+        row = f"{name:<10} {value:9.4f}"
+        if truth and name in truth:
+            row += f" {truth[name]:7.3f} {abs(value - truth[name]):8.4f}"
+        lines.append(row)
+    lines += ["",
+              f"fault mode : {result.fault_mode}",
+              f"severity   : {result.severity} (tooth: {result.tooth_severity}, "
+              f"transmission error: {result.te_severity})",
+              f"error      : {result.error:.5f} (Eq. 12, relative, summed over channels)",
+              f"evaluations: {result.evaluations} in {result.elapsed_s:.1f} s"]
+    if result.failed_evaluations:
+        lines.append(f"failed     : {result.failed_evaluations} simulations, penalised: " + "; ".join(
+            f"{n} x {reason}" for reason, n in result.failure_reasons.items()))
+    return "\n".join(lines)
+
+
+def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
+    lines = [f"error      : {c.error:.5f} (Eq. 12 less its noise part, {c.error_raw:.5f} raw, on "
+             f"{c.n_error_bins} bins: synchronous lines and the measurement's peaks; "
+             f"{c.n_periods} periods, {c.bin_hz:.3g} Hz bins)",
+             "parameters : " + ", ".join(f"{k}={v:.4g}" for k, v in c.parameters.items()),
+             f"peaks      : {len(c.peaks)} unexplained above the noise floor "
+             f"(false-alarm rate {c.false_alarm_rate:g})"]
+    for i, p in enumerate(c.peaks[:max_peaks], 1):
+        lines.append(f"  {i:2d}. {p.channel:<5} {p.freq_hz:9.2f} Hz  {p.family:<15} {p.label:<24} "
+                     f"{100 * p.energy_fraction:5.1f} % of residual energy")
+    shown = [s for s in c.suggested_effects if s.score > 0]
+    lines.append("suggested  : " + ("none" if not shown else ""))
+    for s in shown:
+        flag = "confident" if s.confident else "weak"
+        lines.append(f"  {s.effect:<26} confidence {s.confidence:.2f} ({flag}); "
+                     + "; ".join(s.evidence[:1]))
+    return "\n".join(lines)
+
+
+def format_discovery(base: Comparison, found: list[Discovery]) -> str:
+    lines = [f"base model error {base.error:.5f}; effects ranked by BIC (dBIC < 0: worth its "
+             "parameters)",
+             f"{'rank':>4} {'effect':<26} {'dBIC':>10} {'error':>8} {'reduction':>9}  parameters"]
+    for i, d in enumerate(found, 1):
+        if d.status != "ok":
+            lines.append(f"{i:4d} {d.effect:<26} {'-':>10} {'-':>8} {'-':>9}  failed: {d.status}")
+            continue
+        params = ", ".join(f"{k}={v:.4g}" for k, v in d.parameters.items())
+        lines.append(f"{i:4d} {d.effect:<26} {d.delta_bic:10.1f} {d.error:8.4f} "
+                     f"{100 * d.error_reduction:8.0f}%  {params}")
+    return "\n".join(lines)
+
+
+def format_history(rows: list[dict]) -> str:
+    lines = [f"{'run':>4} {'time (UTC)':<20} {'model':<28} {'fmu sha256':<12} {'error':>8} {'peaks':>5}"]
+    for r in rows:
+        lines.append(f"{r['id']:4d} {r['time_utc']:<20} {(r['model_name'] or '')[:28]:<28} "
+                     f"{r['fmu_sha256'][:12]:<12} {r['error']:8.4f} {r['n_peaks']:5d}")
+    return "\n".join(lines)
+
+
+def format_regression(report: RegressionReport) -> str:
+    lines = [f"FAIL {mm.case} {mm.sensor} at {mm.freq_hz:.2f} Hz: golden {mm.golden:.6g}, "
+             f"now {mm.actual:.6g} (allowed +-{mm.allowed:.3g})" for mm in report.mismatches]
+    status = "PASS" if report.passed else "FAIL"
+    lines.append(f"{status}: {report.cases} cases x {len(report.sensors)} sensors, worst deviation "
+                 f"{report.worst_relative:.2e} of the largest line (tolerance {report.rtol:.1e})")
+    return "\n".join(lines)

@@ -1,0 +1,76 @@
+"""The commands of the model-improvement loop: compare, discover, history."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from pydiag.app.commands import (check_outputs, estimator_settings, problem_of, progress_bar,
+                                 read_input)
+from pydiag.app.formatting import format_comparison, format_discovery, format_history
+from pydiag.core.errors import UsageError
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fmu.description import read_model_description
+from pydiag.gear.effects import EFFECTS
+from pydiag.io.outputs import write_text
+from pydiag.loop import history
+from pydiag.loop.compare import EFFECT_REFIT, compare, refit_with_effect
+from pydiag.loop.discover import MODELICA_ROOT, as_dict, discover
+from pydiag.loop.report import write_report
+
+
+def _effect_estimator(args) -> FaultEstimator:
+    """The refit of an effect: EFFECT_REFIT's budget, overridden by the options given."""
+    return FaultEstimator(**{**EFFECT_REFIT, **estimator_settings(args)})
+
+
+def cmd_compare(args) -> int:
+    check_outputs(args, "json", "report")
+    effect = EFFECTS[args.effect] if args.effect else None
+    m = read_input(args)
+    # with an effect model, the base fit runs with the effect switched off (lower bounds)
+    problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
+    update, close = progress_bar(args.quiet, "compare")
+    try:
+        c = compare(problem, FaultEstimator(**estimator_settings(args), progress=update),
+                    args.bearing, args.false_alarm_rate)
+        if effect is not None:
+            c = refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args),
+                                  args.bearing)
+    finally:
+        close()
+    md, _ = read_model_description(args.fmu)
+    run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
+    print(format_comparison(c))
+    print(f"recorded as run {run_id} in {args.history}")
+    if args.report:
+        write_report(c, args.report, args.measurement, history.runs(args.history), args.force)
+        print(f"report     : {args.report}")
+    if args.json:
+        write_text(args.json, json.dumps(c.to_dict(), indent=2) + "\n", args.force)
+    return 0
+
+
+def cmd_discover(args) -> int:
+    check_outputs(args, "json")
+    m = read_input(args)
+    progress = None if args.quiet else (lambda key: print(f"trying {key} ...", file=sys.stderr))
+    base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
+                           args.bearing, args.effects,
+                           Path(args.modelica) if args.modelica else MODELICA_ROOT,
+                           Path(args.build_dir), progress, _effect_estimator(args))
+    print(format_discovery(base, found))
+    if args.json:
+        write_text(args.json, json.dumps(as_dict(base, found), indent=2) + "\n", args.force)
+    return 0
+
+
+def cmd_history(args) -> int:
+    rows = history.runs(args.history)
+    if not rows:
+        raise UsageError(f"no compare runs recorded in {args.history}")
+    print(format_history(rows))
+    if args.plot:
+        print(f"wrote {history.plot(rows, args.plot)}")
+    return 0

@@ -1,0 +1,219 @@
+"""Estimate fault parameters by particle swarm optimisation of the spectral error.
+
+Each evaluation simulates the FMU for a start-up ``warmup_s`` plus the analysed window
+(one fundamental period for gear models: the model is periodic, so one period holds all
+its lines exactly) and compares its features with the measurement's, channel by
+channel. The measurement may be long: its features average the noise over all of its
+whole periods.
+
+The swarm (:mod:`pydiag.fit.pso`, seeded, Clerc's constriction coefficients) finds
+candidate basins; a bounded trust-region least-squares polish (scipy
+``least_squares``, method "trf") on the residuals of Eq. (12) then converges in each of
+the best few distinct personal-best positions, and the lowest error wins. Measured on
+Table 1 case 2: polishing only the global best converged to f_f = 0 (E = 0.50, the
+truth scores 0.066). Measured on case 5: the swarm alone (16 x 20) stopped at E = 0.157
+while the true parameters score 0.040, and a Nelder-Mead polish of 150 evaluations did
+not close the gap: the valley is narrow in f_ate (displacement channel) and shallow in
+a_f, f_f, which a Gauss-Newton step handles and a simplex does not. The Jacobian is by
+forward differences, its columns simulated in parallel.
+
+Particles and Jacobian columns are evaluated in worker processes, each with its own
+FMU instance; the result does not depend on the number of workers, and the same seed
+gives the same result in any thread.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Callable
+
+import numpy as np
+import scipy.optimize
+
+from pydiag.core.errors import EstimationError, TooManyFailures, UsageError
+from pydiag.fit.problem import FitProblem, ProblemObjective
+from pydiag.fit.pso import global_best_pso
+from pydiag.fmu.isolation import IsolatedPool
+from pydiag.gear.classify import classify
+from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
+
+#: Wall-time limit of one simulation in a worker, seconds.
+DEFAULT_EVAL_TIMEOUT_S = 60.0
+#: Failed simulations in a row that stop a fit.
+DEFAULT_MAX_CONSECUTIVE_FAILURES = 20
+
+
+@dataclass
+class DiagnosisResult:
+    """Plain-data result of :meth:`FaultEstimator.fit`."""
+
+    parameters: dict[str, float]
+    fault_mode: str
+    severity: str
+    tooth_severity: str
+    te_severity: str
+    error: float
+    evaluations: int
+    elapsed_s: float
+    best_error_history: list[float]
+    failed_evaluations: int = 0
+    failure_reasons: dict[str, int] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+class FaultEstimator:
+    """Fit a :class:`~pydiag.fit.problem.FitProblem` (scikit-learn's idiom: ``__init__``
+    stores the settings, :meth:`fit` validates and returns a plain result).
+
+    Args:
+        n_particles, iterations: swarm size and iterations
+        seed: seed of the swarm; the same seed gives the same answer
+        polish_evaluations: simulation budget of each least-squares polish (0 disables it)
+        polish_starts: how many distinct swarm positions to polish from
+        n_workers: worker processes (default: all cores). The FMU always runs in workers
+            (:mod:`pydiag.fmu.isolation`), except inside a daemonic process (a Dask
+            worker), which may not start children: there it runs in-process.
+        eval_timeout_s: wall-time limit of one simulation; a longer one is killed, penalised
+        max_consecutive_failures: failed simulations in a row that stop the fit
+        progress: called as progress(done, total, best_error) after each batch
+    """
+
+    def __init__(self, n_particles: int = 16, iterations: int = 20, seed: int = 0,
+                 polish_evaluations: int = 150, polish_starts: int = 3,
+                 n_workers: int | None = None, eval_timeout_s: float = DEFAULT_EVAL_TIMEOUT_S,
+                 max_consecutive_failures: int = DEFAULT_MAX_CONSECUTIVE_FAILURES,
+                 progress: Callable[[int, int, float], None] | None = None) -> None:
+        self.n_particles = n_particles
+        self.iterations = iterations
+        self.seed = seed
+        self.polish_evaluations = polish_evaluations
+        self.polish_starts = polish_starts
+        self.n_workers = n_workers
+        self.eval_timeout_s = eval_timeout_s
+        self.max_consecutive_failures = max_consecutive_failures
+        self.progress = progress
+
+    def _validate(self) -> None:
+        if self.n_particles < 2 or self.iterations < 1:
+            raise UsageError("need at least 2 particles and 1 iteration")
+        if self.polish_evaluations < 0 or self.polish_starts < 1:
+            raise UsageError("the polish budget must not be negative and needs at least 1 start")
+        if self.n_workers is not None and self.n_workers < 1:
+            raise UsageError(f"need at least 1 worker, got {self.n_workers}")
+        if not self.eval_timeout_s > 0 or self.max_consecutive_failures < 1:
+            raise UsageError("the evaluation timeout and the failure limit must be positive")
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, problem: FitProblem) -> DiagnosisResult:
+        self._validate()
+        started = time.perf_counter()
+        params = problem.parameters
+        lows, highs = problem.lows, problem.highs
+        total = self.n_particles * self.iterations + self.polish_evaluations * self.polish_starts
+        counter = {"n": 0, "best": float("inf")}
+        objective = ProblemObjective(problem)
+        pool = None
+        if not mp.current_process().daemon:
+            pool = IsolatedPool(objective, self.n_workers or os.cpu_count() or 1,
+                                self.eval_timeout_s, self.max_consecutive_failures)
+
+        def residuals(xs: np.ndarray) -> list[np.ndarray | None]:
+            xs = np.clip(np.atleast_2d(xs), lows, highs)
+            out = pool.map(xs) if pool else [objective.residuals_or_none(x) for x in xs]
+            costs = [np.inf if r is None else float(np.linalg.norm(r)) for r in out]
+            counter["n"] += len(xs)
+            counter["best"] = min(counter["best"], min(costs))
+            if self.progress:
+                self.progress(counter["n"], total, counter["best"])
+            return out
+
+        def costs(xs: np.ndarray) -> np.ndarray:
+            return np.array([np.inf if r is None else np.linalg.norm(r) for r in residuals(xs)])
+
+        try:
+            init = lows + np.random.default_rng(self.seed).random((self.n_particles, lows.size)) \
+                * (highs - lows)
+            swarm = global_best_pso(costs, init, lows, highs, self.iterations, self.seed)
+            starts, start_costs = self._distinct_starts(swarm.pbest_pos, swarm.pbest_cost,
+                                                        lows, highs)
+            best_x, best_cost = starts[0], start_costs[0]
+            if self.polish_evaluations > 0:
+                for x0, c0 in zip(starts, start_costs):
+                    if np.isfinite(c0):
+                        x, c = self._polish(residuals, x0, c0, lows, highs)
+                        if c < best_cost:
+                            best_x, best_cost = x, c
+        except TooManyFailures as err:
+            raise TooManyFailures(f"stopped: {err}", err.count, err.consecutive, err.last) from err
+        finally:
+            if pool is not None:
+                pool.close()
+            objective.close()
+        failures = pool.failures if pool is not None else None
+        if not np.isfinite(best_cost):
+            why = f"; the first failed with: {failures.first}" if failures and failures.first else ""
+            raise EstimationError(f"every simulation of the plant failed ({counter['n']} "
+                                  f"evaluations){why}")
+        estimate = {p.name: float(v) for p, v in zip(params, best_x)}
+        if any(name in estimate for name in CLASSIFIED_PARAMETERS):
+            cls = classify({**problem.fixed_values, **estimate})
+            labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
+        else:
+            labels = ("not_classified",) + ("unknown",) * 3
+        return DiagnosisResult(estimate, *labels, best_cost, counter["n"],
+                               time.perf_counter() - started, swarm.best_cost_history,
+                               failures.count if failures else 0,
+                               dict(failures.reasons) if failures else {})
+
+    def _distinct_starts(self, positions, costs, lows, highs) -> tuple[list, list]:
+        """The best personal bests, at least 5 % of the box apart from each other."""
+        order = np.argsort(costs)
+        starts: list[np.ndarray] = []
+        chosen: list[float] = []
+        for i in order:
+            x = np.asarray(positions[i], dtype=float)
+            if all(np.max(np.abs(x - y) / (highs - lows)) > 0.05 for y in starts):
+                starts.append(x)
+                chosen.append(float(costs[i]))
+            if len(starts) == self.polish_starts:
+                break
+        return starts, chosen
+
+    def _polish(self, residuals, x0, cost0, lows, highs) -> tuple[np.ndarray, float]:
+        """Bounded trust-region least squares from a swarm position, parallel FD Jacobian."""
+        n = x0.size
+        step = 1e-3 * (highs - lows)
+        cache: dict[bytes, np.ndarray] = {}
+        last = None
+
+        def fun(x: np.ndarray) -> np.ndarray:
+            nonlocal last
+            key = np.asarray(x, dtype=float).tobytes()
+            if key not in cache:
+                r = residuals(x)[0]
+                if r is None:  # a failed simulation: a large, finite residual keeps trf going
+                    r = np.full(last.size if last is not None else 1, 1e3)
+                cache[key] = r
+                last = r
+            return cache[key]
+
+        def jac(x: np.ndarray) -> np.ndarray:
+            r0 = fun(x)
+            h = np.where(x + step <= highs, step, -step)
+            cols = residuals(x + np.diag(h))
+            return np.column_stack([((c if c is not None else r0) - r0) / h[j]
+                                    for j, c in enumerate(cols)])
+
+        budget = max(1, self.polish_evaluations // (n + 1))
+        res = scipy.optimize.least_squares(fun, x0, jac=jac, bounds=(lows, highs), method="trf",
+                                           x_scale=highs - lows, max_nfev=budget,
+                                           xtol=1e-6, ftol=1e-8, gtol=1e-8)
+        cost = float(np.linalg.norm(fun(res.x)))
+        if cost < cost0:
+            return np.asarray(res.x, dtype=float), cost
+        return x0, cost0

@@ -1,0 +1,101 @@
+"""Safe extraction of FMU archives.
+
+An FMU is a zip file from somewhere else. Before anything is written, every entry is
+checked: no absolute paths or drive letters, no ``..`` components, no symbolic links, at
+most ``MAX_ENTRIES`` entries, at most ``MAX_TOTAL_BYTES`` unpacked, and no entry that
+inflates by more than ``MAX_RATIO`` (zip bombs). Sizes are enforced while inflating, so
+a forged size header does not help. Then the binary for this platform must exist.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import zipfile
+from pathlib import Path, PurePosixPath
+
+from pydiag.core.errors import UnsafeArchive
+
+MAX_ENTRIES = 10_000
+MAX_TOTAL_BYTES = 1 << 30  # 1 GiB
+MAX_RATIO = 1000  # uncompressed / compressed, for entries above 1 MiB
+CHUNK = 1 << 20
+
+
+def _check_name(name: str) -> None:
+    if name.startswith(("/", "\\")) or (len(name) > 1 and name[1] == ":"):
+        raise UnsafeArchive(f"entry '{name}' has an absolute path")
+    parts = PurePosixPath(name.replace("\\", "/")).parts
+    if ".." in parts:
+        raise UnsafeArchive(f"entry '{name}' points outside the archive ('..')")
+
+
+def safe_extract(fmu_path: str | Path, dest: str | Path, max_total_bytes: int = MAX_TOTAL_BYTES,
+                 max_entries: int = MAX_ENTRIES, max_ratio: float = MAX_RATIO) -> None:
+    fmu_path, dest = Path(fmu_path), Path(dest).resolve()
+    try:
+        archive = zipfile.ZipFile(fmu_path)
+    except (zipfile.BadZipFile, OSError) as err:
+        raise UnsafeArchive(f"{fmu_path.name} is not a readable zip archive: {err}") from err
+    with archive:
+        infos = archive.infolist()
+        if len(infos) > max_entries:
+            raise UnsafeArchive(f"{len(infos)} entries, more than the limit of {max_entries}")
+        declared = 0
+        for info in infos:
+            _check_name(info.filename)
+            mode = info.external_attr >> 16
+            if stat.S_ISLNK(mode):
+                raise UnsafeArchive(f"entry '{info.filename}' is a symbolic link")
+            target = (dest / info.filename).resolve()
+            if dest not in target.parents and target != dest:
+                raise UnsafeArchive(f"entry '{info.filename}' points outside the archive")
+            declared += info.file_size
+            if info.file_size > CHUNK and info.file_size > max_ratio * max(info.compress_size, 1):
+                raise UnsafeArchive(f"entry '{info.filename}' inflates {info.file_size} bytes "
+                                    f"from {info.compress_size}: a zip bomb")
+        if declared > max_total_bytes:
+            raise UnsafeArchive(f"archive unpacks to {declared} bytes, more than the limit of "
+                                f"{max_total_bytes}")
+        written = 0
+        for info in infos:
+            target = dest / info.filename
+            if info.is_dir():
+                target.mkdir(parents=True, exist_ok=True)
+                continue
+            target.parent.mkdir(parents=True, exist_ok=True)
+            with archive.open(info) as src, open(target, "wb") as out:
+                while chunk := src.read(CHUNK):
+                    written += len(chunk)
+                    if written > max_total_bytes:
+                        raise UnsafeArchive("archive unpacks to more than the limit of "
+                                            f"{max_total_bytes} bytes (sizes were forged)")
+                    out.write(chunk)
+            if info.filename.startswith("binaries/"):
+                os.chmod(target, 0o755)
+
+
+def platform_dirs(model_description) -> tuple[str, list[str]]:
+    """(the binaries/ folder this machine needs, the folders an FMU may use) for its FMI version."""
+    from fmpy import platform, platform_tuple
+
+    if model_description.fmiVersion.startswith("3"):
+        return platform_tuple, [platform_tuple]
+    return platform, [platform]
+
+
+def check_binary(unzipdir: str | Path, model_description, fmu_name: str) -> None:
+    """One-line error naming the platforms the FMU has when this one is missing."""
+    from fmpy import sharedLibraryExtension
+
+    needed, _ = platform_dirs(model_description)
+    ids = [i.modelIdentifier for i in (model_description.modelExchange,
+                                       model_description.coSimulation) if i is not None]
+    binaries = Path(unzipdir) / "binaries"
+    if any((binaries / needed / f"{mid}{sharedLibraryExtension}").exists() for mid in ids):
+        return
+    have = sorted(p.name for p in binaries.iterdir() if p.is_dir()) if binaries.is_dir() else []
+    has_source = (Path(unzipdir) / "sources").is_dir()
+    raise UnsafeArchive(f"{fmu_name} has no binary for this platform ({needed}); it has: "
+                        f"{', '.join(have) or 'no binaries'}"
+                        + ("; it ships sources, which pydiag does not compile" if has_source else ""))

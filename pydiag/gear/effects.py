@@ -1,0 +1,113 @@
+"""The effect catalogue: each candidate missing effect, its Modelica model, and the
+frequency signature that points to it.
+
+A signature weighs unexplained residual peaks by their kinematic family and order:
+1 for the effect's defining lines, 0.5 for lines it also produces, 0 otherwise. An
+effect's score is the share of the unexplained peak energy its signature covers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from pydiag.core.parameters import Parameter
+from pydiag.gear.kinematic_map import KinematicLine
+
+
+@dataclass(frozen=True)
+class Effect:
+    key: str
+    model: str  # Modelica class, under modelica/GearDiag/Effects
+    description: str
+    parameters: tuple[Parameter, ...]  # what the effect adds, named as its FMU variables
+    weight: Callable[[KinematicLine | None, float, float], float]  # (line, freq, f_mesh) -> 0..1
+    hint: Callable[[list, float], dict] | None = None  # (peaks, bin_hz) -> {name: (low, high)}
+
+    def bounds(self, peaks: list, bin_hz: float) -> tuple[Parameter, ...]:
+        """The effect's parameters, bounds narrowed by what the residual peaks say (if it can)."""
+        narrowed = self.hint(peaks, bin_hz) if self.hint else {}
+        return tuple(dataclasses.replace(p, low=narrowed[p.name][0], high=narrowed[p.name][1])
+                     if p.name in narrowed else p for p in self.parameters)
+
+    def neutral_values(self) -> dict[str, float]:
+        """FMU values that switch the effect off (its lower bounds)."""
+        return {p.fmu_variable: p.fmu_value(p.low) for p in self.parameters}
+
+
+def _gear_eccentricity(line, freq, f_mesh):
+    if line is None:
+        return 0.0
+    if line.family == "gear":
+        return 1.0 if line.order == 1 else 0.5 if line.order == 2 else 0.0
+    return 1.0 if line.family == "mesh_sb_gear" and abs(line.order) == 1 else 0.0
+
+
+def _gear_tooth_fault(line, freq, f_mesh):
+    if line is None:
+        return 0.0
+    if line.family == "gear":
+        return 1.0 if line.order >= 2 else 0.5
+    if line.family == "mesh_sb_gear":
+        return 1.0 if abs(line.order) >= 2 else 0.5
+    return 0.0
+
+
+def _second_pinion_tooth(line, freq, f_mesh):
+    if line is None:
+        return 0.0
+    if line.family == "mesh_sb_pinion":
+        return 1.0
+    return 0.5 if line.family == "pinion" and line.order >= 2 else 0.0
+
+
+def _backlash(line, freq, f_mesh):
+    if line is None:
+        return 0.0
+    if line.family == "mesh":
+        return 1.0 if line.order >= 2 else 0.5
+    return 0.0
+
+
+def _family(name):
+    def weight(line, freq, f_mesh):
+        return 1.0 if line is not None and line.family in name else 0.0
+    return weight
+
+
+def _load_fluctuation(line, freq, f_mesh):
+    # a torque ripple is not kinematic: its line (and its mesh sidebands) match no family
+    return 1.0 if line is None else 0.0
+
+
+def _load_hint(peaks, bin_hz):
+    """The ripple frequency is the strongest unexplained line below 20 Hz, to within a bin."""
+    low = [p for p in peaks if p.family == "unexplained" and p.freq_hz <= 20.0]
+    if not low:
+        return {}
+    f = max(low, key=lambda p: p.energy_fraction).freq_hz
+    return {"f_load": (max(0.5, f - bin_hz), f + bin_hz)}
+
+
+EFFECTS = {e.key: e for e in (
+    Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
+           (Parameter("ecc_gear", 0.0, 50e-6),), _gear_eccentricity),
+    Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
+           (Parameter("a_g", 0.1, 0.9),), _gear_tooth_fault),
+    Effect("second_pinion_tooth_fault", "GearDiag.Effects.SecondPinionToothFault",
+           "a second faulty pinion tooth", (Parameter("a_f2", 0.1, 0.9),), _second_pinion_tooth),
+    Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
+           (Parameter("delta_c", 0.05e-6, 2e-6),), _backlash),
+    Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
+           "outer-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfo",))),
+    Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
+           "inner-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfi", "bpfi_sb"))),
+    Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
+           (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, 20.0)), _load_fluctuation, _load_hint),
+)}
+
+
+def model_file(effect: Effect, modelica_root) -> Path:
+    return Path(modelica_root) / "GearDiag" / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"

@@ -1,0 +1,104 @@
+"""The kinematic frequency map: every characteristic frequency of a gear pair, named.
+
+Families (each line carries its family and order):
+
+- ``pinion``, ``gear``: shaft harmonics k*f_pinion, k*f_gear
+- ``mesh``: mesh harmonics h*f_mesh
+- ``mesh_sb_pinion``, ``mesh_sb_gear``: sidebands h*f_mesh +- k*f_shaft (order = k, signed)
+- ``assembly``: f_mesh / N_ap and its harmonics; ``hunting``: f_mesh / lcm(Np, Ng) harmonics
+  that belong to no family above
+- ``bpfo``, ``bpfi``, ``bsf``, ``ftf``: bearing defect frequencies and harmonics (when a
+  bearing geometry is given), ``bpfi_sb``: BPFI +- shaft speed sidebands
+
+A frequency is matched to the nearest line within ``tolerance_hz``; families earlier in
+``PRIORITY`` win ties: a mesh harmonic is also a pinion harmonic and is named ``mesh``; a
+line within ``n_sidebands`` shaft orders of a mesh harmonic is named as its sideband.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from pydiag.gear.kinematics import GearKinematics
+
+PRIORITY = ("mesh", "mesh_sb_pinion", "mesh_sb_gear", "pinion", "gear", "assembly",
+            "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "hunting")
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """Rolling bearing geometry, on the shaft that turns at ``shaft`` ("pinion" or "gear")."""
+
+    n_balls: int
+    ball_diameter_m: float
+    pitch_diameter_m: float
+    contact_angle_rad: float = 0.0
+    shaft: str = "pinion"
+
+    def frequencies(self, f_shaft_hz: float) -> dict[str, float]:
+        """BPFO, BPFI, BSF, FTF in Hz for an inner race turning at f_shaft (outer fixed)."""
+        r = self.ball_diameter_m / self.pitch_diameter_m * math.cos(self.contact_angle_rad)
+        return {"bpfo": self.n_balls / 2 * f_shaft_hz * (1 - r),
+                "bpfi": self.n_balls / 2 * f_shaft_hz * (1 + r),
+                "bsf": self.pitch_diameter_m / (2 * self.ball_diameter_m) * f_shaft_hz * (1 - r * r),
+                "ftf": f_shaft_hz / 2 * (1 - r)}
+
+
+@dataclass(frozen=True)
+class KinematicLine:
+    freq_hz: float
+    family: str
+    order: int
+    label: str
+
+
+def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | None = None,
+                  n_sidebands: int = 6) -> list[KinematicLine]:
+    """All named lines up to ``max_freq_hz``, sorted by frequency."""
+    lines: list[KinematicLine] = []
+
+    def add(f: float, family: str, order: int, label: str) -> None:
+        if 0 < f <= max_freq_hz:
+            lines.append(KinematicLine(f, family, order, label))
+
+    fp, fg, fm = kin.f_pinion_hz, kin.f_gear_hz, kin.f_mesh_hz
+    for k in range(1, int(max_freq_hz / fp) + 1):
+        add(k * fp, "pinion", k, f"{k}x pinion")
+    for k in range(1, int(max_freq_hz / fg) + 1):
+        add(k * fg, "gear", k, f"{k}x gear")
+    for h in range(1, int(max_freq_hz / fm) + 2):
+        add(h * fm, "mesh", h, f"{h}x mesh")
+        for k in range(1, n_sidebands + 1):
+            for sign in (-1, 1):
+                add(h * fm + sign * k * fp, "mesh_sb_pinion", sign * k,
+                    f"{h}x mesh {'+' if sign > 0 else '-'} {k}x pinion")
+                add(h * fm + sign * k * fg, "mesh_sb_gear", sign * k,
+                    f"{h}x mesh {'+' if sign > 0 else '-'} {k}x gear")
+    fa = kin.f_assembly_hz
+    for k in range(1, int(max_freq_hz / fa) + 1):
+        add(k * fa, "assembly", k, f"{k}x assembly phase")
+    fh = kin.f_hunting_hz
+    for k in range(1, int(max_freq_hz / fh) + 1):
+        add(k * fh, "hunting", k, f"{k}x hunting tooth")
+    if bearing is not None:
+        f_shaft = fp if bearing.shaft == "pinion" else fg
+        for family, f in bearing.frequencies(f_shaft).items():
+            for k in range(1, int(max_freq_hz / f) + 1):
+                add(k * f, family, k, f"{k}x {family.upper()}")
+                if family == "bpfi":
+                    for sign in (-1, 1):
+                        add(k * f + sign * f_shaft, "bpfi_sb", sign * k,
+                            f"{k}x BPFI {'+' if sign > 0 else '-'} shaft")
+    rank = {f: i for i, f in enumerate(PRIORITY)}
+    return sorted(lines, key=lambda l: (l.freq_hz, rank[l.family]))
+
+
+def match(freq_hz: float, lines: list[KinematicLine], tolerance_hz: float) -> KinematicLine | None:
+    """The line nearest ``freq_hz`` within the tolerance; the higher-priority family on ties."""
+    rank = {f: i for i, f in enumerate(PRIORITY)}
+    near = [l for l in lines if abs(l.freq_hz - freq_hz) <= tolerance_hz]
+    if not near:
+        return None
+    return min(near, key=lambda l: (round(abs(l.freq_hz - freq_hz) / max(tolerance_hz, 1e-12), 1),
+                                    rank[l.family]))

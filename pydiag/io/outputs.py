@@ -1,0 +1,89 @@
+"""One policy for every file pydiag writes.
+
+- An existing path is refused unless ``force``; ``force`` replaces a regular file only
+  (never a folder, a device or a link target's file type).
+- Nothing but the asked-for name is written in the user's folder: the content goes to a
+  uniquely named temporary file beside the target (``tempfile``), which is renamed over
+  the target when complete and removed on every failure, so an interrupted write leaves
+  neither a partial file nor a stray temporary one.
+- :func:`check_output` can be called before a long computation, so that a result is never
+  computed only to find that it cannot be written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import stat
+import tempfile
+from pathlib import Path
+from typing import Iterator
+
+from pydiag.core.errors import OutputError
+
+
+def check_output(path: str | Path, force: bool = False) -> Path:
+    """Raise :class:`OutputError` unless ``path`` can be written under the policy."""
+    path = Path(path)
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        st = None
+    except OSError as err:
+        raise OutputError(f"cannot write {path}: {err.strerror or err}") from err
+    if st is not None:
+        if not force:
+            raise OutputError(f"{path} exists; choose another name or pass --force")
+        if not stat.S_ISREG(st.st_mode):
+            raise OutputError(f"{path} exists and is not a regular file; --force replaces "
+                              "regular files only")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OutputError(f"cannot write {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {path}: folder {folder} is not writable")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success it replaces ``path``.
+
+    The caller writes the whole content to the yielded path. Whatever happens inside
+    the block, the temporary file does not survive it.
+    """
+    path = check_output(path, force)
+    folder = path.parent if str(path.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    except OSError as err:
+        raise OutputError(f"cannot write {path}: {err.strerror or err}") from err
+    os.close(fd)
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give what open() would
+        yield Path(tmp)
+        check_output(path, force)  # nothing appeared at the target in the meantime
+        os.replace(tmp, path)
+    except OSError as err:
+        raise OutputError(f"cannot write {path}: {err.strerror or err}") from err
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+
+
+def _umask() -> int:
+    """The process umask, read without changing it (os.umask would set it process-wide)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    return 0o022
+
+
+def write_text(path: str | Path, text: str, force: bool = False) -> Path:
+    """Write ``text`` to ``path`` under the output policy."""
+    with atomic_output(path, force) as tmp:
+        tmp.write_text(text)
+    return Path(path)

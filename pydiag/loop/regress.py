@@ -1,0 +1,183 @@
+"""Regression check of an exported FMU against golden spectra.
+
+A golden file records, for a set of cases (parameter values), the amplitude spectrum
+of each sensor over a fixed window after start-up: the period-synchronous lines up to
+the top band edge when the kinematics are known, else the windowed FFT magnitudes up
+to ``max_freq_hz``. A check passes when, for every case and sensor, every amplitude
+lies within ``rtol`` times the largest amplitude of that spectrum of its golden value.
+
+The default cases are Table 1's eight when the FMU has the paper's fault parameters,
+else one case at the FMU's own defaults: so any FMU can be blessed and checked.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pydiag.core.errors import GoldenError, UsageError
+from pydiag.fmu.plant import DEFAULT_WARMUP_S, FmuPlant
+from pydiag.gear.conventions import default_sensors, kinematics_from, kinematics_to_dict
+from pydiag.gear.features import max_band_freq_hz
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.paper_cases import TABLE1
+from pydiag.io.outputs import atomic_output
+from pydiag.model.adapter import Adapter
+from pydiag.model.simulate import fmu_outputs
+from pydiag.signal.spectra import amplitude_spectrum, sync_spectrum
+
+GOLDEN_VERSION = 1
+DEFAULT_RTOL = 2e-3
+
+
+@dataclass
+class Mismatch:
+    case: str
+    sensor: str
+    freq_hz: float
+    golden: float
+    actual: float
+    allowed: float
+
+
+@dataclass
+class RegressionReport:
+    golden: str
+    cases: int
+    sensors: list[str]
+    rtol: float
+    mismatches: list[Mismatch] = field(default_factory=list)
+    worst_relative: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return not self.mismatches
+
+
+def default_cases(plant: FmuPlant) -> dict[str, dict[str, float]]:
+    names = set(TABLE1[0].parameters)
+    if names <= set(plant.parameters()):
+        return {f"case{c.number}": dict(c.parameters) for c in TABLE1}
+    return {"defaults": {}}
+
+
+def spectrum_of(plant: FmuPlant, parameters: dict[str, float], kin: GearKinematics | None,
+                warmup_s: float, window_s: float, max_freq_hz: float) -> dict[str, dict]:
+    if kin is not None:
+        y = plant.simulate(parameters, kin.period_s, warmup_s)
+        top = max_band_freq_hz(kin)
+        out = {}
+        for i, s in enumerate(plant.sensors):
+            spec = sync_spectrum(y[i], plant.sample_rate_hz, kin.period_s, top)
+            out[s] = {"freq_hz": spec.freq_hz.tolist(), "amplitude": spec.amplitude.tolist()}
+        return out
+    y = plant.simulate(parameters, window_s, warmup_s)
+    out = {}
+    for i, s in enumerate(plant.sensors):
+        freqs, amp = amplitude_spectrum(y[i], plant.sample_rate_hz, "hann")
+        keep = freqs <= max_freq_hz
+        out[s] = {"freq_hz": freqs[keep].tolist(), "amplitude": amp[keep].tolist()}
+    return out
+
+
+def bless_fmu(fmu_path: str | Path, golden_path: str | Path, adapter: Adapter | None = None,
+              sensors: tuple[str, ...] | None = None, sample_rate_hz: float = 10_000.0) -> Path:
+    """Open the FMU as the adapter says (else: the GearDiag sensors among its outputs, or
+    ``sensors``) and :func:`bless` it."""
+    if adapter is not None:
+        if sensors:
+            raise UsageError("give the sensors in the adapter or with --sensor, not both")
+        plant = adapter.plant_spec(fmu_path, sample_rate_hz).open()
+    else:
+        plant = FmuPlant(fmu_path, sensors or default_sensors(fmu_outputs(str(fmu_path))),
+                         sample_rate_hz)
+    with plant:
+        return bless(plant, golden_path, adapter=adapter)
+
+
+def bless(plant: FmuPlant, golden_path: str | Path, warmup_s: float = DEFAULT_WARMUP_S,
+          window_s: float = 0.2, max_freq_hz: float = 2000.0,
+          cases: dict[str, dict[str, float]] | None = None,
+          adapter: Adapter | None = None) -> Path:
+    """Write (or replace: blessing is the explicit act of accepting new behaviour) the golden file.
+
+    With an adapter, its kinematics (or its [spectrum] window) and warm-up apply, and its
+    start values are recorded so that the check sets them too.
+    """
+    if adapter is not None:
+        kin = adapter.resolve_kinematics(plant.parameters())
+        warmup_s = adapter.warmup_s
+        if kin is None:
+            window_s, max_freq_hz = adapter.window_s, adapter.max_freq_hz
+    else:
+        kin = kinematics_from({**plant.parameters(), **plant.fixed_values})
+    cases = cases if cases is not None else default_cases(plant)
+    golden = {
+        "version": GOLDEN_VERSION,
+        "fmu": plant.fmu_path.name,
+        "sensors": list(plant.sensors),
+        "sample_rate_hz": plant.sample_rate_hz,
+        "start_values": dict(plant.fixed_values),
+        "relative_tolerance": plant.relative_tolerance,
+        "warmup_s": warmup_s,
+        "window_s": window_s,
+        "max_freq_hz": max_freq_hz,
+        "kinematics": None if kin is None else kinematics_to_dict(kin),
+        "cases": {name: {"parameters": params,
+                         "spectra": spectrum_of(plant, params, kin, warmup_s, window_s, max_freq_hz)}
+                  for name, params in cases.items()},
+    }
+    path = Path(golden_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_output(path, force=True) as tmp:
+        tmp.write_text(json.dumps(golden, indent=1) + "\n")
+    return path
+
+
+def load_golden(golden_path: str | Path) -> dict:
+    path = Path(golden_path)
+    try:
+        golden = json.loads(path.read_text())
+    except FileNotFoundError as err:
+        raise GoldenError(f"no golden file {path}; create it with --bless") from err
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise GoldenError(f"cannot read golden file {path}: {err}") from err
+    if not isinstance(golden, dict) or golden.get("version") != GOLDEN_VERSION:
+        version = golden.get("version") if isinstance(golden, dict) else None
+        raise GoldenError(f"{path} is not a golden file of version {GOLDEN_VERSION} "
+                          f"(found {version if version is not None else 'no version'})")
+    return golden
+
+
+def check(fmu_path: str | Path, golden_path: str | Path, rtol: float = DEFAULT_RTOL) -> RegressionReport:
+    """Simulate the golden cases on ``fmu_path`` and compare."""
+    if not (math.isfinite(rtol) and rtol >= 0):
+        raise UsageError(f"the tolerance must be a finite number >= 0, got {rtol}")
+    golden = load_golden(golden_path)
+    with FmuPlant(fmu_path, tuple(golden["sensors"]), golden["sample_rate_hz"],
+                  golden.get("relative_tolerance"), golden.get("start_values") or None) as plant:
+        kin_dict = golden["kinematics"]
+        kin = None if kin_dict is None else kinematics_from(kin_dict)
+        report = RegressionReport(str(golden_path), len(golden["cases"]), list(plant.sensors), rtol)
+        for name, case in golden["cases"].items():
+            actual = spectrum_of(plant, case["parameters"], kin, golden["warmup_s"],
+                                 golden["window_s"], golden["max_freq_hz"])
+            for sensor, ref in case["spectra"].items():
+                g = np.asarray(ref["amplitude"])
+                a = np.asarray(actual[sensor]["amplitude"])
+                scale = float(np.max(np.abs(g))) or 1.0
+                if a.shape != g.shape:
+                    report.mismatches.append(Mismatch(name, sensor, float("nan"), float(g.size),
+                                                      float(a.size), 0.0))
+                    continue
+                dev = np.abs(a - g)
+                report.worst_relative = max(report.worst_relative, float(np.max(dev)) / scale)
+                i = int(np.argmax(dev))
+                if dev[i] > rtol * scale:
+                    report.mismatches.append(Mismatch(name, sensor, ref["freq_hz"][i], float(g[i]),
+                                                      float(a[i]), rtol * scale))
+    return report

@@ -1,0 +1,115 @@
+"""Amplitude spectra, noise floors and local maxima: the signal processing every stage shares.
+
+Period-synchronous spectra: a record that spans a whole number M of the fundamental
+period T0 has every kinematic line on a DFT bin (bin index a multiple of M), so no window
+is needed and line amplitudes are read without leakage. The bins between the lines hold
+only noise (and non-synchronous content); their mean power is the noise floor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pydiag.core.errors import MeasurementError
+
+WINDOWS = ("boxcar", "hann")
+
+
+def amplitude_spectrum(signal: np.ndarray, sample_rate_hz: float,
+                       window: str = "boxcar") -> tuple[np.ndarray, np.ndarray]:
+    """Single-sided peak-amplitude spectrum of ``signal`` with its mean removed.
+
+    Returns ``(freq_hz, amplitude)`` over the ``rfft`` bins; a tone of amplitude A on a bin
+    reads A (the window's coherent gain is divided out). ``window``: "boxcar" (none: exact
+    for period-synchronous records) or "hann" (leakage-suppressing, for any record).
+    """
+    x = np.asarray(signal, dtype=float)
+    x = x - np.mean(x)
+    if window == "boxcar":
+        amplitude = 2.0 * np.abs(np.fft.rfft(x)) / x.size
+    elif window == "hann":
+        w = np.hanning(x.size)
+        amplitude = 2.0 * np.abs(np.fft.rfft(x * w)) / np.sum(w)
+    else:
+        raise ValueError(f"window must be one of {WINDOWS}, got {window!r}")
+    return np.fft.rfftfreq(x.size, 1.0 / sample_rate_hz), amplitude
+
+
+def noise_power(amplitude: np.ndarray, robust: bool = False, min_bins: int = 1) -> float:
+    """Mean squared amplitude of a noise-only bin, from bins that hold only noise.
+
+    For complex Gaussian noise the squared amplitude of a bin is exponentially
+    distributed. ``robust=False``: the sample mean (efficient when the bins are pure
+    noise). ``robust=True``: median / ln 2 (the exponential's median is its mean x ln 2),
+    insensitive to the few bins a non-synchronous line or a missing effect occupies.
+    Fewer than ``min_bins`` bins: 0.0 (the floor is unknown).
+    """
+    power = np.asarray(amplitude, dtype=float) ** 2
+    if power.size < max(min_bins, 1):
+        return 0.0
+    return float(np.median(power) / np.log(2)) if robust else float(np.mean(power))
+
+
+def local_maxima(values: np.ndarray) -> np.ndarray:
+    """Boolean mask of entries not below either neighbour (an edge has one neighbour)."""
+    v = np.asarray(values, dtype=float)
+    left = np.concatenate([[-np.inf], v[:-1]])
+    right = np.concatenate([v[1:], [-np.inf]])
+    return (v >= left) & (v >= right)
+
+
+@dataclass(frozen=True)
+class SyncSpectrum:
+    """Single-sided amplitude spectrum at the harmonics of 1/period.
+
+    Attributes:
+        freq_hz: line frequencies, k/period for k = 0..n_lines-1
+        amplitude: peak amplitudes of the lines (signal units)
+        noise_power: mean squared amplitude of a noise-only bin (signal units squared)
+        n_periods: whole periods in the record
+    """
+
+    freq_hz: np.ndarray
+    amplitude: np.ndarray
+    noise_power: float
+    n_periods: int
+
+
+def whole_periods(n_samples: int, sample_rate_hz: float, period_s: float) -> tuple[int, int]:
+    """(periods, samples) of the longest prefix that holds a whole number of periods."""
+    n_periods = int(np.floor(n_samples / (sample_rate_hz * period_s) + 1e-9))
+    return n_periods, int(round(n_periods * period_s * sample_rate_hz))
+
+
+def sync_spectrum(signal: np.ndarray, sample_rate_hz: float, period_s: float,
+                  max_freq_hz: float | None = None) -> SyncSpectrum:
+    """Amplitude spectrum of ``signal`` at the harmonics of ``1/period_s``.
+
+    The record is cut to its longest whole number of periods. If a period is not a
+    whole number of samples, the cut is rounded to the nearest sample and the lines
+    fall within a small fraction of a bin of the DFT grid; amplitudes are then
+    evaluated at the exact line frequencies by a direct DFT.
+    """
+    signal = np.asarray(signal, dtype=float)
+    n_periods, n = whole_periods(signal.size, sample_rate_hz, period_s)
+    if n_periods < 1:
+        raise MeasurementError(f"record of {signal.size / sample_rate_hz:.4g} s is shorter than "
+                               f"one fundamental period ({period_s:.4g} s)")
+    nyquist = sample_rate_hz / 2
+    top = nyquist if max_freq_hz is None else min(max_freq_hz, nyquist)
+    n_lines = int(np.floor(top * period_s + 1e-9)) + 1
+    freqs = np.arange(n_lines) / period_s
+    _, bins = amplitude_spectrum(signal[:n], sample_rate_hz)
+    if abs(n_periods * period_s * sample_rate_hz - n) < 1e-6:
+        amplitude = bins[np.arange(n_lines) * n_periods]
+    else:
+        x = signal[:n] - np.mean(signal[:n])
+        t = np.arange(n) / sample_rate_hz
+        amplitude = 2.0 * np.abs(np.exp(-2j * np.pi * np.outer(freqs, t)) @ x) / n
+    amplitude[0] = 0.0  # mean removed
+    k = np.arange(1, bins.size - 1)
+    # one period: no bin between lines, the floor is unknown (0)
+    noise = noise_power(bins[k[k % n_periods != 0]]) if n_periods > 1 else 0.0
+    return SyncSpectrum(freqs, amplitude, noise, n_periods)

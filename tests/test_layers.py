@@ -1,0 +1,104 @@
+"""pydiag's architecture, read from the code: stages import only their own or lower
+stages, and no module imports itself back through a circle.
+
+Every ``import`` and ``from ... import`` of every module counts, at any depth (a
+function-level import is still a dependency).
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "pydiag"
+#: The stages, lowest first (the order of pydiag/__init__.py's table).
+STAGES = ("core", "signal", "io", "fmu", "gear", "model", "fit", "loop", "app")
+MAX_CLI_LINES = 400
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def imports_of(path: Path) -> set[str]:
+    """The pydiag modules a file imports (``from pydiag.x import y`` may name module y)."""
+    tree = ast.parse(path.read_text(), str(path))
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name.split(".")[0] == "pydiag"}
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] == "pydiag":
+                found.add(node.module)
+                found |= {f"{node.module}.{a.name}" for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level:
+            raise AssertionError(f"{path}: relative import; use absolute pydiag.* imports")
+    return found
+
+
+def graph() -> dict[str, set[str]]:
+    files = {module_name(p): p for p in PACKAGE.rglob("*.py") if "native" not in p.parts}
+    return {name: {m for m in imports_of(path) if m in files and m != name}
+            for name, path in files.items()}
+
+
+def stage_of(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] in STAGES else None
+
+
+def test_every_module_belongs_to_a_stage():
+    loose = [m for m in graph() if m not in ("pydiag", "pydiag.__main__") and stage_of(m) is None]
+    assert loose == [], f"modules outside the stage folders: {loose}"
+
+
+def test_no_upward_import():
+    rank = {s: i for i, s in enumerate(STAGES)}
+    upward = [(m, d) for m, deps in graph().items() for d in deps
+              if stage_of(m) and stage_of(d) and rank[stage_of(d)] > rank[stage_of(m)]]
+    assert upward == [], "a stage imports a higher one:\n" + "\n".join(f"{m} -> {d}" for m, d in upward)
+
+
+def test_package_init_imports_no_stage():
+    # importing any pydiag module runs pydiag/__init__.py first: it must not pull stages in
+    assert graph()["pydiag"] == set()
+
+
+def find_cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    colour: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        colour[node] = 1
+        stack.append(node)
+        for nxt in sorted(edges.get(node, ())):
+            if colour.get(nxt) == 1:
+                return stack[stack.index(nxt):] + [nxt]
+            if colour.get(nxt) is None and (cycle := visit(nxt)):
+                return cycle
+        stack.pop()
+        colour[node] = 2
+        return None
+
+    for node in sorted(edges):
+        if colour.get(node) is None and (cycle := visit(node)):
+            return cycle
+    return None
+
+
+def test_no_import_circle():
+    cycle = find_cycle(graph())
+    assert cycle is None, "import circle: " + " -> ".join(cycle)
+
+
+def test_the_checks_can_fail():
+    """The cycle finder and the stage ranking catch what they are for."""
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"b"}, "b": set()}) is None
+    assert stage_of("pydiag.fit.problem") == "fit" and stage_of("pydiag.other") is None
+
+
+@pytest.mark.parametrize("path", sorted((PACKAGE / "app").glob("*.py")), ids=lambda p: p.name)
+def test_cli_modules_stay_small(path):
+    assert len(path.read_text().splitlines()) <= MAX_CLI_LINES
