@@ -15,14 +15,11 @@ BRIDGE := $(wildcard fmu_build/*.py)
 
 venv: $(STAMP)
 
-# The checkout goes on the venv's path through a .pth file, and `pydiag` is a launcher:
-# no build step, edits take effect at once.
-$(STAMP): requirements.txt
+# The checkout is installed as an editable package (pyproject.toml): `.venv/bin/pydiag`
+# is its console script, and edits take effect at once.
+$(STAMP): requirements.txt pyproject.toml
 	$(PYTHON_BOOT) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
-	$(PY) -c 'import site, os; open(os.path.join(site.getsitepackages()[0], "gear_diag.pth"), "w").write(os.getcwd() + "\n")'
-	printf '#!/bin/sh\nexec "%s/bin/python" -m pydiag "$$@"\n' "$(abspath $(VENV))" > $(VENV)/bin/pydiag
-	chmod +x $(VENV)/bin/pydiag
 	touch $(STAMP)
 
 fmu: $(FMUS)

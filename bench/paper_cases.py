@@ -7,11 +7,17 @@ truth (an optimiser whose answer scores worse than the truth has not converged),
 evaluations and wall time. Usage:
 
     .venv/bin/python bench/paper_cases.py [--cases 1,2,...] [--seeds 3] [--markdown out.md]
+                                          [--json estimates.json]
+
+``--json`` keeps every run's estimates at full precision (parameters, error, evaluations,
+best-error history), so two versions of the code can be compared exactly with
+``bench/same_estimates.py``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import platform
 import statistics
 import sys
@@ -48,10 +54,11 @@ def main() -> int:
     ap.add_argument("--polish", type=int, default=150)
     ap.add_argument("--starts", type=int, default=3)
     ap.add_argument("--markdown", help="also write the table as Markdown here")
+    ap.add_argument("--json", help="also write every run's full-precision estimates here")
     args = ap.parse_args()
 
     sensors = tuple(args.sensors.split(","))
-    rows, worst, correct, walls, evals = [], 0.0, 0, [], []
+    rows, worst, correct, walls, evals, exact = [], 0.0, 0, [], [], {}
     header = ("case", "seed", *[f"{n} true/est" for n in NAMES], "max abs err", "mode/severity",
               "ok", "E(est)", "E(true)", "evals", "wall s")
     print(" | ".join(header), flush=True)
@@ -77,6 +84,9 @@ def main() -> int:
                 ok = (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
                 worst, correct = max(worst, err), correct + ok
                 walls.append(wall)
+                exact[f"{number}/{seed}"] = {"parameters": r.parameters, "error": r.error,
+                                             "evaluations": r.evaluations,
+                                             "history": r.best_error_history}
                 evals.append(r.evaluations)
                 row = (str(number), str(seed),
                        *[f"{c.parameters[n]:.2f}/{r.parameters[n]:.4f}" for n in NAMES],
@@ -93,6 +103,8 @@ def main() -> int:
         lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
         lines += ["| " + " | ".join(r) + " |" for r in rows]
         Path(args.markdown).write_text("\n".join(lines) + "\n\n" + summary + "\n")
+    if args.json:
+        Path(args.json).write_text(json.dumps(exact, indent=1) + "\n")
     return 0 if worst <= 0.03 and correct == len(rows) else 1
 
 

@@ -1,8 +1,10 @@
+import json
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -33,8 +35,52 @@ def run_cli(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
 
 
 def inspected(fmu: Path) -> Path:
-    """Every FMU a test builds goes through `pydiag inspect` too (issue: inspect runs on all)."""
+    """Every FMU a test builds goes through `pydiag inspect` too, and what inspect says
+    agrees with the FMU: it was built here, so it has this machine's binary; its outputs
+    cannot be set; its parameters can, before initialisation or at any time."""
+    import fmpy
+
     from pydiag.fmu.inspect import describe, format_info
     info = describe(fmu)
-    assert info.interfaces and "platforms:" in format_info(info)
+    md = fmpy.read_model_description(str(fmu), validate=False)
+    here = fmpy.platform_tuple if md.fmiVersion.startswith("3") else fmpy.platform
+    assert here in info.platforms, (here, info.platforms)
+    by_name = {v.name: v for v in info.variables}
+    assert set(by_name) == {v.name for v in md.modelVariables}
+    for v in md.modelVariables:
+        if v.causality == "output":
+            assert by_name[v.name].settable == "no"
+        elif v.causality == "parameter" and v.variability != "constant":
+            assert by_name[v.name].settable in ("before init", "any time")
+    text = format_info(info)
+    assert all(f"  {v.name} " in text for v in md.modelVariables
+               if v.causality in ("parameter", "output"))
     return fmu
+
+
+#: The sensors of the GearDiag models, and the paper's four fault parameters.
+SENSORS = ("acc", "disp")
+NAMES = ("a_f", "f_f", "f_ate", "f_dte")
+
+
+def noisy_measurement(fmu, number: int, seed: int, periods: int = 10):
+    """A Table 1 case simulated by our own FMU at SNR 10 (acc + disp)."""
+    from pydiag.core.measurement import Measurement
+    from pydiag.fmu.plant import FmuPlant
+    from pydiag.gear.conventions import kinematics_from
+    from pydiag.gear.paper_cases import case
+    from pydiag.signal.noise import add_white_noise
+
+    with FmuPlant(fmu, SENSORS) as plant:
+        kin = kinematics_from(plant.parameters())
+        clean = plant.simulate(case(number).parameters, periods * kin.period_s, 0.05)
+    rng = np.random.default_rng(1000 * number + seed)
+    return Measurement({s: add_white_noise(clean[i], 10.0, rng) for i, s in enumerate(SENSORS)},
+                       10_000.0)
+
+
+def write_csv(path, header, rows, meta=None):
+    lines = ([f"# meta: {json.dumps(meta)}"] if meta else []) + [",".join(header)]
+    lines += [",".join(str(v) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n")
+    return path

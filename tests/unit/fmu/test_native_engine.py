@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
-
 from conftest import inspected
+
 from fmu_build import build_fmu
-from pydiag.gear.paper_cases import TABLE1
 from pydiag.core.errors import PlantError
 from pydiag.fmu.plant import FmuPlant
+from pydiag.gear.paper_cases import TABLE1
 
 SENSORS = ("acc", "disp")
 # Both engines converged (rtol 1e-10): sampled signals agree to 2e-4 of their peak

@@ -2,11 +2,11 @@
 
 import json
 
-
 from conftest import inspected, run_cli
+
 from fmu_build import build_fmu
-from pydiag.loop import regress
 from pydiag.fmu.plant import FmuPlant
+from pydiag.loop import regress
 
 GOLDEN = "tests/golden/GearPair.json"
 

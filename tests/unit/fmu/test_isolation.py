@@ -1,19 +1,18 @@
 """A crashing, hanging, NaN-producing, step-failing FMU: penalised, restarted, reported."""
 
+import tomllib
+
 import numpy as np
 import pytest
-
 from conftest import inspected
 from fmus import hostile
-from pydiag.model.adapter import parse_adapter
-from pydiag.core.errors import EstimationError
+
+from pydiag.core.errors import EstimationError, PlantError
+from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
-from pydiag.core.measurement import Measurement
-from pydiag.core.errors import PlantError
 from pydiag.fmu.plant import FmuPlant
-
-import tomllib
+from pydiag.model.adapter import parse_adapter
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import run_cli
+
 from pydiag.app import batch
 
 TINY = dict(n_particles=4, iterations=2, polish_evaluations=10, polish_starts=1, seed=7)

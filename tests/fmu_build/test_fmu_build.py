@@ -9,8 +9,8 @@ import casadi as ca
 import fmpy
 import numpy as np
 import pytest
-
 from conftest import inspected, run_cli
+
 from fmu_build import ModelicaBuildError, build_fmu
 from fmu_build.build import ode_system
 from fmu_build.model_description import add_unit_definitions

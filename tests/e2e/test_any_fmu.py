@@ -1,8 +1,7 @@
-"""Bring your own FMU: adapters, other exporters (CasADi direct, pythonfmu, OpenModelica),
-inspect, and safe archives. Every FMU here is built or fetched by the test run."""
+"""Bring your own FMU: other exporters (CasADi direct, pythonfmu, OpenModelica) diagnosed
+through adapters, inspect, schema warnings. Every FMU here is built or fetched by the test run."""
 
 import json
-import stat
 import subprocess
 import sys
 import zipfile
@@ -10,19 +9,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import ROOT, inspected, run_cli
 from fmus import casadi_gear, pythonfmu_gear
-from pydiag.core.errors import AdapterError
-from pydiag.model.adapter import check_against_fmu, load_adapter, parse_adapter
+
+from pydiag.core.errors import AdapterError, PlantError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
-from pydiag.core.errors import UnsafeArchive
-from pydiag.fmu.archive import safe_extract
 from pydiag.fmu.inspect import describe
-from pydiag.io.measurements import read_measurement
-from pydiag.core.errors import PlantError
 from pydiag.fmu.plant import FmuPlant
+from pydiag.io.measurements import read_measurement
+from pydiag.model.adapter import check_against_fmu, load_adapter, parse_adapter
 
 # ---------------------------------------------------------------------- adapters
 
@@ -30,31 +26,8 @@ MINIMAL = {"sensor": [{"variable": "y"}], "fault_parameter": [{"variable": "k", 
            "spectrum": {"window_s": 1.0, "max_freq_hz": 10.0}}
 
 
-@pytest.mark.parametrize("change,message", [
-    ({"extra": 1}, "unknown key"),
-    ({"sensor": []}, r"at least one \[\[sensor\]\]"),
-    ({"fault_parameter": [{"variable": "k", "low": 1, "high": 1}]}, "low < high"),
-    ({"fault_parameter": [{"variable": "k", "low": "a", "high": 1}]}, "'low' must be a number"),
-    ({"simulation": {"engine": "turbo"}}, "engine must be one of"),
-    ({"kinematics": {"n_pinion": 14, "n_gear": 21, "f_pinion_hz": 25}}, "not both"),
-    ({"spectrum": None}, r"give \[kinematics\]"),
-    ({"start_values": {"k": "x"}}, "must be a number"),
-    ({"sensor": [{"variable": "y"}, {"variable": "y"}]}, "channels must be unique"),
-])
-def test_adapter_validation_names_the_key(change, message):
-    data = {**MINIMAL, **change}
-    data = {k: v for k, v in data.items() if v is not None}
-    with pytest.raises(AdapterError, match=message):
-        parse_adapter(data, "a.toml")
 
 
-def test_adapter_file_errors(tmp_path):
-    bad = tmp_path / "bad.toml"
-    bad.write_text("[sensor\n")
-    with pytest.raises(AdapterError, match="not valid TOML"):
-        load_adapter(bad)
-    with pytest.raises(AdapterError, match="cannot read adapter"):
-        load_adapter(tmp_path / "missing.toml")
 
 
 # ---------------------------------------------------------------------- CasADi, other names
@@ -74,9 +47,10 @@ def test_inspect_runs_on_every_fmu_the_tests_build(gear_fmu, vendor_gear, python
     fmus = [gear_fmu, vendor_gear[0], pythonfmu_fmu[0], hostile.build(tmp_path)]
     res = run_cli("-m", "pydiag", "inspect", *map(str, fmus))
     assert res.returncode == 0, res.stderr
-    assert res.stdout.count("platforms:") == 4
-    for made_by in ("CasADi", "PythonFMU"):
-        assert made_by in res.stdout
+    blocks = res.stdout.split("\n\n")
+    assert [b.splitlines()[0] for b in blocks] == list(map(str, fmus))  # one block each, in order
+    assert "FMI 3.0" in blocks[0] and "made by CasADi" in blocks[1] and "PythonFMU" in blocks[2]
+    assert "a_f" in blocks[0] and "Fault_Amplitude" in blocks[2]
 
 
 def test_casadi_vendor_gear_diagnosed_through_its_adapter(vendor_gear, tmp_path):
@@ -229,38 +203,6 @@ def test_adapter_refuses_calculated_parameter(openmodelica_fmus):
 
 # ---------------------------------------------------------------------- safe archives
 
-def make_zip(path, entries):
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, data, mode in entries:
-            info = zipfile.ZipInfo(name)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            if mode is not None:
-                info.external_attr = mode << 16
-            z.writestr(info, data)
-    return path
-
-
-@pytest.mark.parametrize("entries,message", [
-    ([("/etc/evil", b"x", None)], "absolute path"),
-    ([("binaries/../../evil", b"x", None)], r"outside the archive \('\.\.'\)"),
-    ([("link", b"/etc/passwd", stat.S_IFLNK | 0o777)], "symbolic link"),
-    ([("bomb.bin", b"\0" * (64 << 20), None)], "zip bomb"),
-])
-def test_hostile_archives_are_rejected_before_writing(tmp_path, entries, message):
-    fmu = make_zip(tmp_path / "evil.fmu", entries)
-    dest = tmp_path / "out"
-    dest.mkdir()
-    with pytest.raises(UnsafeArchive, match=message):
-        safe_extract(fmu, dest)
-    assert list(dest.iterdir()) == []
-    assert not (tmp_path / "evil").exists()
-
-
-def test_total_size_limit(tmp_path):
-    fmu = make_zip(tmp_path / "big.fmu", [(f"f{i}", bytes(1000), None) for i in range(20)])
-    with pytest.raises(UnsafeArchive, match="more than the limit"):
-        safe_extract(fmu, tmp_path / "out", max_total_bytes=10_000)
-
 
 def test_schema_problems_are_warnings_and_the_fmu_still_runs(gear_fmu, tmp_path):
     """Vendor FMUs often fail fmpy's validation yet run (here: units without UnitDefinitions)."""
@@ -290,7 +232,7 @@ def test_missing_platform_binary_names_what_the_fmu_has(gear_fmu, tmp_path):
             data = src.read(item)
             name = item.filename.replace("x86_64-linux", "x86_64-windows").replace(".so", ".dll")
             dst.writestr(name, data)
-    assert "x86_64-windows" in describe(inspected(windows_only)).platforms
+    assert describe(windows_only).platforms == ["x86_64-windows", "sources"]
     with pytest.raises(PlantError, match=r"no binary for this platform \(x86_64-linux\); it has: "
                                          r"x86_64-windows"):
         FmuPlant(windows_only, ("acc",))

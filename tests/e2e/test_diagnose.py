@@ -1,0 +1,53 @@
+"""Diagnosis end to end on noisy Table 1 measurements (SNR 10, acc + disp channels)."""
+
+import json
+
+import pytest
+from conftest import NAMES, noisy_measurement, run_cli
+
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import build_problem
+from pydiag.gear.paper_cases import TABLE1, case
+
+
+@pytest.mark.parametrize("number", [3, 6])
+def test_fast_diagnosis_recovers_parameters_mode_and_severity(gear_fmu, number):
+    c = case(number)
+    est = FaultEstimator(n_particles=8, iterations=6, polish_evaluations=100, polish_starts=2,
+                         seed=1)
+    r = est.fit(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)))
+    errors = {n: abs(r.parameters[n] - c.parameters[n]) for n in NAMES}
+    assert max(errors.values()) <= 0.03, errors
+    assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
+    assert r.evaluations <= 8 * 6 + 2 * 100
+    assert r.best_error_history == sorted(r.best_error_history, reverse=True)
+
+
+
+
+def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
+    meas = tmp_path / "m.csv"
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--set", "f_ate=0.4",
+                  "--set", "f_dte=0.4", "--duration", "0.48", "--snr", "10", "--out", str(meas))
+    assert res.returncode == 0, res.stderr
+    out = tmp_path / "r.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement", str(meas),
+                  "--json", str(out), "--particles", "4", "--iterations", "2", "--polish", "0",
+                  "--quiet")
+    assert res.returncode == 0, res.stderr
+    data = json.loads(out.read_text())
+    assert {"parameters", "fault_mode", "severity", "error", "evaluations", "elapsed_s"} <= set(data)
+    assert set(data["parameters"]) == set(NAMES)
+    assert data["evaluations"] == 8 and data["error"] > 0
+    assert "fault mode" in res.stdout and res.stderr == ""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("number", [c.number for c in TABLE1])
+def test_paper_case_full_diagnosis(gear_fmu, number):
+    c = case(number)
+    r = FaultEstimator(seed=0).fit(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)))
+    assert max(abs(r.parameters[n] - c.parameters[n]) for n in NAMES) <= 0.03
+    assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
+
+

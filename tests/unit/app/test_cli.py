@@ -1,0 +1,66 @@
+"""The command line's contract: user errors exit 2 with one line, bugs exit 3 and say so,
+every number is checked before any work."""
+
+import pytest
+
+from pydiag.app import cli
+from pydiag.core.errors import MeasurementError
+
+
+def run(argv, capsys):
+    try:
+        code = cli.main(argv)
+    except SystemExit as stop:
+        code = stop.code
+    err = capsys.readouterr().err
+    return code, err
+
+
+def test_a_pydiag_error_is_the_users_to_fix(monkeypatch, capsys):
+    def fails(args):
+        raise MeasurementError("m.csv: column 'acc' contains NaN values")
+    monkeypatch.setattr(cli, "cmd_inspect", fails)
+    code, err = run(["inspect", "x.fmu"], capsys)
+    assert code == 2 and err == "pydiag inspect: error: m.csv: column 'acc' contains NaN values\n"
+
+
+@pytest.mark.parametrize("bug", [ValueError("operands could not be broadcast together"),
+                                 OSError("disk on fire"), ZeroDivisionError("division by zero")])
+def test_anything_else_is_an_internal_error_never_the_users(monkeypatch, capsys, bug):
+    def fails(args):
+        raise bug
+    monkeypatch.setattr(cli, "cmd_inspect", fails)
+    monkeypatch.delenv("PYDIAG_DEBUG", raising=False)
+    code, err = run(["inspect", "x.fmu"], capsys)
+    assert code == 3 and "internal error" in err and "a bug in pydiag" in err
+    assert len(err.strip().splitlines()) == 1
+    monkeypatch.setenv("PYDIAG_DEBUG", "1")
+    with pytest.raises(type(bug)):
+        cli.main(["inspect", "x.fmu"])
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["diagnose", "--workers", "0"], "--workers: 0 must be >= 1"),
+    (["diagnose", "--polish", "-5"], "--polish: -5 must be >= 0"),
+    (["diagnose", "--seed", "-1"], "--seed: -1 must be >= 0"),
+    (["diagnose", "--particles", "many"], "--particles: 'many' is not an integer"),
+    (["diagnose", "--eval-timeout", "0"], "--eval-timeout: 0 must be > 0"),
+    (["compare", "--false-alarm-rate", "0"], "--false-alarm-rate: 0 must be > 0"),
+    (["compare", "--false-alarm-rate", "-1"], "--false-alarm-rate: -1 must be > 0"),
+    (["compare", "--bearing", "9,40,39.04"], "ball diameter < pitch diameter"),
+    (["compare", "--bearing", "9.5,7.94,39.04"], "positive integer"),
+    (["compare", "--effect", "gremlins"], "invalid choice: 'gremlins'"),
+    (["discover", "--effects", "backlash,gremlins"], "unknown effect(s) gremlins"),
+    (["regress", "--rtol", "nan"], "--rtol: 'nan' is not a finite number"),
+    (["simulate", "--snr", "0"], "--snr: 0 must be > 0"),
+    (["simulate", "--set", "f_pinion"], "--set: takes NAME=VALUE"),
+])
+def test_numbers_are_checked_at_parse_time(capsys, argv, message):
+    base = {"diagnose": ["--fmu", "f.fmu", "--measurement", "m.csv"],
+            "compare": ["--fmu", "f.fmu", "--measurement", "m.csv"],
+            "discover": ["--fmu", "f.fmu", "--measurement", "m.csv"],
+            "regress": ["--fmu", "f.fmu", "--golden", "g.json"],
+            "simulate": ["--fmu", "f.fmu", "--out", "o.csv"]}[argv[0]]
+    code, err = run([argv[0], *base, *argv[1:]], capsys)
+    assert code == 2 and message in err, err
+    assert len(err.strip().splitlines()) == 1

@@ -1,0 +1,27 @@
+"""The kinematic map names every line of a gear pair and its bearing."""
+
+import pytest
+
+from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
+from pydiag.gear.kinematics import GearKinematics
+
+BASE = dict(a_f=0.3, f_f=0.6, f_ate=0.1, f_dte=0.1)
+BEARING = Bearing(9, 7.94e-3, 39.04e-3)
+HIDDEN = {"bearing_outer_race": "BearingOuterRace", "gear_eccentricity": "GearEccentricity",
+          "load_fluctuation": "LoadFluctuation"}
+FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
+
+
+def test_kinematic_map_names_the_lines():
+    kin = GearKinematics(14, 21, 25.0)
+    lines = kinematic_map(kin, 1000.0, BEARING)
+    assert match(350.0, lines, 0.5).label == "1x mesh"  # mesh wins over 14x pinion
+    assert match(375.0, lines, 0.5).family == "mesh_sb_pinion"
+    assert match(350 - 350 / 21, lines, 0.5).label == "1x mesh - 1x gear"
+    assert match(25.0, lines, 0.5).label == "1x pinion"
+    bpfo = BEARING.frequencies(25.0)["bpfo"]
+    assert bpfo == pytest.approx(4.5 * 25 * (1 - 7.94 / 39.04))
+    assert match(bpfo, lines, 0.5).family == "bpfo"
+    assert match(7.3, lines, 0.5) is None
+    freqs = BEARING.frequencies(25.0)
+    assert freqs["ftf"] < 25 < freqs["bpfo"] < freqs["bpfi"]

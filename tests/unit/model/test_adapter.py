@@ -1,0 +1,38 @@
+"""Adapter files: every mistake names the file, the table and the key."""
+
+import pytest
+
+from pydiag.core.errors import AdapterError
+from pydiag.model.adapter import load_adapter, parse_adapter
+
+# ---------------------------------------------------------------------- adapters
+
+MINIMAL = {"sensor": [{"variable": "y"}], "fault_parameter": [{"variable": "k", "low": 0, "high": 1}],
+           "spectrum": {"window_s": 1.0, "max_freq_hz": 10.0}}
+
+
+@pytest.mark.parametrize("change,message", [
+    ({"extra": 1}, "unknown key"),
+    ({"sensor": []}, r"at least one \[\[sensor\]\]"),
+    ({"fault_parameter": [{"variable": "k", "low": 1, "high": 1}]}, "low < high"),
+    ({"fault_parameter": [{"variable": "k", "low": "a", "high": 1}]}, "'low' must be a number"),
+    ({"simulation": {"engine": "turbo"}}, "engine must be one of"),
+    ({"kinematics": {"n_pinion": 14, "n_gear": 21, "f_pinion_hz": 25}}, "not both"),
+    ({"spectrum": None}, r"give \[kinematics\]"),
+    ({"start_values": {"k": "x"}}, "must be a number"),
+    ({"sensor": [{"variable": "y"}, {"variable": "y"}]}, "channels must be unique"),
+])
+def test_adapter_validation_names_the_key(change, message):
+    data = {**MINIMAL, **change}
+    data = {k: v for k, v in data.items() if v is not None}
+    with pytest.raises(AdapterError, match=message):
+        parse_adapter(data, "a.toml")
+
+
+def test_adapter_file_errors(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[sensor\n")
+    with pytest.raises(AdapterError, match="not valid TOML"):
+        load_adapter(bad)
+    with pytest.raises(AdapterError, match="cannot read adapter"):
+        load_adapter(tmp_path / "missing.toml")

@@ -1,0 +1,98 @@
+"""Synchronous spectra, noise floors and synthetic noise, on synthetic signals."""
+
+import numpy as np
+import pytest
+
+from pydiag.core.errors import MeasurementError, UsageError
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.signal.noise import add_white_noise
+from pydiag.signal.spectra import (amplitude_spectrum, local_maxima, noise_power, sync_spectrum,
+                                    whole_periods)
+
+KIN = GearKinematics(14, 21, 25.0)  # mesh 350 Hz, fundamental period 0.12 s
+FS = 10_000.0
+
+
+def test_sync_spectrum_reads_exact_line_amplitudes():
+    t = np.arange(int(5 * KIN.period_s * FS)) / FS
+    x = 3.0 * np.sin(2 * np.pi * 350 * t + 0.3) + 0.5 * np.cos(2 * np.pi * 25 * t) + 7.0
+    spec = sync_spectrum(x, FS, KIN.period_s, max_freq_hz=2000)
+    assert spec.n_periods == 5
+    amp = dict(zip(np.round(spec.freq_hz, 6), spec.amplitude))
+    assert amp[350.0] == pytest.approx(3.0, rel=1e-9)
+    assert amp[25.0] == pytest.approx(0.5, rel=1e-9)
+    assert amp[0.0] == 0.0  # the mean is not a line
+    others = [a for f, a in amp.items() if f not in (350.0, 25.0)]
+    assert max(others) < 1e-9
+    assert spec.noise_power < 1e-20
+
+
+def test_sync_spectrum_cuts_to_whole_periods_and_rejects_short_records():
+    n = int(2.5 * KIN.period_s * FS)
+    assert whole_periods(n, FS, KIN.period_s) == (2, 2400)
+    with pytest.raises(MeasurementError, match="shorter than one fundamental period"):
+        sync_spectrum(np.zeros(100), FS, KIN.period_s)
+
+
+def test_sync_spectrum_off_grid_period_uses_exact_frequencies():
+    fs = 9_999.0  # a period is not a whole number of samples
+    t = np.arange(int(20 * KIN.period_s * fs)) / fs
+    spec = sync_spectrum(2.0 * np.sin(2 * np.pi * 700 * t), fs, KIN.period_s, 1000)
+    assert spec.amplitude[np.argmin(abs(spec.freq_hz - 700))] == pytest.approx(2.0, rel=2e-3)
+
+
+def test_noise_floor_matches_white_noise_power():
+    rng = np.random.default_rng(0)
+    sigma = 0.7
+    x = rng.normal(0, sigma, int(20 * KIN.period_s * FS))
+    spec = sync_spectrum(x, FS, KIN.period_s)
+    # a bin of white noise: E|2X/N|^2 = 4 sigma^2 / N
+    assert spec.noise_power == pytest.approx(4 * sigma ** 2 / x.size, rel=0.05)
+
+
+def test_snr_is_a_power_ratio():
+    rng = np.random.default_rng(1)
+    t = np.arange(200_000) / FS
+    clean = 2.0 * np.sin(2 * np.pi * 350 * t)
+    noisy = add_white_noise(clean, 10.0, rng)
+    assert np.var(clean) / np.var(noisy - clean) == pytest.approx(10.0, rel=0.02)
+    with pytest.raises(UsageError, match="SNR must be positive"):
+        add_white_noise(clean, 0.0, rng)
+
+
+
+
+
+
+
+
+
+
+
+
+@pytest.mark.parametrize("window", ["boxcar", "hann"])
+def test_amplitude_spectrum_reads_a_tone_on_a_bin(window):
+    n, fs = 4000, 1000.0
+    t = np.arange(n) / fs
+    freqs, amp = amplitude_spectrum(2.5 * np.sin(2 * np.pi * 50.0 * t) + 4.0, fs, window)
+    assert freqs[np.argmax(amp)] == 50.0
+    assert amp.max() == pytest.approx(2.5, rel=1e-6)  # Hann: symmetric window, gain divided out
+    assert amp[0] < 1e-6 * 4.0  # mean removed
+    with pytest.raises(ValueError, match="window"):
+        amplitude_spectrum(t, fs, "flattop")
+
+
+def test_noise_power_mean_and_robust_estimates():
+    rng = np.random.default_rng(4)
+    noise = np.abs(rng.normal(size=20_000) + 1j * rng.normal(size=20_000))  # E|z|^2 = 2
+    assert noise_power(noise) == pytest.approx(2.0, rel=0.03)
+    assert noise_power(noise, robust=True) == pytest.approx(2.0, rel=0.03)
+    spiked = np.concatenate([noise, np.full(50, 100.0)])  # a few non-synchronous lines
+    assert noise_power(spiked) > 1.2 * 2.0
+    assert noise_power(spiked, robust=True) == pytest.approx(2.0, rel=0.04)
+    assert noise_power(noise[:5], min_bins=9) == 0.0 and noise_power(np.array([])) == 0.0
+
+
+def test_local_maxima_include_edges_and_plateaus():
+    v = np.array([3.0, 1.0, 2.0, 2.0, 0.5, 4.0])
+    assert local_maxima(v).tolist() == [True, False, True, True, False, True]
