@@ -100,7 +100,7 @@ def flatten(model_file: str | Path, model: str) -> FlatModel:
         dae = compiled.to_dict("dae")
         flat = compiled.to_dict("flat")
     except rumoca.RumocaError as err:
-        raise ModelicaBuildError(f"rumoca could not compile {model}: {_diagnostics_text(err)}") from None
+        raise ModelicaBuildError(f"rumoca could not compile {model}: {_diagnostics_text(err)}") from err
 
     sources = SourceMap({sid: (name, text) for sid, name, text in dae["source_map"]["files"]})
     if len(compiled.inputs):

@@ -138,7 +138,7 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
             files = dae.export_fmu({"no_warning": True, "with_serialization": False})
         except RuntimeError as err:
             raise ModelicaBuildError(f"CasADi could not export the FMU: "
-                                     f"{str(err).strip().splitlines()[-1]}") from None
+                                     f"{str(err).strip().splitlines()[-1]}") from err
         md = Path("modelDescription.xml")
         text = add_unit_definitions(md.read_text())
         if system.derived:
@@ -151,7 +151,7 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
             packed = dae.pack_fmu(files, {"path": "model.fmu"})
         except RuntimeError as err:
             raise ModelicaBuildError(f"CasADi could not pack the FMU: "
-                                     f"{str(err).strip().splitlines()[-1]}") from None
+                                     f"{str(err).strip().splitlines()[-1]}") from err
         tmp_out = out_path.with_suffix(".fmu.tmp")
         shutil.move(packed, tmp_out)
         os.replace(tmp_out, out_path)

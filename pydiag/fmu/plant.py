@@ -71,7 +71,7 @@ class FmuPlant:
             output samples when it is smaller than 1/sample_rate_hz
     """
 
-    def __init__(self, fmu_path: str | Path, sensors: tuple[str, ...] = ("acc",),
+    def __init__(self, fmu_path: str | Path, sensors: tuple[str, ...],
                  sample_rate_hz: float = 10_000.0,
                  relative_tolerance: float | None = None,
                  fixed_values: dict[str, float] | None = None, engine: str = "auto",
