@@ -205,7 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
     p.add_argument("--history", default=DEFAULT_HISTORY)
-    p.add_argument("--plot", help="PNG file for the error history")
+    p.add_argument("--plot", help="PNG (or .svg, .pdf) file for the error history")
+    _force(p)
     p.set_defaults(func=cmd_history)
 
     p = sub.add_parser("inspect", help="describe an FMU: version, interfaces, settable variables")

@@ -27,6 +27,7 @@ def _effect_estimator(args) -> FaultEstimator:
 
 def cmd_compare(args) -> int:
     check_outputs(args, "json", "report")
+    history.check(args.history)
     effect = EFFECTS[args.effect] if args.effect else None
     m = read_input(args)
     # with an effect model, the base fit runs with the effect switched off (lower bounds)
@@ -67,10 +68,11 @@ def cmd_discover(args) -> int:
 
 
 def cmd_history(args) -> int:
+    check_outputs(args, "plot")
     rows = history.runs(args.history)
     if not rows:
         raise UsageError(f"no compare runs recorded in {args.history}")
     print(format_history(rows))
     if args.plot:
-        print(f"wrote {history.plot(rows, args.plot)}")
+        print(f"wrote {history.plot(rows, args.plot, args.force)}")
     return 0

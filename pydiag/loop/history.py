@@ -12,6 +12,9 @@ import sqlite3
 import time
 from pathlib import Path
 
+from pydiag.core.errors import OutputError
+from pydiag.io.outputs import atomic_output, check_output
+
 DEFAULT_PATH = Path("pydiag_history.sqlite")
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
@@ -40,9 +43,23 @@ def sha256_of(path: str | Path) -> str:
 
 
 def _connect(db: str | Path) -> sqlite3.Connection:
-    con = sqlite3.connect(str(db))
-    con.execute(SCHEMA)
+    if Path(db).is_dir():
+        raise OutputError(f"history {db} is a folder, not an SQLite file")
+    try:
+        con = sqlite3.connect(str(db))
+        con.execute(SCHEMA)
+    except sqlite3.Error as err:
+        raise OutputError(f"cannot use {db} as the run history: {err}") from err
     return con
+
+
+def check(db: str | Path) -> None:
+    """Raise OutputError unless ``db`` is a run history or can be created as one; call it
+    before the work whose result it will record (nothing is created here)."""
+    if Path(db).exists() or Path(db).is_symlink():
+        _connect(db).close()
+    else:
+        check_output(db)
 
 
 def record(db: str | Path, comparison, measurement_path: str, model_name: str | None,
@@ -71,8 +88,10 @@ def runs(db: str | Path) -> list[dict]:
         return [dict(r) for r in con.execute("SELECT * FROM runs ORDER BY id")]
 
 
-def plot(rows: list[dict], out: str | Path) -> Path:
-    """Error per run, labelled with the model name: the error falling as physics is added."""
+def plot(rows: list[dict], out: str | Path, force: bool = False) -> Path:
+    """Error per run, labelled with the model name: the error falling as physics is added.
+    Written under the output policy (:mod:`pydiag.io.outputs`); the format follows the
+    name's suffix (.png, .svg, .pdf)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -89,6 +108,9 @@ def plot(rows: list[dict], out: str | Path) -> Path:
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out)
-    plt.close(fig)
+    try:
+        with atomic_output(out, force) as tmp:
+            fig.savefig(tmp, format=Path(out).suffix.lstrip(".") or "png")
+    finally:
+        plt.close(fig)
     return Path(out)

@@ -257,6 +257,8 @@ def load_adapter(path: str | Path) -> Adapter:
         data = tomllib.loads(path.read_text())
     except OSError as err:
         raise AdapterError(f"cannot read adapter {path}: {err.strerror or err}") from err
+    except UnicodeDecodeError as err:
+        raise AdapterError(f"{path}: not UTF-8 text (TOML files are UTF-8): {err}") from err
     except tomllib.TOMLDecodeError as err:
         raise AdapterError(f"{path}: not valid TOML: {err}") from err
     return parse_adapter(data, str(path))

@@ -57,3 +57,13 @@ def test_json_may_not_replace_the_measurement(gear_fmu, short_measurement):
                   str(short_measurement), "--json", str(short_measurement), "--quiet")
     assert res.returncode == 2 and "would overwrite an input file" in res.stderr
     assert short_measurement.read_text() == before
+
+
+def test_an_unusable_history_stops_compare_before_the_fit(gear_fmu, short_measurement, tmp_path):
+    notes = tmp_path / "notes.txt"
+    notes.write_text("not a database\n" * 50)
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--measurement",
+                  str(short_measurement), "--history", str(notes), "--quiet")
+    assert res.returncode == 2 and "cannot use" in res.stderr and "run history" in res.stderr
+    assert notes.read_text() == "not a database\n" * 50
+    assert len(res.stderr.strip().splitlines()) == 1

@@ -36,3 +36,10 @@ def test_adapter_file_errors(tmp_path):
         load_adapter(bad)
     with pytest.raises(AdapterError, match="cannot read adapter"):
         load_adapter(tmp_path / "missing.toml")
+
+
+def test_non_utf8_adapter_names_the_file(tmp_path):
+    path = tmp_path / "latin1.toml"
+    path.write_bytes('[simulation]\n# Drehzahl in U/min, Übersetzung\n'.encode("latin-1"))
+    with pytest.raises(AdapterError, match=r"latin1\.toml: not UTF-8 text"):
+        load_adapter(path)
