@@ -30,4 +30,4 @@ MO
 # 3. compare again, fitting the effect's parameters too, and watch the error fall
 "$PYDIAG" compare --fmu MyGearbox.fmu --effect bearing_outer_race --measurement meas.csv \
     --bearing 9,7.94,39.04 --source modelica/GearDiag/MyGearbox.mo --quiet
-"$PYDIAG" history --plot "$ROOT/build/loop_history.png"
+"$PYDIAG" history --plot "$ROOT/build/loop_history.png" --force  # a build artefact, replaced each run
