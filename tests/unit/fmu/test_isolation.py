@@ -95,3 +95,14 @@ class Stiff(Fmi2Slave):
     with FmuPlant(fmu, ("y",), sample_rate_hz=10_000.0, cs_step_s=1e-5) as plant:
         y = plant.simulate({}, 0.05, 0.0)[0]
         assert plant.substeps == 10 and np.max(np.abs(y)) < 1.1
+
+
+def test_a_swarm_whose_every_simulation_fails_stops_with_the_first_cause(hostile_fmu):
+    """Fewer failures than the consecutive limit, yet no finite cost: a clean stop naming
+    the first failure (pyswarms used to fail on an empty best position here)."""
+    est = FaultEstimator(n_particles=4, iterations=3, polish_evaluations=0, n_workers=2,
+                         eval_timeout_s=1.0, max_consecutive_failures=100)
+    problem = build_problem(str(hostile_fmu), measurement(hostile_fmu, 0.4), adapter(1.65, 2.0))
+    with pytest.raises(EstimationError, match=r"every simulation of the plant failed \(4 "
+                                              r"evaluations\); the first failed with: .*SIGSEGV"):
+        est.fit(problem)
