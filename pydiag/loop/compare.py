@@ -32,7 +32,6 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from pydiag.core.errors import EstimationError
-from pydiag.core.parameters import fmu_values
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
@@ -146,9 +145,13 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
 
 def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
             bearing: Bearing | None = None, false_alarm_rate: float = 0.01,
-            max_periods: int = 10, parameters: dict[str, float] | None = None) -> Comparison:
-    """Fit (unless ``parameters`` are given, by name) and compare; see the module docstring."""
-    measured = measured_spectra(problem, false_alarm_rate, max_periods)
+            max_periods: int = 10, parameters: dict[str, float] | None = None,
+            measured: MeasuredSpectra | None = None) -> Comparison:
+    """Fit (unless ``parameters`` are given, by name) and compare; see the module docstring.
+
+    ``measured``: the measurement's spectra when already computed for the same
+    false-alarm rate and periods (they depend on the measurement alone)."""
+    measured = measured or measured_spectra(problem, false_alarm_rate, max_periods)
     fit_error = None
     if parameters is None:
         result = (estimator or FaultEstimator()).fit(problem)
@@ -158,8 +161,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     kin = featurizer.kinematics
     rate = problem.measurement.sample_rate_hz
     with problem.spec.open() as plant:
-        y = np.asarray(problem.scales)[:, None] * plant.simulate(
-            fmu_values(problem.parameters, parameters), featurizer.duration_s, problem.warmup_s)
+        y = problem.model_signals(plant, np.array([parameters[p.name] for p in problem.parameters]),
+                                  featurizer.duration_s)
     lines = kinematic_map(kin, featurizer.max_freq_hz, bearing)
     bin_hz = 1.0 / featurizer.duration_s
     candidates, spectra, errors, raw = [], {}, [], []
@@ -217,4 +220,4 @@ def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, eff
                                     featurizer=measured.featurizer)
     fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters
     return compare(effect_problem, None, bearing, base.false_alarm_rate, base.n_periods,
-                   parameters=fitted)
+                   parameters=fitted, measured=measured)

@@ -21,13 +21,13 @@ import numpy as np
 
 from pydiag.core.errors import GoldenError, UsageError
 from pydiag.fmu.plant import DEFAULT_WARMUP_S, FmuPlant
-from pydiag.gear.conventions import default_sensors, kinematics_from, kinematics_to_dict
+from pydiag.gear.conventions import kinematics_from, kinematics_to_dict
 from pydiag.gear.features import max_band_freq_hz
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.io.outputs import atomic_output
 from pydiag.model.adapter import Adapter
-from pydiag.model.simulate import fmu_outputs
+from pydiag.model.simulate import plant_spec_for
 from pydiag.signal.spectra import amplitude_spectrum, sync_spectrum
 
 GOLDEN_VERSION = 1
@@ -88,14 +88,7 @@ def bless_fmu(fmu_path: str | Path, golden_path: str | Path, adapter: Adapter | 
               sensors: tuple[str, ...] | None = None, sample_rate_hz: float = 10_000.0) -> Path:
     """Open the FMU as the adapter says (else: the GearDiag sensors among its outputs, or
     ``sensors``) and :func:`bless` it."""
-    if adapter is not None:
-        if sensors:
-            raise UsageError("give the sensors in the adapter or with --sensor, not both")
-        plant = adapter.plant_spec(fmu_path, sample_rate_hz).open()
-    else:
-        plant = FmuPlant(fmu_path, sensors or default_sensors(fmu_outputs(str(fmu_path))),
-                         sample_rate_hz)
-    with plant:
+    with plant_spec_for(str(fmu_path), sample_rate_hz, adapter, sensors).open() as plant:
         return bless(plant, golden_path, adapter=adapter)
 
 

@@ -7,7 +7,7 @@ import numpy as np
 from pydiag.core.errors import PlantError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fmu.description import outputs_of, read_model_description
-from pydiag.fmu.plant import DEFAULT_WARMUP_S, FmuPlant
+from pydiag.fmu.plant import DEFAULT_WARMUP_S, PlantSpec
 from pydiag.gear.conventions import default_sensors, kinematics_from, kinematics_to_dict
 from pydiag.model.adapter import Adapter, check_against_fmu
 from pydiag.signal.noise import add_white_noise
@@ -25,6 +25,17 @@ def fmu_outputs(fmu_path: str) -> list[str]:
     return outputs
 
 
+def plant_spec_for(fmu: str, sample_rate_hz: float, adapter: Adapter | None = None,
+                   sensors: tuple[str, ...] | None = None) -> PlantSpec:
+    """How to run ``fmu`` as a sensor: as the adapter says, else for ``sensors`` (default:
+    the GearDiag sensors among its outputs, else every output)."""
+    if adapter is not None:
+        if sensors:
+            raise UsageError("give the sensors in the adapter or with --sensor, not both")
+        return adapter.plant_spec(fmu, sample_rate_hz)
+    return PlantSpec(str(fmu), tuple(sensors or default_sensors(fmu_outputs(fmu))), sample_rate_hz)
+
+
 def simulate_measurement(fmu: str, values: dict[str, float], duration_s: float | None,
                          sample_rate_hz: float, snr: float | None, seed: int,
                          sensors: tuple[str, ...] | None = None,
@@ -37,19 +48,14 @@ def simulate_measurement(fmu: str, values: dict[str, float], duration_s: float |
     channel, None for a noiseless record. The metadata hold the operating point the
     record was made at (with ``values`` applied).
     """
+    spec = plant_spec_for(fmu, sample_rate_hz, adapter, sensors)
     if adapter is not None:
-        if sensors:
-            raise UsageError("give the sensors in the adapter or with --sensor, not both")
         channels = [(s.channel, s.scale) for s in adapter.sensors]
-        spec = adapter.plant_spec(fmu, sample_rate_hz)
         warmup_s = adapter.warmup_s
     else:
-        sensors = sensors or default_sensors(fmu_outputs(fmu))
-        channels = [(s, 1.0) for s in sensors]
-        spec = None
+        channels = [(s, 1.0) for s in spec.sensors]
         warmup_s = DEFAULT_WARMUP_S
-    plant = spec.open() if spec else FmuPlant(fmu, sensors, sample_rate_hz)
-    with plant:
+    with spec.open() as plant:
         operating_point = {**plant.parameters(), **plant.fixed_values, **values}
         if adapter is not None:
             check_against_fmu(adapter, plant.variables)
