@@ -17,7 +17,7 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.fmu.inspect import describe
 from pydiag.fmu.plant import FmuPlant
-from pydiag.io.measurements import read_measurement
+from pydiag.io.readers import read_measurement
 from pydiag.model.adapter import check_against_fmu, load_adapter, parse_adapter
 
 # ---------------------------------------------------------------------- adapters

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from conftest import run_cli, write_csv
 
-from pydiag.io.measurements import read_measurement
+from pydiag.io.readers import read_measurement
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +24,7 @@ def test_simulate_writes_channels_and_operating_point(short_measurement):
 
 
 @pytest.mark.parametrize("extra,message", [
-    (["--column", "nope"], "not in the measurement"),
+    (["--column", "nope"], "not in the file"),
     (["--column", "acc", "--particles", "1"], "--particles: 1 must be >= 2"),
 ])
 def test_diagnose_rejects_bad_requests(gear_fmu, short_measurement, extra, message):

@@ -6,7 +6,8 @@ from conftest import write_csv
 
 from pydiag.core.errors import MeasurementError, OutputError
 from pydiag.core.measurement import Measurement
-from pydiag.io.measurements import read_measurement, write_measurement
+from pydiag.io.measurements import write_measurement
+from pydiag.io.readers import read_measurement
 
 
 def test_round_trip_keeps_channels_rate_and_metadata(tmp_path):
@@ -14,9 +15,10 @@ def test_round_trip_keeps_channels_rate_and_metadata(tmp_path):
     write_measurement(tmp_path / "m.csv", m)
     back = read_measurement(tmp_path / "m.csv")
     assert back.sample_rate_hz == pytest.approx(2000.0)
-    assert back.metadata == {"snr": 10}
+    assert back.metadata == {"snr": 10, "file": str(tmp_path / "m.csv"),
+                             "sample_rate_source": "column 'time_s'"}
     np.testing.assert_array_equal(back.channels["acc"], m.channels["acc"])
-    assert list(read_measurement(tmp_path / "m.csv", columns=["disp"]).channels) == ["disp"]
+    assert list(read_measurement(tmp_path / "m.csv", channels=["disp"]).channels) == ["disp"]
 
 
 def test_existing_file_is_not_overwritten(tmp_path):
@@ -28,8 +30,8 @@ def test_existing_file_is_not_overwritten(tmp_path):
 
 
 @pytest.mark.parametrize("header,rows,kwargs,message", [
-    (["time_s", "acc"], [[0, 1], [1e-4, float("nan")], [2e-4, 1]], {}, "contains NaN"),
-    (["time_s", "acc"], [[0, 1], [1e-4, 2]], {"columns": ["disp"]}, "not in the measurement"),
+    (["time_s", "acc"], [[0, 1], [1e-4, float("nan")], [2e-4, 1]], {}, "missing or NaN value"),
+    (["time_s", "acc"], [[0, 1], [1e-4, 2]], {"channels": ["disp"]}, "not in the file"),
     (["acc"], [[1], [2]], {}, "give --sample-rate"),
     (["time_s", "acc"], [[0, 1], [0, 2]], {}, "increase strictly"),
     (["time_s", "acc"], [[0, 1], [1e-4, "x"]], {}, "non-numeric"),

@@ -1,0 +1,370 @@
+"""Read a measurement from the files engineers have, picked by extension.
+
+=================  ==========================================================================
+extension          how
+=================  ==========================================================================
+.csv .tsv .txt     pandas with the pyarrow engine; delimiter sniffed (``,`` ``;`` tab space),
+.dat (+ .gz)       decimal comma accepted with ``;`` or tab, header optional (columns are then
+                   ``ch1``, ``ch2``...), leading ``#`` lines skipped, ``# meta: {json}`` kept
+.parquet           pandas/pyarrow; the file's ``pydiag`` key-value metadata kept
+.mat               MATLAB v5 (scipy.io) or v7.3 (h5py): every numeric vector is a channel
+                   (a matrix gives ``NAME_1``, ``NAME_2``... per column)
+.wav               scipy.io.wavfile: channels ``ch1``...; integer PCM scaled to full scale 1
+.tdms              npTDMS: channels named ``group/channel`` (or ``channel`` when unique)
+=================  ==========================================================================
+
+The sample rate comes from, in this order: a time column (``time_s``, ``time``, ``t``;
+accepted when every sample lies within 1 % of a sample interval of a uniform grid), the
+file itself (WAV rate, TDMS ``wf_increment``, a scalar ``fs``/``sample_rate`` variable
+of a MAT file), or ``sample_rate_hz``. Given as well, it must agree with the file to 0.1 %.
+The source is kept in ``metadata["sample_rate_source"]``.
+
+Channels are chosen and mapped to model outputs with specs ``NAME=OUTPUT`` (``NAME`` alone
+keeps the name), and converted to SI with ``units`` (:mod:`pydiag.io.units`). A chosen
+channel that is constant (a dead sensor), a duplicated column name, a missing or non-numeric
+value are refused with one line naming the file and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from pydiag.core.errors import MeasurementError, UsageError
+from pydiag.core.measurement import Measurement
+from pydiag.io.units import si_factor
+
+TIME_COLUMNS = ("time_s", "time", "t")
+META_PREFIX = "# meta:"
+#: A time column is uniform when every sample lies this close to the grid, in samples.
+TIME_TOLERANCE = 0.01
+#: A given sample rate must agree with the file's this closely (relative).
+RATE_TOLERANCE = 1e-3
+RATE_VARIABLES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "sampling_rate", "sr")
+TEXT_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
+SUFFIXES = TEXT_SUFFIXES + (".parquet", ".mat", ".wav", ".tdms")
+
+
+class _Table:
+    """Columns as read, before a sample rate and a channel choice are applied."""
+
+    def __init__(self, columns: dict[str, np.ndarray], metadata: dict | None = None,
+                 rate_hz: float | None = None, rate_source: str | None = None) -> None:
+        self.columns = columns
+        self.metadata = metadata or {}
+        self.rate_hz = rate_hz
+        self.rate_source = rate_source
+
+
+def _fail(path: Path, message: str) -> MeasurementError:
+    return MeasurementError(f"{path}: {message}")
+
+
+def _open_text(path: Path):
+    raw = gzip.open(path, "rb") if path.suffix == ".gz" else open(path, "rb")
+    return io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
+
+
+def _head(path: Path, n_lines: int = 50) -> list[str]:
+    with _open_text(path) as fh:
+        return [line for _, line in zip(range(n_lines), fh)]
+
+
+def _is_number(token: str, decimal: str) -> bool:
+    try:
+        float(token.strip().replace(decimal, ".") if decimal != "." else token.strip())
+        return True
+    except ValueError:
+        return False
+
+
+def _read_text(path: Path) -> _Table:
+    import pandas as pd
+
+    head = _head(path)
+    metadata, n_comments = {}, 0
+    for line in head:
+        if line.startswith(META_PREFIX):
+            try:
+                metadata = json.loads(line[len(META_PREFIX):])
+            except json.JSONDecodeError as err:
+                raise _fail(path, f"bad metadata line: {err}") from err
+        elif not (line.startswith("#") or not line.strip()):
+            break
+        n_comments += 1
+    body = [line for line in head[n_comments:] if line.strip()]
+    if not body:
+        raise _fail(path, "no data rows found")
+    try:
+        delimiter = csv.Sniffer().sniff("".join(body[:20]), delimiters=",;\t ").delimiter
+    except csv.Error:
+        delimiter = ","  # one column
+    sample = body[1] if len(body) > 1 else body[0]
+    decimal = "," if delimiter in ";\t " and "," in sample and not _is_number(
+        sample.split(delimiter)[0], ".") else "."
+    first = [t.strip() for t in next(csv.reader([body[0]], delimiter=delimiter)) if
+             delimiter != " " or t.strip()]
+    has_header = not all(_is_number(t, decimal) for t in first)
+    if has_header:
+        duplicated = sorted({t for t in first if first.count(t) > 1})
+        if duplicated:
+            raise _fail(path, f"duplicate column name(s) {', '.join(duplicated)}: which one is "
+                              "the sensor? Rename them")
+        names = first
+    else:
+        names = [f"ch{i + 1}" for i in range(len(first))]
+    fast = decimal == "." and delimiter != " "
+    try:
+        frame = pd.read_csv(path, sep=r"\s+" if delimiter == " " else delimiter,
+                            skiprows=n_comments + (1 if has_header else 0), header=None,
+                            names=names, decimal=decimal, engine="pyarrow" if fast else "c",
+                            compression="gzip" if path.suffix == ".gz" else None,
+                            encoding="utf-8-sig")
+    except (ValueError, pd.errors.ParserError, OSError, UnicodeDecodeError) as err:
+        first_line = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+        raise _fail(path, f"cannot parse as {'decimal-comma ' if decimal == ',' else ''}text "
+                          f"with delimiter {delimiter!r}: {first_line}") from err
+    return _Table(_numeric_columns(path, frame), metadata)
+
+
+def _numeric_columns(path: Path, frame) -> dict[str, np.ndarray]:
+    import pandas as pd
+
+    columns = {}
+    for name in frame.columns:
+        col = frame[name]
+        if not pd.api.types.is_numeric_dtype(col):
+            values = pd.to_numeric(col, errors="coerce")
+            bad = np.flatnonzero(values.isna() & col.notna())
+            if bad.size:
+                raise _fail(path, f"column '{name}' has a non-numeric value "
+                                  f"({col.iloc[bad[0]]!r}, data row {bad[0] + 1})")
+            col = values
+        values = col.to_numpy(dtype=float, na_value=np.nan)
+        missing = np.flatnonzero(np.isnan(values))
+        if missing.size:
+            raise _fail(path, f"column '{name}' has {missing.size} missing or NaN value(s), "
+                              f"the first in data row {missing[0] + 1}")
+        if not np.isfinite(values).all():
+            raise _fail(path, f"column '{name}' has infinite values")
+        columns[str(name)] = values
+    return columns
+
+
+def _read_parquet(path: Path) -> _Table:
+    import pandas as pd
+    import pyarrow.parquet as pq
+
+    try:
+        frame = pd.read_parquet(path, engine="pyarrow")
+        kv = pq.read_schema(path).metadata or {}
+    except Exception as err:  # pyarrow raises its own kinds on a damaged file  # noqa: BLE001
+        raise _fail(path, f"cannot read as Parquet: {err}") from err
+    metadata = json.loads(kv[b"pydiag"]) if b"pydiag" in kv else {}
+    return _Table(_numeric_columns(path, frame), metadata)
+
+
+def _matrix_columns(name: str, value: np.ndarray, out: dict[str, np.ndarray]) -> None:
+    a = np.asarray(value)
+    if a.dtype.kind not in "fiu" or a.size < 2:
+        return
+    a = np.squeeze(a)
+    if a.ndim == 1:
+        out[name] = a.astype(float)
+    elif a.ndim == 2:
+        cols = a if a.shape[0] >= a.shape[1] else a.T  # samples along the longer axis
+        for i in range(cols.shape[1]):
+            out[f"{name}_{i + 1}"] = cols[:, i].astype(float)
+
+
+def _read_mat(path: Path) -> _Table:
+    import scipy.io
+
+    variables: dict[str, np.ndarray] = {}
+    try:
+        raw = scipy.io.loadmat(path)
+        items = {k: v for k, v in raw.items() if not k.startswith("__")}
+    except NotImplementedError:  # v7.3 is HDF5
+        import h5py
+        with h5py.File(path, "r") as f:
+            items = {k: np.asarray(v) for k, v in f.items() if isinstance(v, h5py.Dataset)}
+    except Exception as err:  # scipy raises several kinds on a non-MAT file  # noqa: BLE001
+        raise _fail(path, f"cannot read as a MATLAB file: {err}") from err
+    rate = None
+    for key in RATE_VARIABLES:
+        if key in items and np.asarray(items[key]).size == 1:
+            rate = float(np.asarray(items.pop(key)).ravel()[0])
+            break
+    for key, value in items.items():
+        _matrix_columns(key, value, variables)
+    return _Table(variables, {}, rate, "the file's rate variable" if rate else None)
+
+
+def _read_wav(path: Path) -> _Table:
+    import scipy.io.wavfile
+
+    try:
+        rate, data = scipy.io.wavfile.read(path)
+    except (ValueError, OSError, EOFError) as err:
+        raise _fail(path, f"cannot read as WAV: {err}") from err
+    if data.dtype.kind in "iu":
+        info = np.iinfo(data.dtype)
+        data = (data.astype(float) - (info.max + 1 if data.dtype.kind == "u" else 0)) / (info.max + 1)
+    data = np.asarray(data, dtype=float).reshape(len(data), -1)
+    return _Table({f"ch{i + 1}": data[:, i] for i in range(data.shape[1])}, {}, float(rate),
+                  "the WAV header")
+
+
+def _read_tdms(path: Path) -> _Table:
+    from nptdms import TdmsFile
+
+    try:
+        tdms = TdmsFile.read(path)
+    except Exception as err:  # npTDMS raises several kinds on a damaged file  # noqa: BLE001
+        raise _fail(path, f"cannot read as TDMS: {err}") from err
+    found = [(g.name, c) for g in tdms.groups() for c in g.channels()]
+    names = [c.name for _, c in found]
+    columns, rates = {}, set()
+    for group, channel in found:
+        key = channel.name if names.count(channel.name) == 1 else f"{group}/{channel.name}"
+        _matrix_columns(key, channel[:], columns)
+        if "wf_increment" in channel.properties:
+            rates.add(1.0 / float(channel.properties["wf_increment"]))
+    if len(rates) > 1:
+        raise _fail(path, f"channels have different sample rates {sorted(rates)}")
+    rate = rates.pop() if rates else None
+    return _Table(columns, {}, rate, "the TDMS wf_increment" if rate else None)
+
+
+READERS = {".parquet": _read_parquet, ".mat": _read_mat, ".wav": _read_wav, ".tdms": _read_tdms}
+
+
+def _suffix(path: Path) -> str:
+    suffixes = [s.lower() for s in path.suffixes]
+    return suffixes[-2] if suffixes[-1:] == [".gz"] and len(suffixes) > 1 else (suffixes or [""])[-1]
+
+
+def is_measurement_file(path: str | Path) -> bool:
+    """Whether the name has an extension pydiag reads."""
+    return _suffix(Path(path)) in SUFFIXES
+
+
+def _time_rate(path: Path, name: str, t: np.ndarray) -> float:
+    """The rate of a uniform time column; MeasurementError otherwise."""
+    if t.size < 2:
+        raise _fail(path, "one row only: a record needs at least two samples")
+    if np.any(np.diff(t) <= 0):
+        k = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise _fail(path, f"'{name}' must increase strictly (data rows {k + 1} and {k + 2})")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    deviation = float(np.max(np.abs(t - (t[0] + dt * np.arange(t.size))))) / dt
+    if deviation > TIME_TOLERANCE:
+        raise _fail(path, f"'{name}' is not uniformly sampled: a sample lies {deviation:.3g} "
+                          f"sample intervals off the uniform grid (tolerance {TIME_TOLERANCE:g})")
+    return 1.0 / dt
+
+
+def parse_channel(spec: str) -> tuple[str, str]:
+    """``NAME=OUTPUT`` -> (NAME, OUTPUT); ``NAME`` -> (NAME, NAME)."""
+    name, sep, output = spec.partition("=")
+    name, output = name.strip(), output.strip()
+    if not name or (sep and not output):
+        raise UsageError(f"a channel is NAME or NAME=OUTPUT, got '{spec}'")
+    return name, output or name
+
+
+def parse_units(specs: list[str] | None) -> dict[str | None, str]:
+    """``UNIT`` (every channel) or ``NAME=UNIT`` -> {NAME or None: UNIT}."""
+    units: dict[str | None, str] = {}
+    for spec in specs or []:
+        name, sep, unit = spec.rpartition("=") if "=" in spec else ("", "", spec)
+        if sep and not name.strip():
+            raise UsageError(f"a unit is UNIT or NAME=UNIT, got '{spec}'")
+        units[name.strip() or None] = unit.strip()
+    return units
+
+
+def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
+                     channels: list[str] | None = None,
+                     units: list[str] | dict[str | None, str] | None = None) -> Measurement:
+    """Read a measurement file (see the module docstring for the formats).
+
+    Args:
+        path: the file; its format from the extension (``.gz`` compressed text too)
+        sample_rate_hz: the rate, when the file has none (checked against it otherwise)
+        channels: ``NAME`` or ``NAME=OUTPUT`` specs (default: every column but time)
+        units: ``UNIT`` for every channel or ``NAME=UNIT`` (NAME as in the file or as
+            mapped); values are converted to SI
+
+    Returns a Measurement whose channels carry the OUTPUT names, in SI units when a unit
+    was given, and metadata: ``file``, ``sample_rate_source``, ``channel_map``, ``units``.
+    Every problem with the file raises MeasurementError naming it; a bad spec UsageError.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    if suffix not in SUFFIXES:
+        raise _fail(path, f"unknown measurement format '{suffix or path.name}'; pydiag reads "
+                          f"{', '.join(SUFFIXES)} (text also gzipped)")
+    if path.suffix.lower() == ".gz" and suffix not in TEXT_SUFFIXES:
+        raise _fail(path, f"only text records can be gzipped, not '{suffix}'")
+    if not path.is_file():
+        raise _fail(path, "cannot read: no such file" if not path.exists() else
+                    "cannot read: not a regular file")
+    try:
+        table = (_read_text if suffix in TEXT_SUFFIXES else READERS[suffix])(path)
+    except (OSError, EOFError, UnicodeDecodeError, gzip.BadGzipFile) as err:
+        raise _fail(path, f"cannot read: {getattr(err, 'strerror', None) or err}") from err
+    columns = dict(table.columns)
+    rate, source = table.rate_hz, table.rate_source
+    time_name = next((c for c in columns if c.lower() in TIME_COLUMNS), None)
+    if time_name is not None:
+        rate, source = _time_rate(path, time_name, columns.pop(time_name)), f"column '{time_name}'"
+    if rate is not None and sample_rate_hz is not None:
+        if abs(rate - sample_rate_hz) > RATE_TOLERANCE * rate:
+            raise _fail(path, f"--sample-rate {sample_rate_hz:g} Hz disagrees with {source} "
+                              f"({rate:.8g} Hz)")
+    elif rate is None:
+        if sample_rate_hz is None:
+            raise _fail(path, "the file has no time column or sample rate; give --sample-rate")
+        rate, source = float(sample_rate_hz), "--sample-rate"
+    if not columns:
+        raise _fail(path, "no signal column")
+    lengths = {c: v.size for c, v in columns.items()}
+    if len(set(lengths.values())) > 1:
+        raise _fail(path, f"channels have different lengths: {lengths}")
+    specs = [parse_channel(s) for s in channels] if channels else [(c, c) for c in columns]
+    missing = [n for n, _ in specs if n not in columns]
+    if missing:
+        raise _fail(path, f"channel(s) {', '.join(missing)} not in the file; it has: "
+                          f"{', '.join(columns)}")
+    outputs = [o for _, o in specs]
+    if len(set(outputs)) < len(outputs):
+        raise UsageError(f"two channels map to the same output: {', '.join(outputs)}")
+    unit_of = parse_units(units) if not isinstance(units, dict) else units
+    known = {n for n, _ in specs} | set(outputs)
+    stray = [n for n in unit_of if n is not None and n not in known]
+    if stray:
+        raise UsageError(f"--unit names channel(s) {', '.join(stray)} that are not chosen")
+    selected, used_units = {}, {}
+    for name, output in specs:
+        values = columns[name]
+        if values.size >= 2 and np.ptp(values) == 0:
+            raise _fail(path, f"channel '{name}' is constant ({values[0]:g}): a dead or "
+                              "disconnected sensor?")
+        unit = unit_of.get(name) or unit_of.get(output) or unit_of.get(None)
+        if unit:
+            factor, si = si_factor(unit)
+            values = values * factor
+            used_units[output] = f"{unit} -> {si}"
+        selected[output] = np.ascontiguousarray(values, dtype=float)
+    metadata = {**table.metadata, "file": str(path), "sample_rate_source": source}
+    if any(n != o for n, o in specs):
+        metadata["channel_map"] = {o: n for n, o in specs}
+    if used_units:
+        metadata["units"] = used_units
+    return Measurement(selected, float(rate), metadata)

@@ -1,0 +1,179 @@
+"""Every reader on small generated files: the same record comes back from each format,
+with its sample rate found where the format holds one; and the ways real files go wrong
+(delimiters, decimal commas, BOMs, gzip, jittered time columns, duplicates, dead sensors)."""
+
+import gzip
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import scipy.io
+import scipy.io.wavfile
+
+from pydiag.core.errors import MeasurementError, UsageError
+from pydiag.io.readers import read_measurement
+
+FS = 2048.0
+N = 600
+
+
+@pytest.fixture
+def signals():
+    rng = np.random.default_rng(3)
+    return {"a1": rng.standard_normal(N), "a2": np.sin(np.arange(N) / 7.0)}
+
+
+def _check(m, signals, rate=FS, names=("a1", "a2"), rtol=1e-12):
+    assert list(m.channels) == list(names)
+    assert m.sample_rate_hz == pytest.approx(rate, rel=1e-9)
+    for name, original in zip(names, signals.values()):
+        np.testing.assert_allclose(m.channels[name], original, rtol=rtol, atol=rtol)
+
+
+def test_csv_with_time_column_gives_the_rate_and_keeps_metadata(tmp_path, signals):
+    path = tmp_path / "r.csv"
+    t = np.arange(N) / FS
+    with open(path, "w") as fh:
+        fh.write('# meta: {"rig": "test"}\n# a comment\n')
+        pd.DataFrame({"time_s": t, **signals}).to_csv(fh, index=False)
+    m = read_measurement(path)
+    _check(m, signals)
+    assert m.metadata["rig"] == "test" and m.metadata["sample_rate_source"] == "column 'time_s'"
+
+
+def test_time_column_written_to_nine_digits_is_accepted(tmp_path, signals):
+    """A real recorder's time column (9 significant digits) jitters by a tiny fraction of
+    a sample; the old reader refused it as not uniform."""
+    fs = 25_600.0
+    t = np.arange(N) / fs + 10.0  # a record that starts at 10 s
+    path = tmp_path / "r.csv"
+    pd.DataFrame({"Time": [f"{v:.9g}" for v in t], **signals}).to_csv(path, index=False)
+    m = read_measurement(path)
+    assert abs(m.sample_rate_hz - fs) < 1e-4 * fs
+    jittered = t.copy()
+    jittered[N // 2] += 0.05 / fs  # 5 % of a sample: not a uniform record
+    pd.DataFrame({"Time": jittered, **signals}).to_csv(path, index=False)
+    with pytest.raises(MeasurementError, match="not uniformly sampled.*0.05"):
+        read_measurement(path)
+
+
+@pytest.mark.parametrize("sep,decimal", [(";", ","), ("\t", "."), ("\t", ","), (" ", ".")])
+def test_delimiters_and_decimal_commas_are_sniffed(tmp_path, signals, sep, decimal):
+    path = tmp_path / "r.txt"
+    pd.DataFrame(signals).to_csv(path, index=False, sep=sep, decimal=decimal)
+    _check(read_measurement(path, sample_rate_hz=FS), signals, rtol=1e-12)
+
+
+def test_gzip_bom_and_headerless_text(tmp_path, signals):
+    text = pd.DataFrame(signals).to_csv(index=False)
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes("\ufeff".encode() + text.encode())
+    _check(read_measurement(bom, FS), signals)
+    gz = tmp_path / "r.csv.gz"
+    gz.write_bytes(gzip.compress(text.encode()))
+    _check(read_measurement(gz, FS), signals)
+    bare = tmp_path / "bare.csv"
+    pd.DataFrame(signals).to_csv(bare, index=False, header=False)
+    _check(read_measurement(bare, FS), signals, names=("ch1", "ch2"))
+
+
+def test_parquet(tmp_path, signals):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    table = pa.Table.from_pandas(pd.DataFrame({"time_s": np.arange(N) / FS, **signals}))
+    table = table.replace_schema_metadata({**table.schema.metadata,
+                                           b"pydiag": json.dumps({"rig": "pq"}).encode()})
+    pq.write_table(table, tmp_path / "r.parquet")
+    m = read_measurement(tmp_path / "r.parquet")
+    _check(m, signals)
+    assert m.metadata["rig"] == "pq"
+
+
+def test_mat_v5_with_rate_variable_and_matrix(tmp_path, signals):
+    path = tmp_path / "r.mat"
+    scipy.io.savemat(path, {"fs": FS, "acc": signals["a1"][:, None],
+                            "block": np.column_stack(list(signals.values())), "note": "text"})
+    m = read_measurement(path)
+    assert m.metadata["sample_rate_source"] == "the file's rate variable"
+    assert set(m.channels) == {"acc", "block_1", "block_2"}
+    np.testing.assert_array_equal(m.channels["block_2"], signals["a2"])
+    with pytest.raises(MeasurementError, match="disagrees"):
+        read_measurement(path, sample_rate_hz=2 * FS)
+
+
+def test_mat_v73_through_h5py(tmp_path, signals):
+    import h5py
+    path = tmp_path / "r73.mat"
+    with h5py.File(path, "w", userblock_size=512) as f:  # MATLAB's v7.3 layout: HDF5
+        f["a1"] = signals["a1"][None, :]  # MATLAB stores column vectors transposed
+        f["Fs"] = np.array([[FS]])
+    with open(path, "r+b") as fh:  # the MATLAB header in the user block
+        fh.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64".ljust(116) + b"\x00" * 8
+                 + b"\x00\x02IM")
+    m = read_measurement(path)
+    np.testing.assert_array_equal(m.channels["a1"], signals["a1"])
+    assert m.sample_rate_hz == FS
+
+
+def test_wav_int16_is_scaled_to_full_scale(tmp_path, signals):
+    data = np.column_stack([np.round(signals["a2"] * 16000), np.zeros(N)]).astype(np.int16)
+    data[0, 1] = 5
+    scipy.io.wavfile.write(tmp_path / "r.wav", int(FS), data)
+    m = read_measurement(tmp_path / "r.wav", channels=["ch1=acc"])
+    assert m.sample_rate_hz == FS and list(m.channels) == ["acc"]
+    np.testing.assert_allclose(m.channels["acc"], np.round(signals["a2"] * 16000) / 32768)
+
+
+def test_tdms_with_wf_increment(tmp_path, signals):
+    from nptdms import ChannelObject, TdmsWriter
+    with TdmsWriter(tmp_path / "r.tdms") as w:
+        w.write_segment([ChannelObject("vib", name, values, properties={"wf_increment": 1 / FS})
+                         for name, values in signals.items()])
+    m = read_measurement(tmp_path / "r.tdms")
+    _check(m, signals)
+    assert m.metadata["sample_rate_source"] == "the TDMS wf_increment"
+
+
+def test_channels_are_mapped_and_units_converted(tmp_path, signals):
+    path = tmp_path / "r.csv"
+    pd.DataFrame(signals).to_csv(path, index=False)
+    m = read_measurement(path, FS, channels=["a2=acc", "a1"], units=["acc=g", "a1=mm/s**2"])
+    assert list(m.channels) == ["acc", "a1"]
+    np.testing.assert_allclose(m.channels["acc"], 9.80665 * signals["a2"])
+    np.testing.assert_allclose(m.channels["a1"], 1e-3 * signals["a1"])
+    assert m.metadata["channel_map"] == {"acc": "a2", "a1": "a1"}
+    with pytest.raises(UsageError, match="unknown unit"):
+        read_measurement(path, FS, units=["bananas"])
+    with pytest.raises(UsageError, match="not an acceleration"):
+        read_measurement(path, FS, units=["V"])
+
+
+@pytest.mark.parametrize("text,kwargs,message", [
+    ("acc,acc\n1,2\n3,4\n", {"sample_rate_hz": FS}, "duplicate column name.*acc"),
+    ("acc,b\n1,2\n1,5\n1,4\n", {"sample_rate_hz": FS}, "channel 'acc' is constant.*dead"),
+    ("acc,b\n1,2\n,5\n1,4\n", {"sample_rate_hz": FS}, "'acc' has 1 missing.*row 2"),
+    ("time_s,acc\n0,1\n", {}, "one row only"),
+    ("acc\n1\n2\n", {}, "give --sample-rate"),
+    ("acc\n1\n2\n", {"channels": ["acc=acc", "acc=disp"]}, None),
+])
+def test_bad_files_get_one_clear_line(tmp_path, text, kwargs, message):
+    path = tmp_path / "r.csv"
+    path.write_text(text)
+    if message is None:  # two outputs from one column are fine; one output twice is not
+        m = read_measurement(path, FS, **kwargs)
+        assert list(m.channels) == ["acc", "disp"]
+        with pytest.raises(UsageError, match="same output"):
+            read_measurement(path, FS, channels=["acc", "acc"])
+        return
+    with pytest.raises(MeasurementError, match=message) as err:
+        read_measurement(path, **kwargs)
+    assert "\n" not in str(err.value) and str(path) in str(err.value)
+
+
+def test_unknown_format_and_not_a_file(tmp_path):
+    with pytest.raises(MeasurementError, match="unknown measurement format"):
+        read_measurement(tmp_path / "r.xlsx")
+    (tmp_path / "d.csv").mkdir()
+    with pytest.raises(MeasurementError, match="not a regular file"):
+        read_measurement(tmp_path / "d.csv")
