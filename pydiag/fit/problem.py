@@ -1,10 +1,19 @@
 """The fit problem: built once from (FMU, adapter, measurement), then fitted, compared,
 extended with an effect.
 
-:func:`build_problem` opens the FMU once to check the adapter against it and to resolve
-the kinematics, chooses the featurizer, checks the sample rate and the record length,
-and computes the measured features. The result is plain, picklable data: worker
-processes get it whole and open their own plant (:class:`ProblemObjective`).
+:func:`build_problem` opens the FMU to check the adapter against it and to resolve the
+kinematics; for a real record it finds the speed and order-tracks the record
+(:mod:`pydiag.gear.speed`) and puts the model at that speed; it chooses the featurizer,
+checks the sample rate and the record length, and computes the measured features from the
+whole record. The result is plain, picklable data: worker processes get it whole and open
+their own plant (:class:`ProblemObjective`).
+
+Channel gains: a real accelerometer sits on a housing, behind a transfer path and in
+units of its own, so the model's level is not the measurement's. With ``fit_gain`` each
+channel's model features are scaled by the gain that fits them best in least squares,
+in closed form (it enters linearly): ``g = sum(S R~) / sum(S^2)`` with the noise taken out
+of the measured amplitudes, ``R~ = sqrt(max(R^2 - P, 0))``. The fault parameters then
+match the shape of the spectrum, never its overall level.
 """
 
 from __future__ import annotations
@@ -21,7 +30,9 @@ from pydiag.fit.objective import spectral_residuals
 from pydiag.fmu.plant import FmuPlant, PlantSpec
 from pydiag.gear.features import KinematicFeaturizer
 from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed, order_track
 from pydiag.model.adapter import Adapter, check_against_fmu, gear_default
+from pydiag.model.simulate import SIMULATED_SOURCE
 from pydiag.signal.features import Features, Featurizer, SpectrumFeaturizer
 
 #: Co-Simulation: communication steps per period of the highest analysed frequency,
@@ -45,6 +56,8 @@ class FitProblem:
         measurement: the measurement itself
         adapter: what the FMU is (the GearDiag defaults when none was given)
         fixed_values: FMU values set on every run on top of the adapter's start values
+        fit_gain: scale each channel's model by its least-squares gain (module docstring)
+        speed: the speed found in the record and how (None: the record was taken as it is)
     """
 
     spec: PlantSpec
@@ -58,6 +71,8 @@ class FitProblem:
     measurement: Measurement
     adapter: Adapter
     fixed_values: dict[str, float] = field(default_factory=dict)
+    fit_gain: bool = False
+    speed: SpeedEstimate | None = None
 
     @property
     def lows(self) -> np.ndarray:
@@ -71,21 +86,69 @@ class FitProblem:
         """FMU variable -> value for estimates by parameter name."""
         return fmu_values(self.parameters, estimates)
 
-    def model_signals(self, plant: FmuPlant, x: np.ndarray, duration_s: float | None = None) -> np.ndarray:
-        """Channel signals (channel units) of the model at parameter vector ``x``."""
+    @property
+    def n_periods(self) -> int | None:
+        """Whole fundamental periods of the record the measured features come from."""
+        if self.kinematics is None:
+            return None
+        return int(np.floor(self.measurement.duration_s / self.kinematics.period_s + 1e-9))
+
+    def record_facts(self) -> dict:
+        """What was analysed: speed (when found), periods and seconds of the record."""
+        facts = dict(self.speed.to_dict()) if self.speed is not None else {}
+        n = self.n_periods
+        facts["n_periods"] = n
+        facts["duration_s"] = (n * self.kinematics.period_s if n is not None
+                               else self.featurizer.duration_s)
+        return facts
+
+    def facts(self, estimates: dict[str, float]) -> dict:
+        """:meth:`record_facts` and, with ``fit_gain``, the channel gains at ``estimates``
+        (by parameter name; one simulation)."""
+        facts = self.record_facts()
+        if self.fit_gain:
+            with self.spec.open() as plant:
+                facts["gains"] = self.gains(plant, np.array([estimates[p.name]
+                                                              for p in self.parameters]))
+        return facts
+
+    def _simulate(self, plant: FmuPlant, x: np.ndarray, duration_s: float) -> np.ndarray:
         values = {p.fmu_variable: p.fmu_value(v) for p, v in zip(self.parameters, x)}
-        y = plant.simulate(values, self.featurizer.duration_s if duration_s is None else duration_s,
-                           self.warmup_s)
-        return np.asarray(self.scales)[:, None] * y
+        return np.asarray(self.scales)[:, None] * plant.simulate(values, duration_s, self.warmup_s)
+
+    def _gain(self, model: np.ndarray, channel: str) -> float:
+        if not self.fit_gain:
+            return 1.0
+        ref = self.reference[channel]
+        clean = np.sqrt(np.maximum(ref.amplitude ** 2 - ref.noise_power, 0.0))
+        power = float(np.dot(model, model))
+        return max(float(np.dot(model, clean)) / power, 0.0) if power > 0 else 1.0
+
+    def gains(self, plant: FmuPlant, x: np.ndarray) -> dict[str, float]:
+        """Channel -> the model's gain at ``x`` (1.0 everywhere without ``fit_gain``)."""
+        y = self._simulate(plant, x, self.featurizer.duration_s)
+        return {c: self._gain(self.featurizer(y[i], self.spec.sample_rate_hz).amplitude, c)
+                for i, c in enumerate(self.channels)}
+
+    def model_signals(self, plant: FmuPlant, x: np.ndarray, duration_s: float | None = None) -> np.ndarray:
+        """Channel signals (channel units, gains applied) of the model at ``x``."""
+        duration_s = self.featurizer.duration_s if duration_s is None else duration_s
+        y = self._simulate(plant, x, max(duration_s, self.featurizer.duration_s))
+        if self.fit_gain:
+            fs = self.spec.sample_rate_hz
+            y = np.array([self._gain(self.featurizer(y[i], fs).amplitude, c) * y[i]
+                          for i, c in enumerate(self.channels)])
+        return y[:, :int(round(duration_s * self.spec.sample_rate_hz))]
 
     def residuals(self, plant: FmuPlant, x: np.ndarray) -> np.ndarray:
         """Eq. (12) residuals of every channel at ``x``, concatenated; PlantError on failure."""
-        y = self.model_signals(plant, x)
+        y = self._simulate(plant, x, self.featurizer.duration_s)
         out = []
         for i, c in enumerate(self.channels):
-            model = self.featurizer(y[i], self.spec.sample_rate_hz)
+            model = self.featurizer(y[i], self.spec.sample_rate_hz).amplitude
             ref = self.reference[c]
-            out.append(spectral_residuals(model.amplitude, ref.amplitude, ref.noise_power))
+            out.append(spectral_residuals(self._gain(model, c) * model, ref.amplitude,
+                                          ref.noise_power))
         return np.concatenate(out)
 
     def derive(self, fmu_path: str | None = None, parameters: tuple[Parameter, ...] | None = None,
@@ -99,7 +162,7 @@ class FitProblem:
             fixed_values={**self.fixed_values, **(fixed_values or {})},
             kinematics=self.kinematics, featurizer=featurizer or self.featurizer,
             warmup_s=self.warmup_s, relative_tolerance=self.spec.relative_tolerance,
-            engine=self.spec.engine)
+            engine=self.spec.engine, fit_gain=self.fit_gain, speed_estimate=self.speed)
 
 
 class ProblemObjective:
@@ -138,13 +201,42 @@ class ProblemObjective:
         self.close()
 
 
+def _check_rate(measurement: Measurement, featurizer: Featurizer, what: str,
+                top: float | None = None) -> None:
+    top = featurizer.max_freq_hz if top is None else top
+    if measurement.sample_rate_hz < 2 * top:
+        raise EstimationError(
+            f"sample rate {measurement.sample_rate_hz:g} Hz is below twice {what} "
+            f"({top:g} Hz): need at least {2 * top:g} Hz")
+
+
+def _nominal_kinematics(measurement: Measurement, fmu_kin: GearKinematics | None,
+                        given: GearKinematics | None) -> tuple[GearKinematics | None, str]:
+    """The operating point to start from, and where it comes from: the one given (command
+    line), else the record's own metadata (a record made by ``pydiag simulate``), else the
+    FMU's."""
+    if given is not None:
+        return given, "given"
+    meta = measurement.metadata.get("kinematics")
+    if isinstance(meta, dict) and fmu_kin is not None:
+        try:
+            return GearKinematics(int(meta["Np"]), int(meta["Ng"]), float(meta["f_pinion"])), \
+                "record metadata"
+        except (KeyError, TypeError, ValueError):
+            pass  # not ours: the FMU's operating point
+    return fmu_kin, "FMU"
+
+
 def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | None = None, *,
                   parameters: tuple[Parameter, ...] | None = None,
                   fixed_values: dict[str, float] | None = None,
                   kinematics: GearKinematics | None = None,
+                  operating_point: dict[str, float] | None = None,
                   featurizer: Featurizer | None = None, feature_mode: str = "lines",
                   warmup_s: float | None = None, relative_tolerance: float | None = None,
-                  engine: str | None = None) -> FitProblem:
+                  engine: str | None = None, fit_gain: bool | None = False,
+                  speed: SpeedSettings | None = None,
+                  speed_estimate: SpeedEstimate | None = None) -> FitProblem:
     """The fit problem of ``measurement`` on ``fmu_path``.
 
     Args:
@@ -152,33 +244,75 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
             channels named as outputs, kinematics from Np, Ng, f_pinion)
         parameters: override the adapter's fault parameters and bounds
         fixed_values: FMU values set in every run, on top of the adapter's start values
-        kinematics: override the adapter's gear kinematics
+        kinematics: the nominal operating point (teeth, pinion speed), set in the model
+            where the adapter maps it to parameters; default: the record's metadata (a
+            record made by ``pydiag simulate``), else the FMU's
+        operating_point: some of ``n_pinion``, ``n_gear``, ``f_pinion_hz`` (nominal) over
+            that default (the command line's --teeth and --rpm)
         featurizer: override the features (see :class:`pydiag.signal.features.Featurizer`)
         feature_mode: "lines" or "paper" (gear models, :mod:`pydiag.gear.features`)
         warmup_s, relative_tolerance, engine: override the adapter's simulation settings
+        fit_gain: fit a gain per channel in closed form (see the module docstring); None:
+            fit it unless the record was made by ``pydiag simulate`` from a model (whose
+            level is the model's by construction)
+        speed: find the speed in the record and order-track it (gear models); None takes
+            the record at the nominal speed as it is
+        speed_estimate: a speed already found for this (already tracked) measurement
     """
+    if fit_gain is None:
+        fit_gain = measurement.metadata.get("source") != SIMULATED_SOURCE
     given = adapter
     adapter = adapter or gear_default(list(measurement.channels))
-    maps = tuple(s for s in adapter.sensors if s.channel in measurement.channels)
+    tacho = speed.tacho if speed is not None else None
+    maps = tuple(s for s in adapter.sensors if s.channel in measurement.channels
+                 and s.channel != tacho)
     missing = [s.channel for s in adapter.sensors if s.channel not in measurement.channels]
     if given is not None and missing:
         raise EstimationError(f"the measurement lacks channel(s) {', '.join(missing)} that "
                               f"the adapter names; it has: {', '.join(measurement.channels)}")
+    if not maps:
+        raise EstimationError(f"no measurement channel to compare: it has "
+                              f"{', '.join(measurement.channels)}")
     parameters = tuple(parameters) if parameters else adapter.fault_parameters
     fixed = dict(fixed_values or {})
-    spec = adapter.plant_spec(fmu_path, measurement.sample_rate_hz, maps, fixed,
-                              relative_tolerance, engine)
     try:
-        with spec.open() as plant:
+        with adapter.plant_spec(fmu_path, measurement.sample_rate_hz, maps, fixed,
+                                relative_tolerance, engine).open() as plant:
             check_against_fmu(adapter, plant.variables)
             for p in parameters:
                 if p.fmu_variable not in plant.variables:
                     raise EstimationError(f"fault parameter '{p.fmu_variable}' is not in "
                                           f"{plant.fmu_path.name}")
-            kin = kinematics or adapter.resolve_kinematics({**plant.parameters(),
-                                                            **spec.fixed_values})
+            fmu_kin = adapter.resolve_kinematics({**plant.parameters(), **plant.fixed_values})
     except (PlantError, AdapterError) as err:
         raise EstimationError(str(err)) from err
+    kin, _ = _nominal_kinematics(measurement, fmu_kin, kinematics)
+    if operating_point:
+        if kin is None:
+            raise EstimationError("--rpm and --teeth need a gear model: this FMU has no Np, Ng, "
+                                  "f_pinion and the adapter no [kinematics]")
+        op = {k: (int(v) if k != "f_pinion_hz" else float(v)) for k, v in operating_point.items()}
+        kin = dataclasses.replace(kin, **op)
+    if kin is not None and speed is not None and speed_estimate is None:
+        _check_rate(measurement, featurizer or KinematicFeaturizer(kin, feature_mode),
+                    "the highest band edge")  # before searching lines the record cannot hold
+        settings = speed if speed.channel else dataclasses.replace(speed, channel=maps[0].channel)
+        speed_estimate = estimate_speed(measurement, kin, settings)
+        measurement = order_track(measurement, speed_estimate, drop=(tacho,) if tacho else ())
+        kin = dataclasses.replace(kin, f_pinion_hz=speed_estimate.speed_hz)
+    if kin is not None:
+        fixed = {**adapter.kinematic_values(kin), **fixed}
+        speed_fixed = adapter.kinematics["f_pinion_hz"].parameter is None
+        if speed_fixed and fmu_kin is not None and fmu_kin != kin:
+            # the model's operating point is fixed: analyse the record at it (an
+            # order-tracked record is the same per revolution at any speed)
+            if measurement.metadata.get("order_tracking"):
+                measurement = dataclasses.replace(
+                    measurement, sample_rate_hz=measurement.sample_rate_hz
+                    * fmu_kin.f_pinion_hz / kin.f_pinion_hz)
+            kin = fmu_kin
+    spec = adapter.plant_spec(fmu_path, measurement.sample_rate_hz, maps, fixed,
+                              relative_tolerance, engine)
     if featurizer is not None:
         top, what = featurizer.max_freq_hz, "the highest analysed frequency"
     elif kin is not None:
@@ -187,11 +321,8 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     else:
         featurizer = SpectrumFeaturizer(adapter.window_s, adapter.max_freq_hz)
         top, what = adapter.max_freq_hz, "the adapter's max_freq_hz"
-    if measurement.sample_rate_hz < 2 * top:
-        raise EstimationError(
-            f"sample rate {measurement.sample_rate_hz:g} Hz is below twice {what} "
-            f"({top:g} Hz): need at least {2 * top:g} Hz")
-    if measurement.duration_s < featurizer.duration_s:
+    _check_rate(measurement, featurizer, what, top)
+    if measurement.duration_s < featurizer.duration_s * (1 - 1e-9):
         raise EstimationError(f"measurement of {measurement.duration_s:.4g} s is shorter than "
                               f"{featurizer.describe_duration()}")
     spec = dataclasses.replace(spec, cs_step_s=adapter.cs_step_s or 1.0 / (CS_STEPS_PER_PERIOD * top))
@@ -200,4 +331,4 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     return FitProblem(spec, tuple(s.channel for s in maps), tuple(s.scale for s in maps),
                       parameters, reference, featurizer,
                       adapter.warmup_s if warmup_s is None else warmup_s, kin, measurement,
-                      adapter, fixed)
+                      adapter, fixed, fit_gain, speed_estimate)

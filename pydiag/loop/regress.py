@@ -102,7 +102,7 @@ def bless(plant: FmuPlant, golden_path: str | Path, warmup_s: float = DEFAULT_WA
     start values are recorded so that the check sets them too.
     """
     if adapter is not None:
-        kin = adapter.resolve_kinematics(plant.parameters())
+        kin = adapter.resolve_kinematics({**plant.parameters(), **plant.fixed_values})
         warmup_s = adapter.warmup_s
         if kin is None:
             window_s, max_freq_hz = adapter.window_s, adapter.max_freq_hz

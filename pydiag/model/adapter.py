@@ -91,9 +91,11 @@ class Adapter:
     cs_step_s: float | None = None
 
     def resolve_kinematics(self, parameters: dict[str, float]) -> GearKinematics | None:
+        """The kinematics at FMU ``parameters`` (the values a run sets: they win over the
+        adapter's start values); None for a model without [kinematics]."""
         if self.kinematics is None:
             return None
-        values = {**parameters, **self.start_values}
+        values = {**self.start_values, **parameters}
         try:
             return GearKinematics(
                 int(round(self.kinematics["n_pinion"].resolve(values, "n_pinion"))),
@@ -101,6 +103,17 @@ class Adapter:
                 self.kinematics["f_pinion_hz"].resolve(values, "f_pinion_hz"))
         except UsageError as err:
             raise AdapterError(f"{self.source}: [kinematics] {err}") from err
+
+    def kinematic_values(self, kinematics: GearKinematics) -> dict[str, float]:
+        """FMU parameter values that put the model at ``kinematics``: one per kinematic
+        quantity the adapter reads from a parameter (value / scale); a quantity given as a
+        number is the model's fixed and cannot be set."""
+        if self.kinematics is None:
+            return {}
+        wanted = {"n_pinion": kinematics.n_pinion, "n_gear": kinematics.n_gear,
+                  "f_pinion_hz": kinematics.f_pinion_hz}
+        return {q.parameter: float(wanted[name]) / q.scale
+                for name, q in self.kinematics.items() if q.parameter is not None}
 
     def channel_names(self) -> list[str]:
         return [s.channel for s in self.sensors]

@@ -12,6 +12,8 @@ from pydiag.gear.conventions import default_sensors, kinematics_from, kinematics
 from pydiag.model.adapter import Adapter, check_against_fmu
 from pydiag.signal.noise import add_white_noise
 
+#: ``metadata["source"]`` of a record made here.
+SIMULATED_SOURCE = "pydiag simulate"
 #: Default record length of a gear model, in fundamental periods.
 DEFAULT_PERIODS = 10
 
@@ -68,7 +70,7 @@ def simulate_measurement(fmu: str, values: dict[str, float], duration_s: float |
         if not duration_s > 0:
             raise UsageError(f"--duration must be positive, got {duration_s}")
         y = plant.simulate(values, duration_s, warmup_s)
-        meta = {"source": "pydiag simulate", "fmu": plant.fmu_path.name, "set": values,
+        meta = {"source": SIMULATED_SOURCE, "fmu": plant.fmu_path.name, "set": values,
                 "snr": snr, "seed": seed, "warmup_s": warmup_s}
         if kin:
             meta["kinematics"] = kinematics_to_dict(kin)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pydiag.core.errors import MeasurementError
+from pydiag.signal.angle import resample_at
 
 WINDOWS = ("boxcar", "hann")
 
@@ -78,8 +79,9 @@ class SyncSpectrum:
 
 
 def whole_periods(n_samples: int, sample_rate_hz: float, period_s: float) -> tuple[int, int]:
-    """(periods, samples) of the longest prefix that holds a whole number of periods."""
-    n_periods = int(np.floor(n_samples / (sample_rate_hz * period_s) + 1e-9))
+    """(periods, samples) of the longest prefix that holds a whole number of periods, to
+    within half a sample (a period of 0.06 s is a 0.06 s record, however it rounds)."""
+    n_periods = int(np.floor((n_samples + 0.5) / (sample_rate_hz * period_s)))
     return n_periods, int(round(n_periods * period_s * sample_rate_hz))
 
 
@@ -87,10 +89,11 @@ def sync_spectrum(signal: np.ndarray, sample_rate_hz: float, period_s: float,
                   max_freq_hz: float | None = None) -> SyncSpectrum:
     """Amplitude spectrum of ``signal`` at the harmonics of ``1/period_s``.
 
-    The record is cut to its longest whole number of periods. If a period is not a
-    whole number of samples, the cut is rounded to the nearest sample and the lines
-    fall within a small fraction of a bin of the DFT grid; amplitudes are then
-    evaluated at the exact line frequencies by a direct DFT.
+    The record is cut to its longest whole number of periods. If a period is not a whole
+    number of samples (a real record at its measured speed), those periods are first
+    resampled onto ceil(period x rate) samples each (band-limited,
+    :func:`pydiag.signal.angle.resample_at`), so the lines fall on DFT bins again; cost
+    O(n), whatever the record's length.
     """
     signal = np.asarray(signal, dtype=float)
     n_periods, n = whole_periods(signal.size, sample_rate_hz, period_s)
@@ -101,13 +104,14 @@ def sync_spectrum(signal: np.ndarray, sample_rate_hz: float, period_s: float,
     top = nyquist if max_freq_hz is None else min(max_freq_hz, nyquist)
     n_lines = int(np.floor(top * period_s + 1e-9)) + 1
     freqs = np.arange(n_lines) / period_s
-    _, bins = amplitude_spectrum(signal[:n], sample_rate_hz)
-    if abs(n_periods * period_s * sample_rate_hz - n) < 1e-6:
-        amplitude = bins[np.arange(n_lines) * n_periods]
+    per_period = period_s * sample_rate_hz
+    if abs(n_periods * per_period - n) < 1e-6:
+        x = signal[:n]
     else:
-        x = signal[:n] - np.mean(signal[:n])
-        t = np.arange(n) / sample_rate_hz
-        amplitude = 2.0 * np.abs(np.exp(-2j * np.pi * np.outer(freqs, t)) @ x) / n
+        samples = int(np.ceil(per_period))
+        x = resample_at(signal, np.arange(n_periods * samples) * (per_period / samples))
+    _, bins = amplitude_spectrum(x, sample_rate_hz)
+    amplitude = bins[np.arange(n_lines) * n_periods]
     amplitude[0] = 0.0  # mean removed
     k = np.arange(1, bins.size - 1)
     # one period: no bin between lines, the floor is unknown (0)

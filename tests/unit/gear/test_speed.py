@@ -1,0 +1,108 @@
+"""Speed from a record with a known drift (mesh lines, and a tacho), and order tracking.
+
+The records are written here from the phase of a drifting shaft (not by our model): mesh
+harmonics, a once-per-turn modulation, white noise, and a tacho pulse train.
+"""
+
+import numpy as np
+import pytest
+
+from pydiag.core.errors import MeasurementError
+from pydiag.core.measurement import Measurement
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.speed import SpeedSettings, estimate_speed, order_track
+from pydiag.signal.angle import angular_resample
+from pydiag.signal.spectra import sync_spectrum
+
+FS, DURATION = 20_000.0, 8.0
+NP, NG = 19, 47
+START_HZ, DRIFT = 24.7, 0.01  # the speed ramps from 24.7 Hz up by 1 % over the record
+
+
+def drifting_record(noise=0.5, seed=1, ppr=1):
+    n = int(FS * DURATION)
+    t = np.arange(n) / FS
+    speed = START_HZ * (1 + DRIFT * t / DURATION)
+    revs = np.cumsum(speed) / FS
+    rng = np.random.default_rng(seed)
+    mesh = sum(np.cos(2 * np.pi * h * NP * revs + h) / h for h in range(1, 4))
+    acc = mesh * (1 + 0.3 * np.cos(2 * np.pi * revs)) + noise * rng.standard_normal(n)
+    tacho = (np.mod(revs * ppr, 1.0) < 0.2).astype(float)
+    mean_hz = (revs[-1] - revs[0]) / (t[-1] - t[0])
+    return Measurement({"acc": acc, "tacho": tacho}, FS), mean_hz
+
+
+def mesh_amplitude(m: Measurement, speed_hz: float) -> float:
+    kin = GearKinematics(NP, NG, speed_hz)
+    spec = sync_spectrum(m.channels["acc"], m.sample_rate_hz, kin.period_s)
+    return float(spec.amplitude[np.argmin(np.abs(spec.freq_hz - kin.f_mesh_hz))])
+
+
+@pytest.mark.parametrize("settings", [SpeedSettings("mesh"), SpeedSettings("auto", tacho="tacho"),
+                                      SpeedSettings("tacho", tacho="tacho", pulses_per_rev=3)])
+def test_drifting_speed_is_found_far_below_a_bin_and_tracking_restores_the_mesh_line(settings):
+    m, mean_hz = drifting_record(ppr=settings.pulses_per_rev)
+    nominal = GearKinematics(NP, NG, 25.0)  # 1.2 % above the truth's mean
+    found = estimate_speed(m, nominal, settings)
+    bin_hz = 1 / DURATION / NP  # one FFT bin at the mesh, in pinion speed
+    assert abs(found.speed_hz - mean_hz) < 0.01 * bin_hz, (found.speed_hz, mean_hz)
+    assert found.method == ("tacho" if settings.tacho else "mesh harmonic 1")
+    assert 0.5 < found.variation_pct < 1.1  # a 1 % ramp, seen over blocks of 10 turns
+    tracked = order_track(m, found, drop=("tacho",))
+    assert list(tracked.channels) == ["acc"]
+    samples_per_rev = tracked.metadata["order_tracking"]["samples_per_rev"]
+    assert tracked.sample_rate_hz == pytest.approx(samples_per_rev * found.speed_hz)
+    assert tracked.sample_rate_hz >= FS
+    # the mesh line (amplitude 1) is whole after tracking, smeared by the drift before
+    assert abs(mesh_amplitude(tracked, found.speed_hz) - 1.0) < 0.01
+    assert mesh_amplitude(m, found.speed_hz) < 0.5
+
+
+def test_nominal_method_keeps_the_record():
+    m, _ = drifting_record()
+    found = estimate_speed(m, GearKinematics(NP, NG, 25.0), SpeedSettings("nominal"))
+    assert (found.speed_hz, found.variation_pct, found.method) == (25.0, 0.0, "nominal")
+    kept = order_track(m, found, drop=("tacho",))
+    assert kept.sample_rate_hz == FS and kept.channels["acc"] is m.channels["acc"]
+
+
+def test_a_record_without_mesh_lines_is_refused():
+    rng = np.random.default_rng(0)
+    m = Measurement({"acc": rng.standard_normal(int(FS * 4))}, FS)
+    with pytest.raises(MeasurementError, match="no mesh line stands out.*--tacho"):
+        estimate_speed(m, GearKinematics(NP, NG, 25.0), SpeedSettings("mesh"))
+
+
+def test_a_sideband_comb_is_not_taken_for_the_mesh():
+    """A strong faulty-tooth modulation puts lines at h f_mesh - h f_pinion; a search wider
+    than half a pinion order at the mesh finds that comb at a lower speed (it did)."""
+    n = int(FS * 4)
+    revs = np.arange(n) / FS * 25.0
+    tooth = np.exp(-0.5 * ((np.mod(revs, 1.0) - 0.5) / 0.02) ** 2)  # one tooth per turn
+    acc = sum(np.cos(2 * np.pi * h * NP * revs) for h in range(1, 4)) * (0.2 + 3 * tooth)
+    found = estimate_speed(Measurement({"acc": acc}, FS), GearKinematics(NP, NG, 25.5),
+                           SpeedSettings("mesh"))
+    assert found.speed_hz == pytest.approx(25.0, rel=1e-6)
+
+
+def test_tacho_with_missing_pulses_is_refused():
+    m, _ = drifting_record()
+    pulses = m.channels["tacho"].copy()
+    starts = np.flatnonzero(np.diff(pulses) > 0)
+    pulses[starts[10]:starts[10] + 200] = 0.0  # one pulse lost
+    m.channels["tacho"] = pulses
+    with pytest.raises(MeasurementError, match="misses pulses"):
+        estimate_speed(m, GearKinematics(NP, NG, 25.0), SpeedSettings("tacho", tacho="tacho"))
+
+
+@pytest.mark.parametrize("cycles_per_sample", [0.05, 0.2, 0.4])
+def test_angular_resampling_keeps_tone_amplitudes(cycles_per_sample):
+    """The resampler's claim (signal/angle.py): < 0.1 % amplitude error up to 0.4 fs."""
+    n = 40_000
+    revs = np.arange(n) / 97.3 + 1e-3 * np.sin(np.arange(n) / 5000)  # 97.3 samples a turn, wobbling
+    order = round(cycles_per_sample * 97.3)  # a whole order: one bin of 300 turns
+    x = np.cos(2 * np.pi * order * revs)  # a tone locked to the angle
+    (y,) = angular_resample([x], revs, 98, 1.0, 300)
+    k = np.arange(y.size)
+    amp = 2 * abs(np.sum(y * np.exp(-2j * np.pi * order * k / 98))) / y.size
+    assert abs(amp - 1.0) < 1e-3
