@@ -35,6 +35,7 @@ from pydiag.gear.conventions import kinematics_from  # noqa: E402
 from pydiag.core.measurement import Measurement  # noqa: E402
 from pydiag.signal.noise import add_white_noise  # noqa: E402
 from pydiag.gear.paper_cases import TABLE1, case  # noqa: E402
+from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.fmu.plant import FmuPlant  # noqa: E402
 
 NAMES = ("a_f", "f_f", "f_ate", "f_dte")
@@ -53,6 +54,9 @@ def main() -> int:
     ap.add_argument("--iterations", type=int, default=20)
     ap.add_argument("--polish", type=int, default=150)
     ap.add_argument("--starts", type=int, default=3)
+    ap.add_argument("--fit-gain", action="store_true", help="fit a gain per channel")
+    ap.add_argument("--speed", choices=("mesh", "nominal"), help="find the speed in the record "
+                    "and order-track it (default: take the record as it is)")
     ap.add_argument("--markdown", help="also write the table as Markdown here")
     ap.add_argument("--json", help="also write every run's full-precision estimates here")
     args = ap.parse_args()
@@ -75,7 +79,9 @@ def main() -> int:
                                      seed=seed, polish_evaluations=args.polish,
                                      polish_starts=args.starts)
                 t0 = time.perf_counter()
-                problem = build_problem(args.fmu, m, feature_mode=args.features)
+                problem = build_problem(args.fmu, m, feature_mode=args.features,
+                                        fit_gain=args.fit_gain,
+                                        speed=SpeedSettings(args.speed) if args.speed else None)
                 r = est.fit(problem)
                 wall = time.perf_counter() - t0
                 with ProblemObjective(problem) as objective:

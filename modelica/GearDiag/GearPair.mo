@@ -6,7 +6,7 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   //   e(t)  = e_ate + e_dte + e_extra
   //   e_ate = f_ate*xi_max*sin(w_pinion*t)          assembly TE, Eq. (4)
   //   e_dte = f_dte*gamma_max*sin(w_fe*t)            geometric TE, Eq. (5), w_fe = w_mesh/N_ap
-  // k_mod, e_extra, F_extra and contact are hooks with neutral declaration equations;
+  // k_mod, e_extra, F_extra, contact and acc_sensor are hooks with neutral declaration equations;
   // a model in Effects/ overrides one of them with a modifier on `extends GearPair(...)`.
 
   // ---- fault parameters (normalised, estimated by pydiag) ----
@@ -42,6 +42,7 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   Real e_extra(unit="m") = 0 "Extra transmission error (effects)";
   Real F_extra(unit="N") = 0 "Extra force on the line of action (effects)";
   Real contact = 1 "Contact factor, 1 while the teeth touch (effects)";
+  Real acc_sensor(unit="m/s2") = der(v) "What the acc sensor sees: the mesh acceleration (effects: a transfer path)";
 
   // ---- states and internal variables ----
   // Nominals set the solvers' absolute tolerance (fmpy's CVode: atol = rtol*nominal).
@@ -70,6 +71,6 @@ equation
   mesh_force = contact*stiffness*(x - e_ate - e_dte - e_extra) + c*v;
   der(x) = v;
   m*der(v) + mesh_force = T/r_p + F_extra;
-  acc = der(v);
+  acc = acc_sensor;
   disp = x;
 end GearPair;

@@ -19,7 +19,7 @@ from typing import Callable, Iterable
 from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
-from pydiag.io.measurements import read_measurement
+from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
 from pydiag.model.adapter import load_adapter
 
@@ -34,16 +34,21 @@ class BatchTask:
     measurement: str
     fmu: str
     estimator: dict = field(default_factory=dict)  # FaultEstimator settings
-    columns: tuple[str, ...] | None = None
+    channels: tuple[str, ...] | None = None  # NAME or NAME=OUTPUT specs
     sample_rate_hz: float | None = None
     adapter: str | None = None  # path of an adapter TOML
     problem: dict = field(default_factory=dict)  # build_problem settings (feature_mode, ...)
+    units: tuple[str, ...] | None = None  # UNIT or NAME=UNIT specs
 
 
 def find_measurements(spec: str) -> list[str]:
-    """A folder (its *.csv), a glob pattern, or one file; sorted, at least one."""
+    """A folder (its files of a format pydiag reads), a glob pattern, or one file; sorted,
+    at least one."""
     path = Path(spec)
-    paths = sorted(str(p) for p in path.glob("*.csv")) if path.is_dir() else sorted(glob.glob(spec))
+    if path.is_dir():
+        paths = sorted(str(p) for p in path.iterdir() if p.is_file() and is_measurement_file(p))
+    else:
+        paths = sorted(glob.glob(spec))
     if not paths:
         raise MeasurementError(f"no measurement files match {spec}")
     return paths
@@ -55,13 +60,15 @@ def diagnose_task(task: BatchTask) -> dict:
     row: dict = {"measurement": task.measurement}
     try:
         m = read_measurement(task.measurement, task.sample_rate_hz,
-                             list(task.columns) if task.columns else None)
+                             list(task.channels) if task.channels else None,
+                             list(task.units) if task.units else None)
         adapter = load_adapter(task.adapter) if task.adapter else None
         problem = build_problem(task.fmu, m, adapter, **task.problem)
         result = FaultEstimator(n_workers=1, **task.estimator).fit(problem)
+        facts = {k: v for k, v in problem.record_facts().items() if k != "nominal_speed_hz"}
         row.update(status="ok", message="", fault_mode=result.fault_mode,
                    severity=result.severity, error=result.error,
-                   evaluations=result.evaluations, **result.parameters)
+                   evaluations=result.evaluations, **result.parameters, **facts)
     except PydiagError as err:
         row.update(status="error", message=str(err))
     except Exception as err:  # a broken FMU must not take the batch down

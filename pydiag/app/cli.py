@@ -22,9 +22,8 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.gear.paper_cases import TABLE1
+from pydiag.gear.speed import SPEED_METHODS
 from pydiag.loop.regress import DEFAULT_RTOL
-
-DEFAULT_HISTORY = "pydiag_history.sqlite"
 
 
 # ---------------------------------------------------------------------- argument types
@@ -76,6 +75,18 @@ def bearing(text: str) -> Bearing:
     return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, math.radians(angle))
 
 
+def teeth(text: str) -> tuple[int, int]:
+    parts = text.split(",")
+    try:
+        values = [int(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != 2 or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"takes NP,NG (pinion and gear teeth, positive "
+                                         f"integers), got '{text}'")
+    return values[0], values[1]
+
+
 def effect_list(text: str) -> list[str]:
     keys = [k.strip() for k in text.split(",") if k.strip()]
     unknown = [k for k in keys if k not in EFFECTS]
@@ -110,11 +121,34 @@ def _optimiser_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def _measurement_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--measurement", required=True, help="CSV with time_s and sensor columns")
-    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
-    p.add_argument("--sample-rate", type=positive, help="Hz, if the CSV has no time_s")
+def _record_args(p: argparse.ArgumentParser) -> None:
+    """How to read a record and find its operating point (diagnose, compare, discover, batch)."""
+    p.add_argument("--channel", "--column", dest="channel", action="append",
+                   metavar="NAME[=OUTPUT]", help="channel to use, mapped to a model output "
+                   "(repeat; e.g. a1=acc; default: every column)")
+    p.add_argument("--unit", action="append", metavar="[NAME=]UNIT",
+                   help="unit of the channels (or of one), converted to SI: g, m/s2, mm/s, um")
+    p.add_argument("--sample-rate", type=positive, help="Hz, if the file has no time column "
+                   "or rate")
     p.add_argument("--adapter", help="adapter TOML describing the FMU")
+    p.add_argument("--rpm", type=positive, help="nominal pinion speed, rev/min (sets f_pinion)")
+    p.add_argument("--teeth", type=teeth, metavar="NP,NG", help="pinion and gear teeth "
+                   "(set Np, Ng)")
+    p.add_argument("--speed", choices=SPEED_METHODS, default="auto",
+                   help="how to find the speed in the record: auto (tacho if given, else the "
+                   "mesh lines), mesh, tacho, or nominal (take it as constant; default auto)")
+    p.add_argument("--tacho", metavar="NAME", help="tacho channel (pulses), not a sensor")
+    p.add_argument("--pulses-per-rev", type=_number(int, 1), default=1,
+                   help="tacho pulses per pinion revolution (default 1)")
+    p.add_argument("--gain", choices=("auto", "fit", "fixed"), default="auto",
+                   help="fit a gain per channel in closed form, or take the model's level as "
+                   "it is; auto (default): fit, except on records pydiag simulate made")
+
+
+def _measurement_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--measurement", required=True, help="record file: CSV/TSV (.gz), Parquet, "
+                   "MAT, WAV, TDMS")
+    _record_args(p)
 
 
 def _force(p: argparse.ArgumentParser) -> None:
@@ -155,9 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--measurements", required=True, help="folder of CSV files, or a glob")
     p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
-    p.add_argument("--adapter", help="adapter TOML describing the FMU")
-    p.add_argument("--column", action="append", help="channel to use (repeat; default: all)")
-    p.add_argument("--sample-rate", type=positive, help="Hz, if CSVs have no time_s")
+    _record_args(p)
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_batch)
@@ -182,7 +214,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="chance of any false peak on a perfect model, in (0, 1) (default 0.01)")
     p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
     p.add_argument("--report", help="write a self-contained HTML report here")
-    p.add_argument("--history", default=DEFAULT_HISTORY, help="SQLite run history")
+    p.add_argument("--history", help="SQLite run history (default: the per-user "
+                   "~/.local/share/pydiag/history.sqlite, or under $XDG_DATA_HOME)")
     p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
     p.add_argument("--effect", choices=list(EFFECTS), help="the FMU is this catalogue effect's "
                    "model (e.g. bearing_outer_race): also fit the effect's parameters")
@@ -204,7 +237,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_discover)
 
     p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
-    p.add_argument("--history", default=DEFAULT_HISTORY)
+    p.add_argument("--history", help="SQLite run history (default: as for compare)")
     p.add_argument("--plot", help="PNG (or .svg, .pdf) file for the error history")
     _force(p)
     p.set_defaults(func=cmd_history)

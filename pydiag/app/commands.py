@@ -9,7 +9,7 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.formatting import format_regression, format_result
+from pydiag.app.formatting import format_facts, format_regression, format_result
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import DiagnosisResult, FaultEstimator
@@ -18,7 +18,9 @@ from pydiag.fmu.description import read_model_description
 from pydiag.fmu.inspect import describe, format_info
 from pydiag.gear.conventions import DEFAULT_SENSORS
 from pydiag.gear.paper_cases import case
-from pydiag.io.measurements import read_measurement, write_measurement
+from pydiag.gear.speed import SpeedSettings
+from pydiag.io.measurements import write_measurement
+from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
 from pydiag.model.adapter import Adapter, load_adapter
@@ -80,13 +82,37 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
+def channels_to_read(args) -> list[str] | None:
+    """The --channel specs, with the tacho channel added when channels are chosen."""
+    chosen = list(args.channel or [])
+    if chosen and args.tacho and args.tacho not in [c.partition("=")[0] for c in chosen]:
+        chosen.append(args.tacho)
+    return chosen or None
+
+
 def read_input(args) -> Measurement:
-    return read_measurement(args.measurement, args.sample_rate, args.column)
+    return read_measurement(args.measurement, args.sample_rate, channels_to_read(args), args.unit)
+
+
+def problem_settings(args) -> dict:
+    """build_problem's settings from the command line (feature mode, operating point, speed,
+    gain); commands without record options (demo) take the record as it is."""
+    settings: dict = {"feature_mode": getattr(args, "features", "lines")}
+    if not hasattr(args, "speed"):
+        return settings
+    op = {}
+    if args.rpm is not None:
+        op["f_pinion_hz"] = args.rpm / 60.0
+    if args.teeth is not None:
+        op["n_pinion"], op["n_gear"] = args.teeth
+    return {**settings, "operating_point": op or None, "fit_gain": {"auto": None, "fit": True, "fixed": False}[args.gain],
+            "speed": SpeedSettings(args.speed, tacho=args.tacho,
+                                   pulses_per_rev=args.pulses_per_rev)}
 
 
 def problem_of(args, measurement: Measurement, **kwargs) -> FitProblem:
     return build_problem(args.fmu, measurement, adapter_of(args),
-                         feature_mode=getattr(args, "features", "lines"), **kwargs)
+                         **{**problem_settings(args), **kwargs})
 
 
 def fit(args, problem: FitProblem) -> DiagnosisResult:
@@ -114,10 +140,14 @@ def cmd_simulate(args) -> int:
 def cmd_diagnose(args) -> int:
     check_outputs(args, "json")
     m = read_input(args)
-    result = fit(args, problem_of(args, m))
+    problem = problem_of(args, m)
+    result = fit(args, problem)
+    facts = problem.facts(result.parameters)
     print(format_result(result))
+    print(format_facts(facts))
     if args.json:
-        out = {**result.to_dict(), "channels": list(m.channels), "measurement": str(args.measurement)}
+        out = {**result.to_dict(), **facts, "channels": list(problem.channels),
+               "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0
 
@@ -128,8 +158,9 @@ def cmd_batch(args) -> int:
     if args.adapter:
         load_adapter(args.adapter)  # fail early, once, on a bad adapter
     settings = {k: v for k, v in estimator_settings(args).items() if k != "n_workers"}
-    tasks = [batch.BatchTask(p, args.fmu, settings, tuple(args.column) if args.column else None,
-                             args.sample_rate, args.adapter, {"feature_mode": args.features})
+    tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels_to_read(args) or ()) or None,
+                             args.sample_rate, args.adapter, problem_settings(args),
+                             tuple(args.unit) if args.unit else None)
              for p in paths]
     bar = None
     if not args.quiet:

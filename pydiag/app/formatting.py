@@ -28,6 +28,23 @@ def format_result(result: DiagnosisResult, truth: dict | None = None) -> str:
     return "\n".join(lines)
 
 
+def format_facts(facts: dict) -> str:
+    """The record analysed: speed, periods, seconds, channel gains."""
+    lines = []
+    if "speed_hz" in facts:
+        lines.append(f"speed      : {facts['speed_hz']:.5f} Hz pinion ({60 * facts['speed_hz']:.2f} "
+                     f"rpm; nominal {facts['nominal_speed_hz']:.4g} Hz), varies "
+                     f"{facts['speed_variation_pct']:.3f} % over the record; "
+                     f"{facts['speed_method']}")
+    if facts.get("n_periods") is not None:
+        lines.append(f"analysed   : {facts['n_periods']} fundamental periods, "
+                     f"{facts['duration_s']:.3f} s")
+    if facts.get("gains"):
+        lines.append("gains      : " + ", ".join(f"{c} x{g:.4g}" for c, g in facts["gains"].items())
+                     + " (model -> measurement level)")
+    return "\n".join(lines)
+
+
 def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
     lines = [f"error      : {c.error:.5f} (Eq. 12 less its noise part, {c.error_raw:.5f} raw, on "
              f"{c.n_error_bins} bins: synchronous lines and the measurement's peaks; "

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from pydiag.app.commands import (check_outputs, estimator_settings, problem_of, progress_bar,
                                  read_input)
-from pydiag.app.formatting import format_comparison, format_discovery, format_history
+from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
+                                   format_history)
 from pydiag.core.errors import UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fmu.description import read_model_description
@@ -27,6 +28,7 @@ def _effect_estimator(args) -> FaultEstimator:
 
 def cmd_compare(args) -> int:
     check_outputs(args, "json", "report")
+    args.history = str(history.resolve(args.history))
     history.check(args.history)
     effect = EFFECTS[args.effect] if args.effect else None
     m = read_input(args)
@@ -43,13 +45,16 @@ def cmd_compare(args) -> int:
         close()
     md, _ = read_model_description(args.fmu)
     run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
+    facts = {k: v for k, v in problem.record_facts().items()
+             if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
     print(format_comparison(c))
+    print(format_facts({**facts, "gains": c.gains}))
     print(f"recorded as run {run_id} in {args.history}")
     if args.report:
         write_report(c, args.report, args.measurement, history.runs(args.history), args.force)
         print(f"report     : {args.report}")
     if args.json:
-        write_text(args.json, json.dumps(c.to_dict(), indent=2) + "\n", args.force)
+        write_text(args.json, json.dumps({**c.to_dict(), **facts}, indent=2) + "\n", args.force)
     return 0
 
 
@@ -69,6 +74,7 @@ def cmd_discover(args) -> int:
 
 def cmd_history(args) -> int:
     check_outputs(args, "plot")
+    args.history = str(args.history or history.default_path())
     rows = history.runs(args.history)
     if not rows:
         raise UsageError(f"no compare runs recorded in {args.history}")

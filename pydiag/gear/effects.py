@@ -77,6 +77,14 @@ def _family(name):
     return weight
 
 
+def _housing(line, freq, f_mesh):
+    # a housing mode reshapes every line near its frequency; it claims the mesh family
+    # at half weight (a missing harmonic shape may explain the same lines)
+    if line is None:
+        return 0.0
+    return 0.5 if line.family in ("mesh", "mesh_sb_pinion", "mesh_sb_gear") else 0.0
+
+
 def _load_fluctuation(line, freq, f_mesh):
     # a torque ripple is not kinematic: its line (and its mesh sidebands) match no family
     return 1.0 if line is None else 0.0
@@ -106,6 +114,11 @@ EFFECTS = {e.key: e for e in (
            "inner-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfi", "bpfi_sb"))),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, 20.0)), _load_fluctuation, _load_hint),
+    # lower bounds: a mode below every line, where the housing passes the force as a mass
+    # (accelerance 1/m): the level is the mesh's, and the channel gain takes the rest
+    Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
+           "accelerometer on the housing, behind one housing mode",
+           (Parameter("f_housing", 20.0, 10000.0), Parameter("zeta_housing", 0.02, 0.5)), _housing),
 )}
 
 

@@ -3,7 +3,8 @@ which missing effect they point to.
 
 1. Fit the model (as ``diagnose``).
 2. Spectra at full resolution: measurement and model over the same M whole fundamental
-   periods (M = the record's, at most ``max_periods``), bins every 1/(M T0).
+   periods (M = all of the (order-tracked) record's, or at most ``max_periods``), bins
+   every 1/(M T0).
 3. Noise power per bin P: the median power of the bins between synchronous lines, / ln 2.
 4. A bin is an unexplained peak when its measured amplitude R exceeds the model's S by
    more than sqrt(P ln(N/alpha)) and is a local maximum of the excess. For a bin of pure
@@ -27,6 +28,7 @@ fall when a missing effect was added.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -89,9 +91,11 @@ class Comparison:
     suggested_effects: list[Suggestion]
     false_alarm_rate: float
     n_periods: int
+    duration_s: float  # of the record analysed: n_periods fundamental periods
     bin_hz: float
     n_error_bins: int
     fit_error: float | None = None
+    gains: dict[str, float] = field(default_factory=dict)  # model -> measurement, per channel
     spectra: dict[str, ChannelSpectrum] = field(default_factory=dict)
     markers: list[dict] = field(default_factory=list)  # main kinematic lines, for plots
 
@@ -121,7 +125,7 @@ class MeasuredSpectra:
 
 
 def measured_spectra(problem: FitProblem, false_alarm_rate: float,
-                     max_periods: int) -> MeasuredSpectra:
+                     max_periods: int | None = None) -> MeasuredSpectra:
     kin = problem.kinematics
     if kin is None:
         raise EstimationError("compare names peaks by gear kinematics: give the FMU's Np, Ng, "
@@ -131,7 +135,10 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
                               f"{false_alarm_rate}")
     m = problem.measurement
     n_periods, _ = whole_periods(m.n_samples, m.sample_rate_hz, kin.period_s)
-    featurizer = FullSpectrumFeaturizer(kin, min(n_periods, max_periods),
+    if n_periods < 1:
+        raise EstimationError(f"record of {m.duration_s:.4g} s is shorter than one fundamental "
+                              f"period ({kin.period_s:.4g} s)")
+    featurizer = FullSpectrumFeaturizer(kin, min(n_periods, max_periods or n_periods),
                                         problem.featurizer.max_freq_hz)
     spectra, margin, bins = {}, {}, None
     for channel in problem.channels:
@@ -145,7 +152,7 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
 
 def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
             bearing: Bearing | None = None, false_alarm_rate: float = 0.01,
-            max_periods: int = 10, parameters: dict[str, float] | None = None,
+            max_periods: int | None = None, parameters: dict[str, float] | None = None,
             measured: MeasuredSpectra | None = None) -> Comparison:
     """Fit (unless ``parameters`` are given, by name) and compare; see the module docstring.
 
@@ -160,9 +167,10 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     bins = featurizer.bins
     kin = featurizer.kinematics
     rate = problem.measurement.sample_rate_hz
+    x = np.array([parameters[p.name] for p in problem.parameters])
     with problem.spec.open() as plant:
-        y = problem.model_signals(plant, np.array([parameters[p.name] for p in problem.parameters]),
-                                  featurizer.duration_s)
+        y = problem.model_signals(plant, x, featurizer.duration_s)
+        gains = problem.gains(plant, x) if problem.fit_gain else {}
     lines = kinematic_map(kin, featurizer.max_freq_hz, bearing)
     bin_hz = 1.0 / featurizer.duration_s
     candidates, spectra, errors, raw = [], {}, [], []
@@ -200,8 +208,9 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                if l.family == "mesh" or 0 < l.order <= orders.get(l.family, 0)]
     return Comparison(problem.spec.fmu_path, float(np.sqrt(np.sum(np.square(errors)))),
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
-                      peaks, suggestions, false_alarm_rate, featurizer.n_periods, bin_hz,
-                      int(np.count_nonzero(bins)), fit_error, spectra, markers)
+                      peaks, suggestions, false_alarm_rate, featurizer.n_periods,
+                      featurizer.duration_s, bin_hz,
+                      int(np.count_nonzero(bins)), fit_error, gains, spectra, markers)
 
 
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
@@ -219,5 +228,6 @@ def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, eff
                                     fixed_values=problem.fmu_values(base.parameters),
                                     featurizer=measured.featurizer)
     fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters
-    return compare(effect_problem, None, bearing, base.false_alarm_rate, base.n_periods,
-                   parameters=fitted, measured=measured)
+    c = compare(effect_problem, None, bearing, base.false_alarm_rate, base.n_periods,
+                parameters=fitted, measured=measured)
+    return dataclasses.replace(c, parameters={**base.parameters, **fitted})

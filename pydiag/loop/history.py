@@ -7,6 +7,7 @@ model revisions, so the effect of adding physics to the Modelica model stays vis
 from __future__ import annotations
 
 import hashlib
+import os
 import json
 import sqlite3
 import time
@@ -15,7 +16,23 @@ from pathlib import Path
 from pydiag.core.errors import OutputError
 from pydiag.io.outputs import atomic_output, check_output
 
-DEFAULT_PATH = Path("pydiag_history.sqlite")
+
+
+def default_path() -> Path:
+    """The per-user history: ``$XDG_DATA_HOME/pydiag/history.sqlite`` (by default
+    ``~/.local/share/pydiag/history.sqlite``); never the current folder."""
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "pydiag" / "history.sqlite"
+
+
+def resolve(path: str | Path | None) -> Path:
+    """``path``, or the per-user history with its folder made on first use."""
+    if path:
+        return Path(path)
+    default = default_path()
+    default.parent.mkdir(parents=True, exist_ok=True)
+    return default
+
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY AUTOINCREMENT,

@@ -1,0 +1,6 @@
+within GearDiag;
+package Components "Parts that sit between the gear mesh and a measurement"
+  annotation(Documentation(info="<html>
+<p>HousingMode: one structural mode of the gearbox housing, between the dynamic mesh
+force and an accelerometer on the housing.</p></html>"));
+end Components;
