@@ -14,7 +14,7 @@ cd "$WORK"
 
 # 1. hold the base model against it: residual peaks, named, and the suggested effect
 "$PYDIAG" compare --fmu "$ROOT/build/GearPair.fmu" --measurement meas.csv --bearing 9,7.94,39.04 \
-    --source "$ROOT/modelica/GearDiag/GearPair.mo" --quiet
+    --source "$ROOT/modelica/GearDiag/GearPair.mo" --history loop.sqlite --quiet
 
 # 2. add the effect: a model that extends the base (here the catalogue's own), rebuild
 cp -r "$ROOT/modelica" modelica
@@ -29,5 +29,5 @@ MO
 
 # 3. compare again, fitting the effect's parameters too, and watch the error fall
 "$PYDIAG" compare --fmu MyGearbox.fmu --effect bearing_outer_race --measurement meas.csv \
-    --bearing 9,7.94,39.04 --source modelica/GearDiag/MyGearbox.mo --quiet
-"$PYDIAG" history --plot "$ROOT/build/loop_history.png" --force  # a build artefact, replaced each run
+    --bearing 9,7.94,39.04 --source modelica/GearDiag/MyGearbox.mo --history loop.sqlite --quiet
+"$PYDIAG" history --history loop.sqlite --plot "$ROOT/build/loop_history.png" --force  # a build artefact, replaced each run

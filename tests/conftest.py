@@ -12,6 +12,14 @@ GEARPAIR_MO = ROOT / "modelica" / "GearDiag" / "GearPair.mo"
 BUILT_FMU = ROOT / "build" / "GearPair.fmu"
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _private_data_home(tmp_path_factory):
+    """The per-user data folder (compare's default history) is a scratch one in tests,
+    for this process and every CLI it starts."""
+    import os
+    os.environ["XDG_DATA_HOME"] = str(tmp_path_factory.mktemp("data_home"))
+
+
 @pytest.fixture(scope="session")
 def gear_fmu(tmp_path_factory) -> Path:
     """The GearPair FMU from `make fmu`, or built here when it is missing."""

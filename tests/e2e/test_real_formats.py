@@ -8,6 +8,7 @@ whose level is lost (the channel gain is fitted).
 """
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -79,4 +80,14 @@ def test_wav_record_level_lost_the_gain_is_fitted(slipped_record, tmp_path):
     assert compared["speed_method"].startswith("mesh harmonic")
     assert compared["n_periods"] >= 15  # the whole record, not the first 10 periods only
     assert compared["error"] < 0.5
-    assert not list(tmp_path.glob("*history*"))  # the history went where it was told
+    assert (tmp_path / "h.sqlite").is_file()  # the history went where it was told
+
+
+def test_compare_history_defaults_to_the_user_data_folder_not_the_current_one(slipped_record,
+                                                                          tmp_path):
+    import os
+    path = tmp_path / "rig.mat"
+    scipy.io.savemat(path, {"Fs": FS, "acc": slipped_record.channels["acc"]})
+    _diagnose(path, [], tmp_path, "compare")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["compare.json", "rig.mat"]
+    assert (Path(os.environ["XDG_DATA_HOME"]) / "pydiag" / "history.sqlite").is_file()

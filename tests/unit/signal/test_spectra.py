@@ -96,3 +96,20 @@ def test_noise_power_mean_and_robust_estimates():
 def test_local_maxima_include_edges_and_plateaus():
     v = np.array([3.0, 1.0, 2.0, 2.0, 0.5, 4.0])
     assert local_maxima(v).tolist() == [True, False, True, True, False, True]
+
+
+def test_a_period_that_is_not_whole_samples_is_still_one_period_and_reads_exactly():
+    """A 33.333333 Hz shaft at 25.6 kHz: a 0.06 s record rounds to 1536 samples, a hair
+    short of 0.06 s; it was judged shorter than one period, and every particle failed."""
+    from pydiag.signal.spectra import sync_spectrum
+    fs, period = 25_600.0, 2 / 33.333333
+    n = int(round(period * fs))
+    assert n < period * fs  # the record is a fraction of a sample short
+    t = np.arange(n) / fs
+    spec = sync_spectrum(np.cos(2 * np.pi * 5 / period * t), fs, period)
+    assert spec.n_periods == 1
+    assert spec.amplitude[5] == pytest.approx(1.0, abs=2e-3)
+    long = np.arange(int(37.5 * period * fs)) / fs  # 37 whole periods and a half
+    spec = sync_spectrum(0.5 * np.cos(2 * np.pi * 12 / period * long), fs, period)
+    assert spec.n_periods == 37 and spec.amplitude[12] == pytest.approx(0.5, rel=1e-3)
+    assert np.max(np.delete(spec.amplitude, 12)) < 1e-3
