@@ -186,7 +186,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("batch", help="diagnose many measurements (locally or on Dask)")
     p.add_argument("--fmu", required=True)
-    p.add_argument("--measurements", required=True, help="folder of CSV files, or a glob")
+    p.add_argument("--measurements", required=True,
+                   help="folder of record files (any format pydiag reads), or a glob")
     p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
     _record_args(p)

@@ -105,7 +105,8 @@ def problem_settings(args) -> dict:
         op["f_pinion_hz"] = args.rpm / 60.0
     if args.teeth is not None:
         op["n_pinion"], op["n_gear"] = args.teeth
-    return {**settings, "operating_point": op or None, "fit_gain": {"auto": None, "fit": True, "fixed": False}[args.gain],
+    gain = {"auto": None, "fit": True, "fixed": False}[args.gain]
+    return {**settings, "operating_point": op or None, "fit_gain": gain,
             "speed": SpeedSettings(args.speed, tacho=args.tacho,
                                    pulses_per_rev=args.pulses_per_rev)}
 
@@ -158,7 +159,8 @@ def cmd_batch(args) -> int:
     if args.adapter:
         load_adapter(args.adapter)  # fail early, once, on a bad adapter
     settings = {k: v for k, v in estimator_settings(args).items() if k != "n_workers"}
-    tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels_to_read(args) or ()) or None,
+    channels = channels_to_read(args)
+    tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem_settings(args),
                              tuple(args.unit) if args.unit else None)
              for p in paths]

@@ -211,20 +211,18 @@ def _check_rate(measurement: Measurement, featurizer: Featurizer, what: str,
 
 
 def _nominal_kinematics(measurement: Measurement, fmu_kin: GearKinematics | None,
-                        given: GearKinematics | None) -> tuple[GearKinematics | None, str]:
-    """The operating point to start from, and where it comes from: the one given (command
-    line), else the record's own metadata (a record made by ``pydiag simulate``), else the
-    FMU's."""
+                        given: GearKinematics | None) -> GearKinematics | None:
+    """The operating point to start from: the one given, else the record's own metadata
+    (a record made by ``pydiag simulate``), else the FMU's."""
     if given is not None:
-        return given, "given"
+        return given
     meta = measurement.metadata.get("kinematics")
     if isinstance(meta, dict) and fmu_kin is not None:
         try:
-            return GearKinematics(int(meta["Np"]), int(meta["Ng"]), float(meta["f_pinion"])), \
-                "record metadata"
+            return GearKinematics(int(meta["Np"]), int(meta["Ng"]), float(meta["f_pinion"]))
         except (KeyError, TypeError, ValueError):
             pass  # not ours: the FMU's operating point
-    return fmu_kin, "FMU"
+    return fmu_kin
 
 
 def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | None = None, *,
@@ -286,7 +284,7 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
             fmu_kin = adapter.resolve_kinematics({**plant.parameters(), **plant.fixed_values})
     except (PlantError, AdapterError) as err:
         raise EstimationError(str(err)) from err
-    kin, _ = _nominal_kinematics(measurement, fmu_kin, kinematics)
+    kin = _nominal_kinematics(measurement, fmu_kin, kinematics)
     if operating_point:
         if kin is None:
             raise EstimationError("--rpm and --teeth need a gear model: this FMU has no Np, Ng, "

@@ -10,10 +10,10 @@ harmonics. :func:`estimate_speed` finds the shaft angle over the record:
   +- ``SPEED_SEARCH`` and +- 0.45/Np: beyond half a pinion order at the mesh, the comb of
   sidebands h f_mesh - h f_pinion of a faulty tooth lines up as well as the mesh and can
   pass for it (seen on a simulated tooth fault, Np = 14). The nominal speed must be that
-  close (1.4 % for a 32-tooth pinion); otherwise use a tacho. The harmonic that stands highest above its band's median is then
-  phase-demodulated in a band of +- half the slower shaft's speed (Tukey taper, flat over
-  the inner half), which excludes the shaft-order sidebands, so the phase is the shaft
-  angle times h Np. The mean speed is the slope of that phase (far below one FFT bin);
+  close (1.4 % for a 32-tooth pinion); otherwise use a tacho. The harmonic that stands
+  highest above its band's median is then phase-demodulated in a band of +- half the
+  slower shaft's speed (Tukey taper, flat over the inner half), which excludes the
+  shaft-order sidebands, so the phase is the shaft angle times h Np. The mean speed is the slope of that phase (far below one FFT bin);
 - ``"nominal"``: the nominal speed, constant.
 
 The mesh line must stand above the noise: its amplitude over its band's median must
@@ -117,10 +117,18 @@ def _mean_speed(revs: np.ndarray, sample_rate_hz: float) -> float:
     return float(np.polyfit(n, revs, 1)[0] * sample_rate_hz)
 
 
-def mesh_speed(signal: np.ndarray, sample_rate_hz: float, n_pinion: int, nominal_hz: float,
+def _demodulation_band_hz(kinematics: GearKinematics) -> float:
+    """Half-width of the band around a mesh harmonic: half the slower shaft's speed, so no
+    shaft-order sideband enters it (module docstring)."""
+    return 0.5 * min(kinematics.f_pinion_hz, kinematics.f_gear_hz)
+
+
+def mesh_speed(signal: np.ndarray, sample_rate_hz: float, kinematics: GearKinematics,
                search: float = SPEED_SEARCH) -> SpeedEstimate:
-    """Pinion speed from the mesh harmonics of ``signal`` (see the module docstring)."""
+    """Pinion speed from the mesh harmonics of ``signal`` around the nominal
+    ``kinematics.f_pinion_hz`` (see the module docstring)."""
     x = np.asarray(signal, dtype=float)
+    n_pinion, nominal_hz = kinematics.n_pinion, kinematics.f_pinion_hz
     freqs, amp = amplitude_spectrum(x, sample_rate_hz, "hann")
     bin_hz = freqs[1]
     search = min(search, SIDEBAND_FRACTION / n_pinion)
@@ -149,13 +157,8 @@ def mesh_speed(signal: np.ndarray, sample_rate_hz: float, n_pinion: int, nominal
             f"no mesh line stands out near {n_pinion * nominal_hz:.1f} Hz (+-{100 * search:g} %): "
             f"the best is {ratio:.1f}x its band's median, chance reaches {needed:.1f}x; check "
             "--rpm and --teeth, or give a tacho channel (--tacho)")
-    return _demodulated(x, sample_rate_hz, n_pinion, h, coarse, nominal_hz)
-
-
-def _demodulated(x: np.ndarray, sample_rate_hz: float, n_pinion: int, h: int, coarse_hz: float,
-                 nominal_hz: float, bandwidth_hz: float | None = None) -> SpeedEstimate:
-    bandwidth = bandwidth_hz or 0.25 * coarse_hz
-    index, cycles = tone_phase(x, sample_rate_hz, h * n_pinion * coarse_hz, bandwidth)
+    band = _demodulation_band_hz(dataclasses.replace(kinematics, f_pinion_hz=coarse))
+    index, cycles = tone_phase(x, sample_rate_hz, h * n_pinion * coarse, band)
     revs = extend_linearly(index, cycles / (h * n_pinion), x.size)
     inner = (np.arange(x.size) >= index[0]) & (np.arange(x.size) <= index[-1])
     mean = _mean_speed(revs[inner], sample_rate_hz)
@@ -173,8 +176,8 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
     """
     method, channel, tacho = settings.method, settings.channel, settings.tacho
     pulses_per_rev = settings.pulses_per_rev
-    bandwidth = 0.5 * min(kinematics.f_pinion_hz, kinematics.f_gear_hz)
-    short = measurement.duration_s < 2 * EDGE_BANDWIDTHS / bandwidth + MIN_TRACKED_PERIODS * kinematics.period_s
+    short = measurement.duration_s < (2 * EDGE_BANDWIDTHS / _demodulation_band_hz(kinematics)
+                                      + MIN_TRACKED_PERIODS * kinematics.period_s)
     if method == "auto":
         method = "tacho" if tacho else "nominal" if short else "mesh"
     fs, nominal = measurement.sample_rate_hz, kinematics.f_pinion_hz
@@ -196,13 +199,7 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
     channel = channel or names[0]
     if channel not in measurement.channels:
         raise MeasurementError(f"channel '{channel}' not in the measurement")
-    found = mesh_speed(measurement.channels[channel], fs, kinematics.n_pinion, nominal)
-    h = int(found.method.rsplit(" ", 1)[1])
-    # final pass: a band that excludes every shaft-order sideband, around the found speed
-    kin = dataclasses.replace(kinematics, f_pinion_hz=found.speed_hz)
-    return _demodulated(np.asarray(measurement.channels[channel], dtype=float), fs,
-                        kinematics.n_pinion, h, found.speed_hz, nominal,
-                        0.5 * min(kin.f_pinion_hz, kin.f_gear_hz))
+    return mesh_speed(measurement.channels[channel], fs, kinematics)
 
 
 def order_track(measurement: Measurement, estimate: SpeedEstimate,

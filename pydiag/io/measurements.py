@@ -14,9 +14,9 @@ import pandas as pd
 
 from pydiag.core.measurement import Measurement
 from pydiag.io.outputs import atomic_output
-from pydiag.io.readers import META_PREFIX
+from pydiag.io.readers import META_PREFIX, TIME_COLUMNS
 
-TIME_COLUMN = "time_s"
+TIME_COLUMN = TIME_COLUMNS[0]
 
 
 def write_measurement(path: str | Path, measurement: Measurement, overwrite: bool = False) -> None:

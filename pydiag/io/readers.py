@@ -65,8 +65,12 @@ def _fail(path: Path, message: str) -> MeasurementError:
     return MeasurementError(f"{path}: {message}")
 
 
+def _gzipped(path: Path) -> bool:
+    return path.suffix.lower() == ".gz"
+
+
 def _open_text(path: Path):
-    raw = gzip.open(path, "rb") if path.suffix == ".gz" else open(path, "rb")
+    raw = gzip.open(path, "rb") if _gzipped(path) else open(path, "rb")
     return io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
 
 
@@ -77,7 +81,7 @@ def _head(path: Path, n_lines: int = 50) -> list[str]:
 
 def _is_number(token: str, decimal: str) -> bool:
     try:
-        float(token.strip().replace(decimal, ".") if decimal != "." else token.strip())
+        float(token.strip().replace(decimal, "."))
         return True
     except ValueError:
         return False
@@ -94,7 +98,7 @@ def _read_text(path: Path) -> _Table:
                 metadata = json.loads(line[len(META_PREFIX):])
             except json.JSONDecodeError as err:
                 raise _fail(path, f"bad metadata line: {err}") from err
-        elif not (line.startswith("#") or not line.strip()):
+        elif line.strip() and not line.startswith("#"):
             break
         n_comments += 1
     body = [line for line in head[n_comments:] if line.strip()]
@@ -123,7 +127,7 @@ def _read_text(path: Path) -> _Table:
         frame = pd.read_csv(path, sep=r"\s+" if delimiter == " " else delimiter,
                             skiprows=n_comments + (1 if has_header else 0), header=None,
                             names=names, decimal=decimal, engine="pyarrow" if fast else "c",
-                            compression="gzip" if path.suffix == ".gz" else None,
+                            compression="gzip" if _gzipped(path) else None,
                             encoding="utf-8-sig")
     except (ValueError, pd.errors.ParserError, OSError, UnicodeDecodeError) as err:
         first_line = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
@@ -310,7 +314,7 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     if suffix not in SUFFIXES:
         raise _fail(path, f"unknown measurement format '{suffix or path.name}'; pydiag reads "
                           f"{', '.join(SUFFIXES)} (text also gzipped)")
-    if path.suffix.lower() == ".gz" and suffix not in TEXT_SUFFIXES:
+    if _gzipped(path) and suffix not in TEXT_SUFFIXES:
         raise _fail(path, f"only text records can be gzipped, not '{suffix}'")
     if not path.is_file():
         raise _fail(path, "cannot read: no such file" if not path.exists() else
