@@ -66,7 +66,8 @@ def diagnose_task(task: BatchTask) -> dict:
         problem = build_problem(task.fmu, m, adapter, **task.problem)
         result = FaultEstimator(n_workers=1, **task.estimator).fit(problem)
         facts = {k: v for k, v in problem.record_facts().items() if k != "nominal_speed_hz"}
-        row.update(status="ok", message="", fault_mode=result.fault_mode,
+        row.update(status="ok", message="; ".join(problem.warnings(result.error)),
+                   fault_mode=result.fault_mode,
                    severity=result.severity, error=result.error,
                    evaluations=result.evaluations, **result.parameters, **facts)
     except PydiagError as err:

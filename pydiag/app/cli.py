@@ -12,7 +12,9 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import signal
 import sys
+import threading
 
 from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_inspect, cmd_regress,
                                  cmd_simulate, warn_validation)
@@ -113,7 +115,10 @@ def _optimiser_args(p: argparse.ArgumentParser) -> None:
                    "per start, 0 to skip (default 150; an effect's refit: 60)")
     p.add_argument("--seed", type=_number(int, 0), help="random seed (default 0)")
     p.add_argument("--workers", type=_number(int, 1),
-                   help="worker processes (default: cores); batch: measurements in parallel")
+                   help="worker processes (default: cores; at most the cores unless "
+                   "--oversubscribe); batch: measurements in parallel")
+    p.add_argument("--oversubscribe", action="store_true",
+                   help="allow more workers than cores (they only share the cores)")
     p.add_argument("--eval-timeout", type=positive, help="seconds one simulation may take "
                    "before it is killed and penalised (default 60)")
     p.add_argument("--features", choices=FEATURE_MODES, default="lines",
@@ -258,8 +263,36 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that every ``finally`` runs (workers stopped,
+    temporary files removed) before the process ends."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated
+
+
+def _check_workers(parser: Parser, args: argparse.Namespace) -> None:
+    cores = os.cpu_count() or 1
+    if getattr(args, "workers", None) and args.workers > cores and not args.oversubscribe:
+        parser.error(f"--workers: {args.workers} is more than the {cores} cores of this machine; "
+                     "more workers than cores make a fit slower (--oversubscribe to insist)")
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _check_workers(parser, args)
+    if threading.current_thread() is not threading.main_thread():
+        return _run(args)
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        return _run(args)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         if isinstance(getattr(args, "fmu", None), str):
             warn_validation(args.fmu)
@@ -270,6 +303,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("pydiag: interrupted", file=sys.stderr)
         return 130
+    except Terminated:
+        print("pydiag: terminated", file=sys.stderr)
+        return 143
     except Exception as err:  # a bug: one line for the user; PYDIAG_DEBUG=1 shows the traceback
         if os.environ.get("PYDIAG_DEBUG"):
             raise

@@ -144,11 +144,14 @@ def cmd_diagnose(args) -> int:
     problem = problem_of(args, m)
     result = fit(args, problem)
     facts = problem.facts(result.parameters)
+    warnings = problem.warnings(result.error, facts.get("gains"))
     print(format_result(result))
     print(format_facts(facts))
+    for warning in warnings:
+        print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
     if args.json:
-        out = {**result.to_dict(), **facts, "channels": list(problem.channels),
-               "measurement": str(args.measurement)}
+        out = {**result.to_dict(), **facts, "warnings": warnings,
+               "channels": list(problem.channels), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0
 
@@ -178,8 +181,10 @@ def cmd_batch(args) -> int:
     failed = [r for r in rows if r["status"] != "ok"]
     print(f"wrote {args.out}: {len(rows)} measurements, {len(rows) - len(failed)} diagnosed, "
           f"{len(failed)} failed")
-    for r in failed:
-        print(f"  {r['measurement']}: {r['message']}")
+    for r in rows:
+        if r["message"]:
+            print(f"  {r['measurement']}: {'' if r['status'] != 'ok' else 'warning: '}"
+                  f"{r['message']}")
     return 0
 
 

@@ -47,14 +47,17 @@ def cmd_compare(args) -> int:
     run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
+    warnings = problem.warnings(c.fit_error, c.gains) if c.fit_error is not None else []
     print(format_comparison(c))
     print(format_facts({**facts, "gains": c.gains}))
+    for warning in warnings:
+        print(f"pydiag compare: warning: {warning}", file=sys.stderr)
     print(f"recorded as run {run_id} in {args.history}")
     if args.report:
         write_report(c, args.report, args.measurement, history.runs(args.history), args.force)
         print(f"report     : {args.report}")
     if args.json:
-        write_text(args.json, json.dumps({**c.to_dict(), **facts}, indent=2) + "\n", args.force)
+        write_text(args.json, json.dumps({**c.to_dict(), **facts, "warnings": warnings}, indent=2) + "\n", args.force)
     return 0
 
 

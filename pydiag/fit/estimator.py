@@ -75,17 +75,18 @@ class FaultEstimator:
         seed: seed of the swarm; the same seed gives the same answer
         polish_evaluations: simulation budget of each least-squares polish (0 disables it)
         polish_starts: how many distinct swarm positions to polish from
-        n_workers: worker processes (default: all cores). The FMU always runs in workers
-            (:mod:`pydiag.fmu.isolation`), except inside a daemonic process (a Dask
-            worker), which may not start children: there it runs in-process.
+        n_workers: worker processes (default: all cores, at most one per particle). The FMU
+            always runs in workers (:mod:`pydiag.fmu.isolation`), except inside a daemonic
+            process (a Dask worker), which may not start children: there it runs in-process.
         eval_timeout_s: wall-time limit of one simulation; a longer one is killed, penalised
+            (None: the adapter's ``eval_timeout_s``, else ``DEFAULT_EVAL_TIMEOUT_S``)
         max_consecutive_failures: failed simulations in a row that stop the fit
         progress: called as progress(done, total, best_error) after each batch
     """
 
     def __init__(self, n_particles: int = 16, iterations: int = 20, seed: int = 0,
                  polish_evaluations: int = 150, polish_starts: int = 3,
-                 n_workers: int | None = None, eval_timeout_s: float = DEFAULT_EVAL_TIMEOUT_S,
+                 n_workers: int | None = None, eval_timeout_s: float | None = None,
                  max_consecutive_failures: int = DEFAULT_MAX_CONSECUTIVE_FAILURES,
                  progress: Callable[[int, int, float], None] | None = None) -> None:
         self.n_particles = n_particles
@@ -105,7 +106,8 @@ class FaultEstimator:
             raise UsageError("the polish budget must not be negative and needs at least 1 start")
         if self.n_workers is not None and self.n_workers < 1:
             raise UsageError(f"need at least 1 worker, got {self.n_workers}")
-        if not self.eval_timeout_s > 0 or self.max_consecutive_failures < 1:
+        if (self.eval_timeout_s is not None and not self.eval_timeout_s > 0) or \
+                self.max_consecutive_failures < 1:
             raise UsageError("the evaluation timeout and the failure limit must be positive")
 
     # ------------------------------------------------------------------ fit
@@ -118,9 +120,10 @@ class FaultEstimator:
         counter = {"n": 0, "best": float("inf")}
         objective = ProblemObjective(problem)
         pool = None
+        timeout_s = self.eval_timeout_s or problem.adapter.eval_timeout_s or DEFAULT_EVAL_TIMEOUT_S
         if not mp.current_process().daemon:
-            pool = IsolatedPool(objective, self.n_workers or os.cpu_count() or 1,
-                                self.eval_timeout_s, self.max_consecutive_failures)
+            workers = self.n_workers or min(os.cpu_count() or 1, self.n_particles)
+            pool = IsolatedPool(objective, workers, timeout_s, self.max_consecutive_failures)
 
         def residuals(xs: np.ndarray) -> list[np.ndarray | None]:
             xs = np.clip(np.atleast_2d(xs), lows, highs)

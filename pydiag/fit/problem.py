@@ -38,6 +38,12 @@ from pydiag.signal.features import Features, Featurizer, SpectrumFeaturizer
 #: Co-Simulation: communication steps per period of the highest analysed frequency,
 #: unless the adapter says otherwise.
 CS_STEPS_PER_PERIOD = 20.0
+#: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
+#: not a diagnosis: a model with no lines at all scores about 1 (measured: a record in
+#: mm/s^2 read as m/s^2 scored 1.70 with the level fixed, parameters on their bounds).
+UNEXPLAINED_ERROR = 1.0
+#: A fitted channel gain outside this range is a level mismatch, not a transfer path.
+PLAUSIBLE_GAINS = (0.02, 50.0)
 
 
 @dataclass(frozen=True)
@@ -111,6 +117,25 @@ class FitProblem:
                 facts["gains"] = self.gains(plant, np.array([estimates[p.name]
                                                               for p in self.parameters]))
         return facts
+
+    def warnings(self, error: float, gains: dict[str, float] | None = None) -> list[str]:
+        """Why a fit with this ``error`` (and these fitted ``gains``) is not to be trusted:
+        an empty list when nothing looks wrong."""
+        found = []
+        check = ("check the units (--unit), the channel mapping (--channel) and the sample "
+                 "rate")
+        per_channel = error / np.sqrt(len(self.channels))
+        if per_channel >= UNEXPLAINED_ERROR:
+            found.append(f"the fit's error is {per_channel:.3g} per channel (1 = as large as the "
+                         "measured lines): the model explains none of the record; "
+                         f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "
+                         "a larger budget")
+        low, high = PLAUSIBLE_GAINS
+        for channel, gain in (gains or {}).items():
+            if not low <= gain <= high:
+                found.append(f"channel {channel}: the model had to be scaled by {gain:.3g} to "
+                             f"match the record's level; {check}")
+        return found
 
     def _simulate(self, plant: FmuPlant, x: np.ndarray, duration_s: float) -> np.ndarray:
         values = {p.fmu_variable: p.fmu_value(v) for p, v in zip(self.parameters, x)}

@@ -2,9 +2,13 @@
 
 An FMU is a zip file from somewhere else. Before anything is written, every entry is
 checked: no absolute paths or drive letters, no ``..`` components, no symbolic links, at
-most ``MAX_ENTRIES`` entries, at most ``MAX_TOTAL_BYTES`` unpacked, and no entry that
-inflates by more than ``MAX_RATIO`` (zip bombs). Sizes are enforced while inflating, so
-a forged size header does not help. Then the binary for this platform must exist.
+most ``MAX_ENTRIES`` entries, at most ``MAX_TOTAL_BYTES`` unpacked, no entry that
+inflates by more than ``MAX_RATIO`` (zip bombs), and no archive above
+``RATIO_FLOOR_BYTES`` unpacked that inflates by more than ``MAX_ARCHIVE_RATIO`` as a
+whole (many small, highly compressible entries: 1000 entries of 1 MiB of zeros are a
+1.2 MB FMU that unpacks to 1 GiB per worker). An FMU's binaries and XML compress 3-20
+times (our GearPair.fmu: 4.2). Sizes are enforced while inflating, so a forged size
+header does not help. Then the binary for this platform must exist.
 """
 
 from __future__ import annotations
@@ -17,8 +21,10 @@ from pathlib import Path, PurePosixPath
 from pydiag.core.errors import UnsafeArchive
 
 MAX_ENTRIES = 10_000
-MAX_TOTAL_BYTES = 1 << 30  # 1 GiB
+MAX_TOTAL_BYTES = 1 << 29  # 512 MiB
 MAX_RATIO = 1000  # uncompressed / compressed, for entries above 1 MiB
+MAX_ARCHIVE_RATIO = 100  # uncompressed / compressed, for the whole archive ...
+RATIO_FLOOR_BYTES = 32 << 20  # ... when it unpacks to more than 32 MiB
 CHUNK = 1 << 20
 
 
@@ -57,6 +63,10 @@ def safe_extract(fmu_path: str | Path, dest: str | Path, max_total_bytes: int = 
         if declared > max_total_bytes:
             raise UnsafeArchive(f"archive unpacks to {declared} bytes, more than the limit of "
                                 f"{max_total_bytes}")
+        packed = max(sum(i.compress_size for i in infos), 1)
+        if declared > RATIO_FLOOR_BYTES and declared > MAX_ARCHIVE_RATIO * packed:
+            raise UnsafeArchive(f"archive unpacks to {declared} bytes from {packed} "
+                                f"({declared / packed:.0f} times): a zip bomb")
         written = 0
         for info in infos:
             target = dest / info.filename
@@ -67,9 +77,10 @@ def safe_extract(fmu_path: str | Path, dest: str | Path, max_total_bytes: int = 
             with archive.open(info) as src, open(target, "wb") as out:
                 while chunk := src.read(CHUNK):
                     written += len(chunk)
-                    if written > max_total_bytes:
-                        raise UnsafeArchive("archive unpacks to more than the limit of "
-                                            f"{max_total_bytes} bytes (sizes were forged)")
+                    if written > max_total_bytes or (written > RATIO_FLOOR_BYTES and
+                                                     written > MAX_ARCHIVE_RATIO * packed):
+                        raise UnsafeArchive(f"archive unpacks to more than its {declared} "
+                                            "declared bytes (sizes were forged)")
                     out.write(chunk)
             if info.filename.startswith("binaries/"):
                 os.chmod(target, 0o755)

@@ -6,13 +6,28 @@ a failed ``doStep``) comes back as ``None``: the optimiser penalises it, the dea
 worker is killed and replaced, and the run goes on. ``max_consecutive_failures`` failed
 evaluations in a row stop the run with :class:`TooManyFailures`, naming the last cause.
 Results do not depend on the number of workers: each task is evaluated alone.
+
+Nothing outlives the pool. Each pool owns a run folder (``pydiag_run_*`` in the temp
+folder); its workers put their temporary files there (the extracted FMU included), and
+:meth:`IsolatedPool.close` removes it with the workers. A worker keeps only its own end of
+its pipe (not the parent's end, nor other workers' pipes). If the main process dies
+without closing the pool (``kill -TERM`` with no handler, ``kill -KILL``, a crash), a
+janitor process forked first, which holds nothing but the read end of a pipe from the
+parent, sees that pipe close: it kills the workers the parent reported and removes the run
+folder, so no worker is left under PID 1 and no extracted FMU is left on disk.
+
+A pool whose first evaluations all time out (a hanging FMU, or a warm-up far too long)
+stops after one timeout per worker instead of after ``max_consecutive_failures`` of them.
 """
 
 from __future__ import annotations
 
 import faulthandler
 import multiprocessing as mp
+import os
+import shutil
 import signal
+import tempfile
 import time
 from dataclasses import dataclass, field
 from multiprocessing.connection import wait
@@ -39,9 +54,39 @@ class FailureLog:
         self.reasons[reason] = self.reasons.get(reason, 0) + 1
 
 
-def _worker_loop(conn, objective) -> None:
+def _keep_only(fds: list[int]) -> None:
+    """Close inherited descriptors of the pool that this process must not hold."""
+    for fd in fds:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+
+
+def _use_run_folder(folder: str) -> None:
+    """Temporary files of this worker (the extracted FMU, an FMU's own) go to the run folder.
+
+    The worker is a process of its own, so changing its temp folder touches no one else.
+    """
+    os.environ["TMPDIR"] = folder
+    tempfile.tempdir = folder
+
+
+def _worker_loop(conn, objective, inherited: list[int], folder: str) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     faulthandler.disable()  # a crashing FMU is reported by the parent, not dumped to stderr
+    _keep_only(inherited)
+    _use_run_folder(folder)
+    try:
+        _serve(conn, objective)
+    finally:
+        close = getattr(objective, "close", None)
+        if close is not None:
+            close()
+
+
+def _serve(conn, objective) -> None:
     while True:
         try:
             task = conn.recv()
@@ -54,6 +99,39 @@ def _worker_loop(conn, objective) -> None:
             conn.send(("ok", result))
         except Exception as err:  # report, keep the worker
             conn.send(("error", f"{type(err).__name__}: {err}"))
+
+
+def _janitor(read_fd: int, inherited: list[int], folder: str) -> None:
+    """Wait for the parent's pipe to close; then kill the workers it named, remove the folder.
+
+    The parent writes ``+PID`` when it starts a worker and ``-PID`` when it has reaped one.
+    """
+    class Terminated(Exception):
+        pass
+
+    def terminated(signum, frame):
+        raise Terminated
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    signal.signal(signal.SIGTERM, terminated)  # a TERM to the whole group: clean up now
+    _keep_only(inherited)
+    pids: set[int] = set()
+    pending = b""
+    try:
+        while chunk := os.read(read_fd, 4096):
+            pending += chunk
+            *lines, pending = pending.split(b"\n")
+            for line in lines:
+                pid = int(line[1:])
+                (pids.add if line[:1] == b"+" else pids.discard)(pid)
+    except Terminated:
+        pass
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def _describe_exit(code: int | None) -> str:
@@ -82,21 +160,51 @@ class IsolatedPool:
         self.max_consecutive_failures = max_consecutive_failures
         self.ctx = mp.get_context("fork")
         self.failures = FailureLog()
-        self.workers: list[tuple[Any, Any]] = [self._spawn() for _ in range(max(1, n_workers))]
+        self.successes = 0
+        self.timeouts = 0
+        self.folder = tempfile.mkdtemp(prefix="pydiag_run_")
+        self.workers: list[tuple[Any, Any]] = []
+        self._janitor_fd = -1
+        try:
+            read_fd, self._janitor_fd = os.pipe()
+            self._janitor = self.ctx.Process(target=_janitor, daemon=True, args=(
+                read_fd, [self._janitor_fd], self.folder))
+            self._janitor.start()
+            os.close(read_fd)
+            for _ in range(max(1, n_workers)):
+                self.workers.append(self._spawn())
+        except BaseException:
+            self.close()
+            raise
+
+    def _tell_janitor(self, message: str) -> None:
+        try:
+            os.write(self._janitor_fd, f"{message}\n".encode())
+        except OSError:
+            pass
 
     def _spawn(self):
         parent, child = self.ctx.Pipe()
-        proc = self.ctx.Process(target=_worker_loop, args=(child, self.objective), daemon=True)
+        inherited = [self._janitor_fd, parent.fileno()] + [c.fileno() for _, c in self.workers
+                                                       if not c.closed]
+        proc = self.ctx.Process(target=_worker_loop, daemon=True,
+                                args=(child, self.objective, inherited, self.folder))
         proc.start()
         child.close()
+        self._tell_janitor(f"+{proc.pid}")
         return proc, parent
 
-    def _replace(self, i: int) -> None:
-        proc, conn = self.workers[i]
+    def _reap(self, proc, conn) -> None:
         if proc.is_alive():
             proc.kill()
         proc.join(5)
         conn.close()
+        self._tell_janitor(f"-{proc.pid}")
+        if not proc.is_alive():
+            proc.close()  # its sentinel descriptor
+
+    def _replace(self, i: int) -> None:
+        self._reap(*self.workers[i])
         self.workers[i] = self._spawn()
 
     def map(self, xs: np.ndarray) -> list[np.ndarray | None]:
@@ -126,6 +234,7 @@ class IsolatedPool:
                     continue
                 if status == "ok" and payload is not None:
                     results[task] = payload
+                    self.successes += 1
                     self.failures.consecutive = 0
                 else:
                     self._fail(payload if status == "error" else "simulation failed (non-finite "
@@ -134,30 +243,42 @@ class IsolatedPool:
             for w, (task, started) in list(busy.items()):
                 if now - started > self.timeout_s and self.workers[w][1] not in ready:
                     busy.pop(w)
-                    self._fail(f"evaluation exceeded {self.timeout_s:g} s")
+                    self.timeouts += 1
                     self._replace(w)
+                    self._fail(f"evaluation exceeded {self.timeout_s:g} s")
         return results
 
     def _fail(self, reason: str) -> None:
         self.failures.add(reason)
+        if self.successes == 0 and self.timeouts >= len(self.workers) and \
+                self.timeouts == self.failures.count:
+            raise TooManyFailures(f"the first {self.timeouts} evaluations all exceeded "
+                                  f"{self.timeout_s:g} s: the FMU hangs, or its warm-up or "
+                                  "window is far too long (or raise the evaluation timeout)",
+                                  self.failures.count, self.failures.consecutive, reason)
         if self.failures.consecutive >= self.max_consecutive_failures:
             raise TooManyFailures(f"{self.failures.consecutive} evaluations failed in a row; "
                                   f"last: {reason}", self.failures.count,
                                   self.failures.consecutive, reason)
 
     def close(self) -> None:
+        """Stop the workers (each removes its files), then the janitor; remove the run folder."""
         for proc, conn in self.workers:
             try:
                 conn.send(None)
             except (OSError, BrokenPipeError):
                 pass
         for proc, conn in self.workers:
-            proc.join(2)
-            if proc.is_alive():
-                proc.kill()
-                proc.join(2)
-            conn.close()
+            proc.join(5)
+            self._reap(proc, conn)
         self.workers = []
+        shutil.rmtree(self.folder, ignore_errors=True)
+        if self._janitor_fd >= 0:
+            os.close(self._janitor_fd)  # the janitor finds nothing left to do, and exits
+            self._janitor_fd = -1
+            self._janitor.join(5)
+            if not self._janitor.is_alive():
+                self._janitor.close()
 
     def __enter__(self) -> "IsolatedPool":
         return self

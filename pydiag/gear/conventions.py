@@ -8,6 +8,7 @@ from the parameters ``Np``, ``Ng`` and ``f_pinion``.
 from __future__ import annotations
 
 from pydiag.core.parameters import Parameter
+from pydiag.core.errors import UsageError
 from pydiag.gear.kinematics import GearKinematics
 
 #: The paper's four fault parameters (a0 = 0.1 is known) with their physical ranges.
@@ -43,6 +44,9 @@ def kinematics_from(values: dict[str, float]) -> GearKinematics | None:
     names = KINEMATIC_PARAMETERS
     if any(values.get(n) is None for n in names.values()):
         return None
+    for name in (names["n_pinion"], names["n_gear"]):
+        if abs(values[name] - round(values[name])) > 1e-9:
+            raise UsageError(f"{name} = {values[name]:g}: a number of teeth must be whole")
     return GearKinematics(int(round(values[names["n_pinion"]])),
                           int(round(values[names["n_gear"]])),
                           float(values[names["f_pinion_hz"]]))

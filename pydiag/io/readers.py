@@ -22,7 +22,10 @@ The source is kept in ``metadata["sample_rate_source"]``.
 Channels are chosen and mapped to model outputs with specs ``NAME=OUTPUT`` (``NAME`` alone
 keeps the name), and converted to SI with ``units`` (:mod:`pydiag.io.units`). A chosen
 channel that is constant (a dead sensor), a duplicated column name, a missing or non-numeric
-value are refused with one line naming the file and the column.
+value, and a value more than ``MAX_SPIKE`` times the channel's median absolute deviation
+from its median (a corrupt value or a DAQ's overflow code such as 9.9e37; the sharpest
+impacts of a broken tooth stand some tens of times above it) are refused with one line
+naming the file and the column.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ META_PREFIX = "# meta:"
 TIME_TOLERANCE = 0.01
 #: A given sample rate must agree with the file's this closely (relative).
 RATE_TOLERANCE = 1e-3
+#: A sample this many times the channel's median absolute deviation from its median is refused.
+MAX_SPIKE = 1e6
 RATE_VARIABLES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "sampling_rate", "sr")
 TEXT_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
 SUFFIXES = TEXT_SUFFIXES + (".parquet", ".mat", ".wav", ".tdms")
@@ -253,6 +258,16 @@ def _suffix(path: Path) -> str:
     return suffixes[-2] if suffixes[-1:] == [".gz"] and len(suffixes) > 1 else (suffixes or [""])[-1]
 
 
+def _check_spikes(path: Path, name: str, values: np.ndarray) -> None:
+    deviation = np.abs(values - np.median(values))
+    mad = float(np.median(deviation))
+    worst = int(np.argmax(deviation))
+    if mad > 0 and deviation[worst] > MAX_SPIKE * mad:
+        raise _fail(path, f"channel '{name}' sample {worst} is {values[worst]:g}, "
+                          f"{deviation[worst] / mad:.2g} times the channel's median deviation: "
+                          "a corrupt value or an overflow code?")
+
+
 def is_measurement_file(path: str | Path) -> bool:
     """Whether the name has an extension pydiag reads."""
     return _suffix(Path(path)) in SUFFIXES
@@ -360,6 +375,7 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
         if values.size >= 2 and np.ptp(values) == 0:
             raise _fail(path, f"channel '{name}' is constant ({values[0]:g}): a dead or "
                               "disconnected sensor?")
+        _check_spikes(path, name, values)
         unit = unit_of.get(name) or unit_of.get(output) or unit_of.get(None)
         if unit:
             factor, si = si_factor(unit)

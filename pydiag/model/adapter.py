@@ -7,8 +7,9 @@ and how to simulate. Example (see README, "Bring your own FMU")::
     [simulation]
     relative_tolerance = 1e-8      # optional
     engine = "auto"                # auto | native | fmpy
-    warmup_s = 0.05                # start-up discarded before the analysed window
+    warmup_s = 0.05                # start-up discarded before the analysed window (<= 100 s)
     cs_step_s = 1e-5               # Co-Simulation communication step (default: 1/(20 f_top))
+    eval_timeout_s = 60.0          # wall time one simulation may take (--eval-timeout wins)
 
     [kinematics]                   # gear models: lines at the kinematic frequencies
     n_pinion = 14                  # a number, or {parameter = "z1"}
@@ -40,6 +41,7 @@ A fault parameter becomes a :class:`~pydiag.core.parameters.Parameter` named by 
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,6 +52,10 @@ from pydiag.fmu.description import FmuVariable, require_settable
 from pydiag.fmu.plant import DEFAULT_WARMUP_S, ENGINES, PlantSpec
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, KINEMATIC_PARAMETERS
 from pydiag.gear.kinematics import GearKinematics
+
+#: Longest start-up an adapter may ask for, simulated seconds: it is simulated before every
+#: evaluation (a warm-up of 1e6 s made each evaluation run until its timeout).
+MAX_WARMUP_S = 100.0
 
 
 @dataclass(frozen=True)
@@ -89,6 +95,7 @@ class Adapter:
     warmup_s: float = DEFAULT_WARMUP_S
     source: str = "<built-in>"
     cs_step_s: float | None = None
+    eval_timeout_s: float | None = None
 
     def resolve_kinematics(self, parameters: dict[str, float]) -> GearKinematics | None:
         """The kinematics at FMU ``parameters`` (the values a run sets: they win over the
@@ -96,11 +103,16 @@ class Adapter:
         if self.kinematics is None:
             return None
         values = {**self.start_values, **parameters}
+        teeth = {}
+        for name in ("n_pinion", "n_gear"):
+            count = self.kinematics[name].resolve(values, name)
+            if abs(count - round(count)) > 1e-9:
+                raise AdapterError(f"{self.source}: [kinematics] {name} is {count:g}: a number "
+                                   "of teeth must be whole")
+            teeth[name] = int(round(count))
         try:
-            return GearKinematics(
-                int(round(self.kinematics["n_pinion"].resolve(values, "n_pinion"))),
-                int(round(self.kinematics["n_gear"].resolve(values, "n_gear"))),
-                self.kinematics["f_pinion_hz"].resolve(values, "f_pinion_hz"))
+            return GearKinematics(teeth["n_pinion"], teeth["n_gear"],
+                                  self.kinematics["f_pinion_hz"].resolve(values, "f_pinion_hz"))
         except UsageError as err:
             raise AdapterError(f"{self.source}: [kinematics] {err}") from err
 
@@ -149,6 +161,8 @@ def _number(table: dict, key: str, where: str, default=None, positive=False) -> 
     value = table[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise AdapterError(f"{where}: '{key}' must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise AdapterError(f"{where}: '{key}' must be a finite number, got {value}")
     if positive and not value > 0:
         raise AdapterError(f"{where}: '{key}' must be positive, got {value}")
     return float(value)
@@ -194,7 +208,7 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
     _check_keys(data, {"simulation", "kinematics", "spectrum", "start_values", "sensor",
                        "fault_parameter"}, source)
     sim = data.get("simulation", {})
-    _check_keys(sim, {"relative_tolerance", "engine", "warmup_s", "cs_step_s"},
+    _check_keys(sim, {"relative_tolerance", "engine", "warmup_s", "cs_step_s", "eval_timeout_s"},
                 f"{source} [simulation]")
     cs_step = None
     if "cs_step_s" in sim:
@@ -206,8 +220,12 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
     if tolerance is not None:
         tolerance = _number(sim, "relative_tolerance", f"{source} [simulation]", positive=True)
     warmup = _number(sim, "warmup_s", f"{source} [simulation]", default=DEFAULT_WARMUP_S)
-    if warmup < 0:
-        raise AdapterError(f"{source} [simulation]: 'warmup_s' must not be negative")
+    if not 0 <= warmup <= MAX_WARMUP_S:
+        raise AdapterError(f"{source} [simulation]: 'warmup_s' must lie in [0, {MAX_WARMUP_S:g}] "
+                           f"s (it is simulated before every evaluation), got {warmup:g}")
+    timeout = None
+    if "eval_timeout_s" in sim:
+        timeout = _number(sim, "eval_timeout_s", f"{source} [simulation]", positive=True)
 
     sensor_maps = []
     for where, s in _tables(data, "sensor", {"channel", "variable", "scale"}, source):
@@ -257,11 +275,12 @@ def parse_adapter(data: dict, source: str = "<adapter>") -> Adapter:
 
     starts = data.get("start_values", {})
     for name, value in starts.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise AdapterError(f"{source} [start_values]: '{name}' must be a number")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                not math.isfinite(value):
+            raise AdapterError(f"{source} [start_values]: '{name}' must be a finite number")
     return Adapter(tuple(sensor_maps), tuple(param_maps), kin, window, max_freq,
                    {k: float(v) for k, v in starts.items()}, tolerance, engine, warmup, source,
-                   cs_step)
+                   cs_step, timeout)
 
 
 def load_adapter(path: str | Path) -> Adapter:

@@ -1,5 +1,8 @@
 """The CLI on bad input: one line, non-zero exit, nothing lost."""
 
+import json
+import re
+
 import numpy as np
 import pytest
 from conftest import run_cli, write_csv
@@ -67,3 +70,27 @@ def test_an_unusable_history_stops_compare_before_the_fit(gear_fmu, short_measur
     assert res.returncode == 2 and "cannot use" in res.stderr and "run history" in res.stderr
     assert notes.read_text() == "not a database\n" * 50
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("gain,message", [
+    ("fixed", r"the fit's error is [\d.]+ per channel \(1 = as large as the measured lines\): the model explains none"),
+    ("fit", r"channel acc: the model had to be scaled by \d{3,4} to match the record's level"),
+])
+def test_a_record_in_the_wrong_units_gets_a_warning_not_a_silent_diagnosis(
+        gear_fmu, short_measurement, tmp_path, gain, message):
+    """The record's acceleration in mm/s^2 read as m/s^2: 1000 times the model's level."""
+    m = read_measurement(short_measurement)
+    t = np.arange(m.n_samples) / m.sample_rate_hz
+    scaled = write_csv(tmp_path / "mm.csv", ["time_s", "acc"], zip(t, 1000 * m.channels["acc"]))
+    out = tmp_path / "d.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(scaled), "--gain", gain, "--particles", "6", "--iterations", "3",
+                  "--polish", "10", "--json", str(out), "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert re.search("pydiag diagnose: warning: " + message, res.stderr), res.stderr
+    assert "check the units (--unit)" in res.stderr
+    assert re.search(message, " ".join(json.loads(out.read_text())["warnings"]))
+    # the record as made, fitted with the default budget: no warning
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(short_measurement), "--gain", gain, "--quiet")
+    assert res.returncode == 0 and "warning" not in res.stderr, res.stderr

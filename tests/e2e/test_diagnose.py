@@ -23,8 +23,6 @@ def test_fast_diagnosis_recovers_parameters_mode_and_severity(gear_fmu, number):
     assert r.best_error_history == sorted(r.best_error_history, reverse=True)
 
 
-
-
 def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
     meas = tmp_path / "m.csv"
     res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--set", "f_ate=0.4",
@@ -39,7 +37,11 @@ def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
     assert {"parameters", "fault_mode", "severity", "error", "evaluations", "elapsed_s"} <= set(data)
     assert set(data["parameters"]) == set(NAMES)
     assert data["evaluations"] == 8 and data["error"] > 0
-    assert "fault mode" in res.stdout and res.stderr == ""
+    assert "fault mode" in res.stdout
+    # eight evaluations are too few to trust: whatever is warned is in the JSON as well
+    warned = res.stderr.splitlines()
+    assert all(w.startswith("pydiag diagnose: warning: ") for w in warned), res.stderr
+    assert [w.removeprefix("pydiag diagnose: warning: ") for w in warned] == data["warnings"]
 
 
 @pytest.mark.slow

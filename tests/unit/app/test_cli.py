@@ -64,3 +64,13 @@ def test_numbers_are_checked_at_parse_time(capsys, argv, message):
     code, err = run([argv[0], *base, *argv[1:]], capsys)
     assert code == 2 and message in err, err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_more_workers_than_cores_is_refused_unless_asked(capsys, monkeypatch, tmp_path):
+    """--workers 1000 started 1085 processes (4 GB, 20 times slower)."""
+    monkeypatch.setattr(cli.os, "cpu_count", lambda: 2)
+    base = ["diagnose", "--fmu", str(tmp_path / "f.fmu"), "--measurement", str(tmp_path / "m.csv")]
+    code, err = run([*base, "--workers", "1000"], capsys)
+    assert code == 2 and "--workers: 1000 is more than the 2 cores" in err, err
+    code, err = run([*base, "--workers", "3", "--oversubscribe"], capsys)
+    assert code == 2 and "--workers" not in err and "m.csv" in err, err  # got past the check

@@ -8,18 +8,6 @@ import pytest
 from pydiag.core.errors import UnsafeArchive
 from pydiag.fmu.archive import safe_extract
 
-# ---------------------------------------------------------------------- adapters
-
-MINIMAL = {"sensor": [{"variable": "y"}], "fault_parameter": [{"variable": "k", "low": 0, "high": 1}],
-           "spectrum": {"window_s": 1.0, "max_freq_hz": 10.0}}
-
-
-
-
-
-
-# ---------------------------------------------------------------------- CasADi, other names
-
 
 @pytest.mark.parametrize("entries,message", [
     ([("/etc/evil", b"x", None)], "absolute path"),
@@ -35,6 +23,24 @@ def test_hostile_archives_are_rejected_before_writing(tmp_path, entries, message
         safe_extract(fmu, dest)
     assert list(dest.iterdir()) == []
     assert not (tmp_path / "evil").exists()
+
+
+def test_many_small_compressible_entries_are_a_bomb_too(tmp_path):
+    """Each 1 MiB entry of zeros is under the per-entry rule; together they are 64 MiB from
+    about 64 kB (the issue's case was 1000 of them: 1 GiB per worker)."""
+    fmu = make_zip(tmp_path / "zeros.fmu", [(f"resources/z{i}", bytes(1 << 20), None)
+                                            for i in range(64)])
+    dest = tmp_path / "out"
+    dest.mkdir()
+    with pytest.raises(UnsafeArchive, match=r"unpacks to 67108864 bytes from \d+ \(\d+ times\): a "
+                                            "zip bomb"):
+        safe_extract(fmu, dest)
+    assert list(dest.iterdir()) == []
+
+
+def test_an_ordinary_fmu_is_far_from_the_ratio_limit(gear_fmu, tmp_path):
+    safe_extract(gear_fmu, tmp_path / "out")
+    assert (tmp_path / "out" / "modelDescription.xml").is_file()
 
 
 def test_total_size_limit(tmp_path):

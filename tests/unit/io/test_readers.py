@@ -171,6 +171,21 @@ def test_bad_files_get_one_clear_line(tmp_path, text, kwargs, message):
     assert "\n" not in str(err.value) and str(path) in str(err.value)
 
 
+def test_a_corrupt_value_is_refused_but_a_tacho_and_impacts_are_not(tmp_path):
+    rng = np.random.default_rng(3)
+    acc = rng.normal(size=4000)
+    acc[::400] += 50.0  # a broken tooth's impacts, 50 sigma
+    tacho = np.where(np.arange(4000) % 100 == 0, 5.0, 0.0)  # pulses: deviation 0 mostly
+    path = tmp_path / "r.csv"
+    pd.DataFrame({"acc": acc, "tacho": tacho}).to_csv(path, index=False)
+    assert read_measurement(path, FS).n_samples == 4000
+    acc[1234] = 9.9e37  # a DAQ's overflow code
+    pd.DataFrame({"acc": acc, "tacho": tacho}).to_csv(path, index=False)
+    with pytest.raises(MeasurementError, match=r"channel 'acc' sample 1234 is 9.9e\+37, .* a "
+                                               "corrupt value or an overflow code"):
+        read_measurement(path, FS)
+
+
 def test_unknown_format_and_not_a_file(tmp_path):
     with pytest.raises(MeasurementError, match="unknown measurement format"):
         read_measurement(tmp_path / "r.xlsx")
