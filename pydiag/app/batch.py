@@ -1,5 +1,9 @@
 """Diagnose many measurements: locally in worker processes, or on a Dask cluster.
 
+With ``indicators`` set to a shaft, each row also holds the condition indicators of
+:mod:`pydiag.gear.indicators` (one column each, ``channel:name`` for several channels), so
+a fleet's records can be trended in one table.
+
 Every measurement is one task; inside a task the estimator runs in a single process
 (the parallelism is across measurements). A measurement that fails becomes a row with
 ``status = "error"`` and its message, never a crashed batch. Rows come back in input
@@ -19,6 +23,9 @@ from typing import Callable, Iterable
 from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
+from pydiag.gear.indicators import condition_indicators
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.speed import SpeedSettings
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
 from pydiag.model.adapter import load_adapter
@@ -39,6 +46,7 @@ class BatchTask:
     adapter: str | None = None  # path of an adapter TOML
     problem: dict = field(default_factory=dict)  # build_problem settings (feature_mode, ...)
     units: tuple[str, ...] | None = None  # UNIT or NAME=UNIT specs
+    indicators: str | None = None  # the shaft whose condition indicators are columns too
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -69,7 +77,14 @@ def diagnose_task(task: BatchTask) -> dict:
         row.update(status="ok", message="; ".join(problem.warnings(result.error)),
                    fault_mode=result.fault_mode,
                    severity=result.severity, error=result.error,
-                   evaluations=result.evaluations, **result.parameters, **facts)
+                   evaluations=result.evaluations, **result.parameters,
+                   tooth_contrast=result.tooth_contrast, **facts)
+        if task.indicators:
+            kin = problem.kinematics
+            nominal = GearKinematics(kin.n_pinion, kin.n_gear, problem.speed.nominal_hz
+                                     if problem.speed is not None else kin.f_pinion_hz)
+            speed = task.problem.get("speed") or SpeedSettings()
+            row.update(condition_indicators(m, nominal, speed, task.indicators).columns())
     except PydiagError as err:
         row.update(status="error", message=str(err))
     except Exception as err:  # a broken FMU must not take the batch down

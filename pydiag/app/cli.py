@@ -16,12 +16,13 @@ import signal
 import sys
 import threading
 
-from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_inspect, cmd_regress,
-                                 cmd_simulate, warn_validation)
+from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators, cmd_inspect,
+                                 cmd_regress, cmd_simulate, warn_validation)
 from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
 from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
+from pydiag.gear.indicators import SHAFTS
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
@@ -126,8 +127,8 @@ def _optimiser_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def _record_args(p: argparse.ArgumentParser) -> None:
-    """How to read a record and find its operating point (diagnose, compare, discover, batch)."""
+def _reading_args(p: argparse.ArgumentParser) -> None:
+    """How to read a record: channels, units, rate."""
     p.add_argument("--channel", "--column", dest="channel", action="append",
                    metavar="NAME[=OUTPUT]", help="channel to use, mapped to a model output "
                    "(repeat; e.g. a1=acc; default: every column)")
@@ -135,7 +136,10 @@ def _record_args(p: argparse.ArgumentParser) -> None:
                    help="unit of the channels (or of one), converted to SI: g, m/s2, mm/s, um")
     p.add_argument("--sample-rate", type=positive, help="Hz, if the file has no time column "
                    "or rate")
-    p.add_argument("--adapter", help="adapter TOML describing the FMU")
+
+
+def _operating_args(p: argparse.ArgumentParser) -> None:
+    """The record's operating point and how to find its speed."""
     p.add_argument("--rpm", type=positive, help="nominal pinion speed, rev/min (sets f_pinion)")
     p.add_argument("--teeth", type=teeth, metavar="NP,NG", help="pinion and gear teeth "
                    "(set Np, Ng)")
@@ -145,6 +149,13 @@ def _record_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tacho", metavar="NAME", help="tacho channel (pulses), not a sensor")
     p.add_argument("--pulses-per-rev", type=_number(int, 1), default=1,
                    help="tacho pulses per pinion revolution (default 1)")
+
+
+def _record_args(p: argparse.ArgumentParser) -> None:
+    """How to read a record and find its operating point (diagnose, compare, discover, batch)."""
+    _reading_args(p)
+    p.add_argument("--adapter", help="adapter TOML describing the FMU")
+    _operating_args(p)
     p.add_argument("--gain", choices=("auto", "fit", "fixed"), default="auto",
                    help="fit a gain per channel in closed form, or take the model's level as "
                    "it is; auto (default): fit, except on records pydiag simulate made")
@@ -189,12 +200,28 @@ def build_parser() -> argparse.ArgumentParser:
     _optimiser_args(p)
     p.set_defaults(func=cmd_diagnose)
 
+    p = sub.add_parser("indicators", help="gear condition indicators on the synchronous average "
+                       "(no FMU)")
+    p.add_argument("--measurement", required=True, help="record file: CSV/TSV (.gz), Parquet, "
+                   "MAT, WAV, TDMS")
+    _reading_args(p)
+    _operating_args(p)
+    p.add_argument("--shaft", choices=SHAFTS, default="pinion",
+                   help="the shaft the synchronous average follows (default pinion)")
+    p.add_argument("--baseline", metavar="FILE", help="reference record (healthy, or the first "
+                   "of a trend) for NA4 and NB4; without it they use the record itself")
+    p.add_argument("--json", help="write the indicators as JSON here")
+    _force(p)
+    p.set_defaults(func=cmd_indicators)
+
     p = sub.add_parser("batch", help="diagnose many measurements (locally or on Dask)")
     p.add_argument("--fmu", required=True)
     p.add_argument("--measurements", required=True,
                    help="folder of record files (any format pydiag reads), or a glob")
     p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
+    p.add_argument("--indicators", nargs="?", const="pinion", choices=SHAFTS,
+                   help="add the condition indicators of this shaft as columns (default pinion)")
     _record_args(p)
     _force(p)
     _optimiser_args(p)

@@ -1,5 +1,5 @@
-"""The commands that diagnose and check FMUs: simulate, diagnose, batch, regress, inspect,
-demo. Each parses nothing and computes nothing itself: it calls the library and prints."""
+"""The commands that diagnose and check FMUs: simulate, diagnose, indicators, batch,
+regress, inspect, demo. Each parses nothing and computes nothing itself: it calls the library and prints."""
 
 from __future__ import annotations
 
@@ -9,14 +9,17 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.formatting import format_facts, format_regression, format_result
+from pydiag.app.formatting import (format_facts, format_indicators, format_regression,
+                                   format_result)
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import DiagnosisResult, FaultEstimator
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.fmu.description import read_model_description
 from pydiag.fmu.inspect import describe, format_info
-from pydiag.gear.conventions import DEFAULT_SENSORS
+from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from
+from pydiag.gear.indicators import condition_indicators
+from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.measurements import write_measurement
@@ -156,6 +159,35 @@ def cmd_diagnose(args) -> int:
     return 0
 
 
+def record_kinematics(args, measurement: Measurement) -> GearKinematics:
+    """Teeth and nominal speed from --teeth/--rpm, else from the record's metadata."""
+    meta = measurement.metadata.get("kinematics")
+    known = kinematics_from(meta) if isinstance(meta, dict) else None
+    if args.teeth is None and known is None:
+        raise UsageError("give the teeth (--teeth NP,NG): the record does not say them")
+    if args.rpm is None and known is None:
+        raise UsageError("give the nominal pinion speed (--rpm): the record does not say it")
+    n_pinion, n_gear = args.teeth if args.teeth is not None else (known.n_pinion, known.n_gear)
+    return GearKinematics(n_pinion, n_gear,
+                          args.rpm / 60.0 if args.rpm is not None else known.f_pinion_hz)
+
+
+def cmd_indicators(args) -> int:
+    check_outputs(args, "json")
+    m = read_input(args)
+    baseline = None
+    if args.baseline:
+        baseline = read_measurement(args.baseline, args.sample_rate, channels_to_read(args),
+                                    args.unit)
+    speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
+    report = condition_indicators(m, record_kinematics(args, m), speed, args.shaft, baseline)
+    print(format_indicators(report))
+    if args.json:
+        out = {**report.to_dict(), "measurement": str(args.measurement)}
+        write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
+    return 0
+
+
 def cmd_batch(args) -> int:
     check_outputs(args, "out")
     paths = batch.find_measurements(args.measurements)
@@ -165,7 +197,7 @@ def cmd_batch(args) -> int:
     channels = channels_to_read(args)
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem_settings(args),
-                             tuple(args.unit) if args.unit else None)
+                             tuple(args.unit) if args.unit else None, args.indicators)
              for p in paths]
     bar = None
     if not args.quiet:

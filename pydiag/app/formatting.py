@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pydiag.fit.estimator import DiagnosisResult
+from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.loop.compare import Comparison
 from pydiag.loop.discover import Discovery
 from pydiag.loop.regress import RegressionReport
@@ -19,8 +20,11 @@ def format_result(result: DiagnosisResult, truth: dict | None = None) -> str:
     lines += ["",
               f"fault mode : {result.fault_mode}",
               f"severity   : {result.severity} (tooth: {result.tooth_severity}, "
-              f"transmission error: {result.te_severity})",
-              f"error      : {result.error:.5f} (Eq. 12, relative, summed over channels)",
+              f"transmission error: {result.te_severity})"]
+    if result.tooth_contrast is not None:
+        lines.append(f"tooth      : contrast {result.tooth_contrast:.3f} (|a_f/a0 - 1|: the faulty "
+                     "tooth's stiffness variation against the others')")
+    lines += [f"error      : {result.error:.5f} (Eq. 12, relative, summed over channels)",
               f"evaluations: {result.evaluations} in {result.elapsed_s:.1f} s"]
     if result.failed_evaluations:
         lines.append(f"failed     : {result.failed_evaluations} simulations, penalised: " + "; ".join(
@@ -92,4 +96,20 @@ def format_regression(report: RegressionReport) -> str:
     status = "PASS" if report.passed else "FAIL"
     lines.append(f"{status}: {report.cases} cases x {len(report.sensors)} sensors, worst deviation "
                  f"{report.worst_relative:.2e} of the largest line (tolerance {report.rtol:.1e})")
+    return "\n".join(lines)
+
+
+def format_indicators(report: IndicatorReport) -> str:
+    """One column per channel, one row per indicator, then what the TSA was made of."""
+    channels = list(report.indicators)
+    lines = [f"{'indicator':<13}" + "".join(f"{c:>14}" for c in channels)]
+    for name in INDICATORS:
+        lines.append(f"{name:<13}" + "".join(f"{report.indicators[c][name]:>14.5g}"
+                                              for c in channels))
+    s = report.speed
+    lines += ["", f"TSA        : {report.revolutions} revolutions of the {report.shaft} (mesh order "
+              f"{report.mesh_order}), {report.samples_per_rev} samples each",
+              f"speed      : {s.speed_hz:.5f} Hz pinion ({60 * s.speed_hz:.2f} rpm; nominal "
+              f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}",
+              f"NA4, NB4   : relative to {report.reference}"]
     return "\n".join(lines)

@@ -37,7 +37,7 @@ from pydiag.core.errors import EstimationError, TooManyFailures, UsageError
 from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.fit.pso import global_best_pso
 from pydiag.fmu.isolation import IsolatedPool
-from pydiag.gear.classify import classify
+from pydiag.gear.classify import classify, tooth_contrast
 from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
 
 #: Wall-time limit of one simulation in a worker, seconds.
@@ -61,6 +61,7 @@ class DiagnosisResult:
     best_error_history: list[float]
     failed_evaluations: int = 0
     failure_reasons: dict[str, int] = field(default_factory=dict)
+    tooth_contrast: float | None = None  # |a_f/a0 - 1|, when the tooth was estimated
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -163,15 +164,18 @@ class FaultEstimator:
             raise EstimationError(f"every simulation of the plant failed ({counter['n']} "
                                   f"evaluations){why}")
         estimate = {p.name: float(v) for p, v in zip(params, best_x)}
+        contrast = None
         if any(name in estimate for name in CLASSIFIED_PARAMETERS):
             cls = classify({**problem.fixed_values, **estimate})
             labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
+            if "a_f" in estimate:
+                contrast = tooth_contrast({**problem.fixed_values, **estimate})
         else:
             labels = ("not_classified",) + ("unknown",) * 3
         return DiagnosisResult(estimate, *labels, best_cost, counter["n"],
                                time.perf_counter() - started, swarm.best_cost_history,
                                failures.count if failures else 0,
-                               dict(failures.reasons) if failures else {})
+                               dict(failures.reasons) if failures else {}, contrast)
 
     def _distinct_starts(self, positions, costs, lows, highs) -> tuple[list, list]:
         """The best personal bests, at least 5 % of the box apart from each other."""

@@ -14,6 +14,12 @@ so a tooth level comes from a_f - a0 at 0.05 / 0.15 / 0.35 and from f_f at
 0.25 / 0.5 / 0.75 (the higher of the two), and a transmission-error level from
 max(f_ate, f_dte) at 0.05 / 0.15 / 0.3. The failure mode names which of the two
 is above "none"; the severity is the higher of the two levels.
+
+When ``a0`` was estimated as well (a record whose level was fitted, see
+:mod:`pydiag.fit.problem`), the absolute amplitudes are not identifiable, their ratio is:
+the tooth level then comes from the contrast ``|a_f / a0 - 1|`` put on the paper's scale
+(``a0`` = 0.1: a contrast of 1 is the paper's a_f - a0 = 0.1), and not from ``f_f``,
+which then is the shape of every tooth's stiffness wave, fitted to the real gear.
 """
 
 from __future__ import annotations
@@ -42,10 +48,21 @@ class Classification:
     te_severity: str
 
 
+def tooth_contrast(parameters: dict[str, float], a0: float = DEFAULT_A0) -> float:
+    """|a_f / a0 - 1|: how much the faulty tooth's stiffness variation differs from the
+    healthy teeth's, relative to theirs (``a0`` from the parameters when estimated)."""
+    a0 = parameters.get("a0", a0)
+    return abs(parameters.get("a_f", a0) / a0 - 1.0)
+
+
 def classify(parameters: dict[str, float], a0: float = DEFAULT_A0) -> Classification:
-    """Classify from ``a_f``, ``f_f``, ``f_ate``, ``f_dte`` (missing ones count as healthy)."""
-    tooth = max(_level(parameters.get("a_f", a0) - a0, TOOTH_AMPLITUDE_EDGES),
-                _level(parameters.get("f_f", 0.0), FORM_FACTOR_EDGES))
+    """Classify from ``a_f``, ``f_f``, ``f_ate``, ``f_dte`` (missing ones count as healthy),
+    or from the tooth contrast when ``a0`` is among the parameters (module docstring)."""
+    if "a0" in parameters:
+        tooth = _level(DEFAULT_A0 * tooth_contrast(parameters), TOOTH_AMPLITUDE_EDGES)
+    else:
+        tooth = max(_level(parameters.get("a_f", a0) - a0, TOOTH_AMPLITUDE_EDGES),
+                    _level(parameters.get("f_f", 0.0), FORM_FACTOR_EDGES))
     te = _level(max(parameters.get("f_ate", 0.0), parameters.get("f_dte", 0.0)), TE_EDGES)
     mode = FAULT_MODES[(tooth > 0) + 2 * (te > 0)]
     return Classification(mode, SEVERITIES[max(tooth, te)], SEVERITIES[tooth], SEVERITIES[te])

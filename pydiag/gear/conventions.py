@@ -22,6 +22,11 @@ GEAR_FAULT_PARAMETERS = (
     Parameter("f_dte", 0.0, 1.0),
 )
 
+#: The stiffness variation of the healthy teeth (GearPair's ``a0``, 0.1 in the paper's
+#: cases). Fitted with a record's level (see :mod:`pydiag.fit.problem`): with the level
+#: free, only the faulty tooth's variation relative to the others is identifiable.
+HEALTHY_TOOTH = Parameter("a0", 0.02, 0.9)
+
 #: Parameter names that feed the classification (any other estimate is only reported).
 CLASSIFIED_PARAMETERS = tuple(p.name for p in GEAR_FAULT_PARAMETERS)
 

@@ -168,16 +168,21 @@ def mesh_speed(signal: np.ndarray, sample_rate_hz: float, kinematics: GearKinema
 
 
 def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
-                   settings: SpeedSettings = SpeedSettings()) -> SpeedEstimate:
+                   settings: SpeedSettings = SpeedSettings(),
+                   tracked_s: float | None = None) -> SpeedEstimate:
     """The pinion speed of ``measurement`` around ``kinematics.f_pinion_hz`` (nominal).
 
     ``settings.method``: "auto" (the tacho when one is named, else the mesh), "mesh",
-    "tacho" or "nominal"; see :class:`SpeedSettings`.
+    "tacho" or "nominal"; see :class:`SpeedSettings`. ``tracked_s``: under "auto", the
+    shortest stretch worth following beyond the demodulation's edges (default
+    :data:`MIN_TRACKED_PERIODS` fundamental periods: what a fit needs).
     """
     method, channel, tacho = settings.method, settings.channel, settings.tacho
     pulses_per_rev = settings.pulses_per_rev
+    if tracked_s is None:
+        tracked_s = MIN_TRACKED_PERIODS * kinematics.period_s
     short = measurement.duration_s < (2 * EDGE_BANDWIDTHS / _demodulation_band_hz(kinematics)
-                                      + MIN_TRACKED_PERIODS * kinematics.period_s)
+                                      + tracked_s)
     if method == "auto":
         method = "tacho" if tacho else "nominal" if short else "mesh"
     fs, nominal = measurement.sample_rate_hz, kinematics.f_pinion_hz

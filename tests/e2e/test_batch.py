@@ -70,3 +70,25 @@ def test_cli_batch_writes_parquet_and_never_overwrites(measurement_dir, gear_fmu
     res = run_cli("-m", "pydiag", "batch", "--fmu", str(gear_fmu), "--measurements",
                   str(tmp_path / "none*.csv"), "--out", str(tmp_path / "x.parquet"), "--quiet")
     assert res.returncode == 2 and "no measurement files" in res.stderr
+
+
+def test_batch_rows_can_carry_the_condition_indicators(measurement_dir, gear_fmu, tmp_path):
+    from pydiag.gear.indicators import INDICATORS, condition_indicators
+    from pydiag.gear.kinematics import GearKinematics
+    from pydiag.io.readers import read_measurement
+
+    path = str(measurement_dir / "a.csv")
+    row, = batch.run_batch([batch.BatchTask(path, str(gear_fmu), TINY, indicators="pinion")],
+                           "local", n_workers=1)
+    assert row["status"] == "ok", row["message"]
+    direct = condition_indicators(read_measurement(path), GearKinematics(14, 21, 25.0))
+    for channel in ("acc", "disp"):
+        for name in INDICATORS:
+            assert row[f"{channel}:{name}"] == pytest.approx(direct.indicators[channel][name],
+                                                             nan_ok=True)
+    out = tmp_path / "fleet.parquet"
+    res = run_cli("-m", "pydiag", "batch", "--fmu", str(gear_fmu), "--measurements", path,
+                  "--out", str(out), "--indicators", "--particles", "4", "--iterations", "2",
+                  "--polish", "0", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert {"acc:fm4", "disp:na4", "acc:ser", "tooth_contrast"} <= set(pd.read_parquet(out))

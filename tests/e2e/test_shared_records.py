@@ -1,0 +1,46 @@
+"""The shared real records (../shared/data/gfd, healthy and broken tooth at two loads): the
+model orders each healthy/broken pair by its tooth contrast, and the indicators command
+runs on them. Skipped where the records are not present."""
+
+import json
+
+import pytest
+from conftest import ROOT, run_cli
+
+DATA = ROOT.parent / "shared" / "data" / "gfd"
+READ = ["--channel", "a1", "--unit", "g", "--rpm", "1800", "--teeth", "32,80",
+        "--sample-rate", "12900"]
+
+pytestmark = pytest.mark.skipif(not (DATA / "h30hz0.csv.gz").exists(),
+                                reason="the shared records are not here")
+
+
+def diagnose(gear_fmu, name, tmp_path) -> dict:
+    out = tmp_path / f"{name}.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(DATA / f"{name}.csv.gz"), *READ[:1], "a1=acc", *READ[2:], "--json",
+                  str(out), "--quiet")
+    assert res.returncode == 0, res.stderr
+    return json.loads(out.read_text())
+
+
+@pytest.mark.parametrize("load", [0, 90])
+def test_the_broken_tooth_has_the_larger_tooth_contrast(gear_fmu, tmp_path, load):
+    healthy = diagnose(gear_fmu, f"h30hz{load}", tmp_path)
+    broken = diagnose(gear_fmu, f"b30hz{load}", tmp_path)
+    for d in (healthy, broken):
+        assert "a0" in d["parameters"]  # the level is fitted, so a0 is too
+    assert broken["tooth_contrast"] > healthy["tooth_contrast"], (broken, healthy)
+    assert broken["tooth_severity"] != "none"
+
+
+def test_indicators_of_a_shared_record(tmp_path):
+    out = tmp_path / "ind.json"
+    res = run_cli("-m", "pydiag", "indicators", "--measurement", str(DATA / "b30hz90.csv.gz"),
+                  *READ, "--baseline", str(DATA / "h30hz90.csv.gz"), "--json", str(out))
+    assert res.returncode == 0, res.stderr
+    data = json.loads(out.read_text())
+    assert data["mesh_order"] == 32 and data["revolutions"] > 150
+    assert abs(data["speed_hz"] - 29.84) < 0.05  # 0.5 % below nominal at 90 % load
+    assert data["trend_reference"].startswith("baseline ") and "h30hz90" in data["trend_reference"]
+    assert all(v is not None for v in data["indicators"].values())
