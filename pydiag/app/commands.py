@@ -1,5 +1,6 @@
 """The commands that diagnose and check FMUs: simulate, diagnose, indicators, batch,
-regress, inspect, demo. Each parses nothing and computes nothing itself: it calls the library and prints."""
+regress, inspect, demo. Each parses nothing and computes nothing itself: it calls the
+library and prints."""
 
 from __future__ import annotations
 

@@ -107,8 +107,8 @@ def format_indicators(report: IndicatorReport) -> str:
         lines.append(f"{name:<13}" + "".join(f"{report.indicators[c][name]:>14.5g}"
                                               for c in channels))
     s = report.speed
-    lines += ["", f"TSA        : {report.revolutions} revolutions of the {report.shaft} (mesh order "
-              f"{report.mesh_order}), {report.samples_per_rev} samples each",
+    lines += ["", f"TSA        : {report.revolutions} revolutions of the {report.shaft} "
+              f"(mesh order {report.mesh_order}), {report.samples_per_rev} samples each",
               f"speed      : {s.speed_hz:.5f} Hz pinion ({60 * s.speed_hz:.2f} rpm; nominal "
               f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}",
               f"NA4, NB4   : relative to {report.reference}"]

@@ -165,6 +165,7 @@ class IsolatedPool:
         self.folder = tempfile.mkdtemp(prefix="pydiag_run_")
         self.workers: list[tuple[Any, Any]] = []
         self._janitor_fd = -1
+        self._janitor = None
         try:
             read_fd, self._janitor_fd = os.pipe()
             self._janitor = self.ctx.Process(target=_janitor, daemon=True, args=(
@@ -276,9 +277,11 @@ class IsolatedPool:
         if self._janitor_fd >= 0:
             os.close(self._janitor_fd)  # the janitor finds nothing left to do, and exits
             self._janitor_fd = -1
+        if self._janitor is not None and self._janitor.pid is not None:
             self._janitor.join(5)
             if not self._janitor.is_alive():
                 self._janitor.close()
+            self._janitor = None
 
     def __enter__(self) -> "IsolatedPool":
         return self

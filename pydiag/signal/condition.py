@@ -124,7 +124,8 @@ def raw_indicators(signal: np.ndarray) -> dict[str, float]:
             "kurtosis": normalized_moment(x, 4)}
 
 
-def tsa_indicators(signals: TsaSignals, reference: TrendReference = TrendReference()) -> dict[str, float]:
+def tsa_indicators(signals: TsaSignals,
+                   reference: TrendReference = TrendReference()) -> dict[str, float]:
     """fm0, fm4, na4, nb4, m6a, m8a, er and ser of one TSA (see docs/indicators.md)."""
     spectrum, mesh = signals.spectrum, signals.mesh_order
     harmonics = spectrum[mesh::mesh]
@@ -140,8 +141,9 @@ def tsa_indicators(signals: TsaSignals, reference: TrendReference = TrendReferen
             return float("nan")
         return normalized_moment(x, k, reference_variance)
 
+    mesh_sum = float(harmonics.sum())
     return {
-        "fm0": float(np.ptp(signals.tsa) / harmonics.sum()) if harmonics.sum() > 0 else float("nan"),
+        "fm0": float(np.ptp(signals.tsa)) / mesh_sum if mesh_sum > 0 else float("nan"),
         "fm4": moment(d, 4),
         "na4": moment(signals.residual, 4, reference.residual_variance),
         "nb4": moment(signals.envelope - signals.envelope.mean(), 4, reference.envelope_variance),
