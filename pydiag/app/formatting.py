@@ -57,8 +57,12 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
              f"peaks      : {len(c.peaks)} unexplained above the noise floor "
              f"(false-alarm rate {c.false_alarm_rate:g})"]
     for i, p in enumerate(c.peaks[:max_peaks], 1):
-        lines.append(f"  {i:2d}. {p.channel:<5} {p.freq_hz:9.2f} Hz  {p.family:<15} {p.label:<24} "
-                     f"{100 * p.energy_fraction:5.1f} % of residual energy")
+        lines.append(f"  {i:2d}. {p.channel:<5} {p.freq_hz:9.2f} Hz  {p.family:<15} "
+                     f"{100 * p.energy_fraction:5.1f} % of the peaks' energy  {p.label}")
+    for channel, groups in c.residual_by_family.items():
+        lines.append(f"by family  : {channel}: share of the measured / of the residual energy")
+        lines += [f"  {g:<17} {100 * v['measured']:5.1f} % / {100 * v['residual']:5.1f} %"
+                  for g, v in groups.items()]
     shown = [s for s in c.suggested_effects if s.score > 0]
     lines.append("suggested  : " + ("none" if not shown else ""))
     for s in shown:

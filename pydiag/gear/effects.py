@@ -85,14 +85,25 @@ def _housing(line, freq, f_mesh):
     return 0.5 if line.family in ("mesh", "mesh_sb_pinion", "mesh_sb_gear") else 0.0
 
 
+#: The highest torque-ripple frequency the load-fluctuation effect models, Hz.
+MAX_RIPPLE_HZ = 20.0
+
+
 def _load_fluctuation(line, freq, f_mesh):
-    # a torque ripple is not kinematic: its line (and its mesh sidebands) match no family
-    return 1.0 if line is None else 0.0
+    # a torque ripple is not kinematic: its line (and its mesh sidebands) match no family.
+    # It predicts lines only at its own frequency (<= MAX_RIPPLE_HZ) and within that of a
+    # mesh harmonic; a non-kinematic line elsewhere (another shaft, the mains, a
+    # resonance) is no evidence for it.
+    if line is not None:
+        return 0.0
+    harmonic = round(freq / f_mesh)
+    near_mesh = harmonic >= 1 and abs(freq - harmonic * f_mesh) <= MAX_RIPPLE_HZ
+    return 1.0 if freq <= MAX_RIPPLE_HZ or near_mesh else 0.0
 
 
 def _load_hint(peaks, bin_hz):
     """The ripple frequency is the strongest unexplained line below 20 Hz, to within a bin."""
-    low = [p for p in peaks if p.family == "unexplained" and p.freq_hz <= 20.0]
+    low = [p for p in peaks if p.family == "unexplained" and p.freq_hz <= MAX_RIPPLE_HZ]
     if not low:
         return {}
     f = max(low, key=lambda p: p.energy_fraction).freq_hz
@@ -113,7 +124,8 @@ EFFECTS = {e.key: e for e in (
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfi", "bpfi_sb"))),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
-           (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, 20.0)), _load_fluctuation, _load_hint),
+           (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
+           _load_hint),
     # lower bounds: a mode below every line, where the housing passes the force as a mass
     # (accelerance 1/m): the level is the mesh's, and the channel gain takes the rest
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",

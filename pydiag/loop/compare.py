@@ -15,6 +15,13 @@ which missing effect they point to.
    compared bins (channels have different units), over the same sum for all peaks.
 6. Each catalogue effect scores the peak energy its signature covers
    (:mod:`pydiag.gear.effects`); the score is also its confidence, 0 when there is no peak.
+   A peak no line of the gear pair explains is named by what it could be (its ratio to
+   each shaft speed, a multiple of a mains frequency) and counts only for an effect whose
+   signature predicts its frequency.
+7. The residual by family: every bin of each channel's spectrum goes to one group of
+   :data:`RESIDUAL_GROUPS` (the kinematic line on it, else a significant peak of the
+   measurement: non-kinematic, else broadband), and each group's share of the measured
+   energy (sum R^2) and of the residual energy (sum (R - S)^2) is reported.
 
 The ``error`` is Eq. (12), relative, with the part that noise alone produces subtracted
 (:func:`pydiag.fit.objective.noise_corrected_error`: ~0 for a perfect model), over a set of
@@ -39,9 +46,18 @@ from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
+from pydiag.gear.kinematic_map import PRIORITY, Bearing, kinematic_map, match
 from pydiag.signal.spectra import local_maxima, whole_periods
 
+#: Groups of the residual by family, and the kinematic families each gathers.
+RESIDUAL_GROUPS = ("mesh_harmonics", "pinion_orders", "gear_orders", "assembly_hunting",
+                   "bearing", "non_kinematic", "broadband")
+FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
+                "pinion": "pinion_orders", "mesh_sb_gear": "gear_orders", "gear": "gear_orders",
+                "assembly": "assembly_hunting", "hunting": "assembly_hunting", "bpfo": "bearing",
+                "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing"}
+#: Mains frequencies a non-kinematic line is checked against, Hz.
+MAINS_HZ = (50.0, 60.0)
 #: A suggestion at or above this confidence is reported as confident.
 CONFIDENT = 0.5
 #: The refit of an effect's few parameters: a smaller swarm than a full diagnosis.
@@ -98,6 +114,8 @@ class Comparison:
     gains: dict[str, float] = field(default_factory=dict)  # model -> measurement, per channel
     spectra: dict[str, ChannelSpectrum] = field(default_factory=dict)
     markers: list[dict] = field(default_factory=list)  # main kinematic lines, for plots
+    # channel -> group -> {"measured": share of sum R^2, "residual": share of sum (R-S)^2}
+    residual_by_family: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
 
     def to_dict(self, with_spectra: bool = False) -> dict:
         d = asdict(self)
@@ -105,6 +123,40 @@ class Comparison:
             d.pop("spectra")
             d.pop("markers")
         return d
+
+
+def bin_groups(freqs: np.ndarray, lines: list, bin_hz: float, measured: np.ndarray,
+               margin: float) -> np.ndarray:
+    """The :data:`RESIDUAL_GROUPS` index of every bin (entry k is frequency (k+1) bin_hz)."""
+    groups = np.where((measured > margin) & local_maxima(measured),
+                      RESIDUAL_GROUPS.index("non_kinematic"), RESIDUAL_GROUPS.index("broadband"))
+    rank = {f: i for i, f in enumerate(PRIORITY)}
+    for line in sorted(lines, key=lambda l: -rank[l.family]):  # the first family wins
+        k = int(round(line.freq_hz / bin_hz)) - 1
+        if 0 <= k < freqs.size and abs(freqs[k] - line.freq_hz) <= bin_hz / 2:
+            groups[k] = RESIDUAL_GROUPS.index(FAMILY_GROUP[line.family])
+    return groups
+
+
+def residual_shares(groups: np.ndarray, measured: np.ndarray,
+                    model: np.ndarray) -> dict[str, dict[str, float]]:
+    """Each group's share of the measured and of the residual energy."""
+    meas_sq, res_sq = measured ** 2, (measured - model) ** 2
+    total_meas, total_res = float(meas_sq.sum()) or 1.0, float(res_sq.sum()) or 1.0
+    return {g: {"measured": float(meas_sq[groups == i].sum()) / total_meas,
+                "residual": float(res_sq[groups == i].sum()) / total_res}
+            for i, g in enumerate(RESIDUAL_GROUPS)}
+
+
+def describe_non_kinematic(freq_hz: float, kin, bin_hz: float) -> str:
+    """What a line no gear-pair frequency explains could be."""
+    text = (f"not kinematic: {freq_hz / kin.f_pinion_hz:.3g}x pinion, "
+            f"{freq_hz / kin.f_gear_hz:.3g}x gear")
+    for mains in MAINS_HZ:
+        n = round(freq_hz / mains)
+        if n >= 1 and abs(freq_hz - n * mains) <= bin_hz:
+            text += f", {n}x {mains:g} Hz mains"
+    return text + " (another shaft or stage, the mains, or a resonance)"
 
 
 def error_bins(measured: np.ndarray, margin: float, n_periods: int) -> np.ndarray:
@@ -173,11 +225,13 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
         gains = problem.gains(plant, x) if problem.fit_gain else {}
     lines = kinematic_map(kin, featurizer.max_freq_hz, bearing)
     bin_hz = 1.0 / featurizer.duration_s
-    candidates, spectra, errors, raw = [], {}, [], []
+    candidates, spectra, errors, raw, by_family = [], {}, [], [], {}
     for i, channel in enumerate(problem.channels):
         freqs, meas, noise = measured.spectra[channel]
         _, model, _ = featurizer.spectrum(y[i], rate)
         spectra[channel] = ChannelSpectrum(freqs.tolist(), meas.tolist(), model.tolist(), noise)
+        groups = bin_groups(freqs, lines, bin_hz, meas, measured.margin[channel])
+        by_family[channel] = residual_shares(groups, meas, model)
         errors.append(noise_corrected_error(model[bins], meas[bins], noise))
         raw.append(spectral_error(model[bins], meas[bins], noise))
         excess = meas - model
@@ -190,7 +244,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     total = sum(c[1] for c in candidates) or 1.0
     peaks = [Peak(ch, float(f), float(m - s), float(m), float(s),
                   line.family if line else "unexplained", line.order if line else None,
-                  line.label if line else "", p / total)
+                  line.label if line else describe_non_kinematic(f, kin, bin_hz), p / total)
              for ch, p, line, f, m, s in candidates]
     suggestions = []
     for effect in EFFECTS.values():
@@ -210,7 +264,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
                       peaks, suggestions, false_alarm_rate, featurizer.n_periods,
                       featurizer.duration_s, bin_hz,
-                      int(np.count_nonzero(bins)), fit_error, gains, spectra, markers)
+                      int(np.count_nonzero(bins)), fit_error, gains, spectra, markers, by_family)
 
 
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,

@@ -106,6 +106,14 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
                        for i, p in numbered)
         parts.append("<table><tr><th>#</th><th>channel</th><th>Hz</th><th>family</th>"
                      "<th>line</th><th>excess</th><th>energy</th></tr>" + rows + "</table>")
+    if c.residual_by_family:
+        parts.append("<h2>Residual by family</h2><table><tr><th>channel</th><th>lines</th>"
+                     "<th>of the measured energy</th><th>of the residual energy</th></tr>")
+        parts += [f"<tr><td>{html.escape(ch)}</td><td>{html.escape(g)}</td>"
+                  f"<td class='num'>{100 * v['measured']:.1f} %</td>"
+                  f"<td class='num'>{100 * v['residual']:.1f} %</td></tr>"
+                  for ch, groups in c.residual_by_family.items() for g, v in groups.items()]
+        parts.append("</table>")
     parts.append("<h2>Suggested effects</h2>")
     shown = [s for s in c.suggested_effects if s.score > 0]
     if not shown:

@@ -93,6 +93,11 @@ def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
     assert data["suggested_effects"][0]["effect"] == "gear_eccentricity"
     assert set(data["suggested_effects"][0]) == {"effect", "score", "confidence", "evidence"}
     assert {"freq_hz", "amplitude", "family", "energy_fraction"} <= set(data["peaks"][0])
+    for channel, groups in data["residual_by_family"].items():
+        for share in ("measured", "residual"):
+            assert sum(g[share] for g in groups.values()) == pytest.approx(1.0)
+        # the eccentricity's gear-order lines are what the model misses, not its mesh
+        assert groups["gear_orders"]["residual"] > 3 * groups["mesh_harmonics"]["residual"]
     before = out.read_bytes()
     res = run_cli(*args)  # an existing output is refused before any work, and kept
     assert res.returncode == 2 and "exists" in res.stderr and out.read_bytes() == before
