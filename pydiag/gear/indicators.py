@@ -17,8 +17,7 @@ import numpy as np
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
-from pydiag.signal.angle import angular_resample
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed, track_revolutions
 from pydiag.signal.condition import (TrendReference, TsaSignals, raw_indicators,
                                      synchronous_average, tsa_indicators, tsa_signals)
 
@@ -89,16 +88,8 @@ def synchronous_signals(measurement: Measurement, kinematics: GearKinematics,
     if teeth * 1.5 >= samples_per_rev / 2:
         raise MeasurementError(f"the {shaft} mesh (order {teeth}) and its sidebands need a sample "
                                f"rate above {3 * teeth * shaft_hz:.5g} Hz; the record has {fs:g}")
-    a, b = estimate.valid
-    revs = estimate.revolutions[a:(b + 1) or None] * ratio
-    first = math.ceil(revs[0])
-    n_revs = int(math.floor(revs[-1] - first))
-    if n_revs < 1:
-        raise MeasurementError(f"record of {measurement.duration_s:.3g} s holds no whole {shaft} "
-                               "revolution")
-    names = [c for c in measurement.channels if c not in drop]
-    tracked = angular_resample([measurement.channels[c][a:(b + 1) or None] for c in names], revs,
-                               samples_per_rev, first, n_revs)
+    names, tracked, n_revs = track_revolutions(measurement, estimate, samples_per_rev, ratio,
+                                               drop, shaft)
     signals = {c: tsa_signals(synchronous_average(x, samples_per_rev), teeth)
                for c, x in zip(names, tracked)}
     return signals, samples_per_rev, n_revs

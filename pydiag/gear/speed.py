@@ -207,6 +207,26 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
     return mesh_speed(measurement.channels[channel], fs, kinematics)
 
 
+def track_revolutions(measurement: Measurement, estimate: SpeedEstimate, samples_per_rev: int,
+                      ratio: float = 1.0, drop: tuple[str, ...] = (), shaft: str = "pinion"
+                      ) -> tuple[list[str], list[np.ndarray], int]:
+    """(channel names, signals, revolutions): every channel but ``drop`` resampled at
+    ``samples_per_rev`` per revolution of a shaft that turns ``ratio`` times per pinion
+    turn, over that shaft's whole revolutions where the angle was measured (not
+    extrapolated)."""
+    a, b = estimate.valid
+    revs = estimate.revolutions[a:(b + 1) or None] * ratio
+    first = math.ceil(revs[0])
+    n_revs = int(math.floor(revs[-1] - first))
+    if n_revs < 1:
+        raise MeasurementError(f"record of {measurement.duration_s:.3g} s holds no whole {shaft} "
+                               "revolution")
+    names = [c for c in measurement.channels if c not in drop]
+    tracked = angular_resample([measurement.channels[c][a:(b + 1) or None] for c in names], revs,
+                               samples_per_rev, first, n_revs)
+    return names, tracked, n_revs
+
+
 def order_track(measurement: Measurement, estimate: SpeedEstimate,
                 drop: tuple[str, ...] = ()) -> Measurement:
     """``measurement`` resampled at a whole number of samples per pinion revolution (at
@@ -221,16 +241,7 @@ def order_track(measurement: Measurement, estimate: SpeedEstimate,
                            {**measurement.metadata, **estimate.to_dict()})
     fs = measurement.sample_rate_hz
     samples_per_rev = int(math.ceil(fs / estimate.speed_hz))
-    a, b = estimate.valid
-    revs = estimate.revolutions[a:(b + 1) or None]  # the angle measured, not extrapolated
-    first = math.ceil(revs[0])
-    n_revs = int(math.floor(revs[-1] - first))
-    if n_revs < 1:
-        raise MeasurementError(f"record of {measurement.duration_s:.3g} s holds no whole pinion "
-                               "revolution")
-    names = [c for c in measurement.channels if c not in drop]
-    tracked = angular_resample([measurement.channels[c][a:(b + 1) or None] for c in names], revs,
-                               samples_per_rev, first, n_revs)
+    names, tracked, n_revs = track_revolutions(measurement, estimate, samples_per_rev, drop=drop)
     meta = {**measurement.metadata, **estimate.to_dict(),
             "order_tracking": {"samples_per_rev": samples_per_rev, "revolutions": n_revs,
                                "original_sample_rate_hz": fs}}
