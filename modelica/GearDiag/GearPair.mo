@@ -2,11 +2,13 @@ within GearDiag;
 model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pinion tooth, assembly and geometric transmission errors"
   // Paper Eq. (6), written as a balance of forces along the line of action:
   //   m*x'' + c*x' + k_eff(t)*(x - e(t)) = T/r_p + F_extra
-  //   k(t)  = K*(1 + a(tooth)*sigma(theta_mesh, f_f) + k_mod)
+  //   k(t)  = K*(1 + a(tooth)*sigma(theta_mesh, f_f) + k2*cos(2*theta_mesh + phi2)
+  //                      + k4*cos(4*theta_mesh + phi4) + k_mod)
   //   e(t)  = e_ate + e_dte + e_extra
   //   e_ate = f_ate*xi_max*sin(w_pinion*t)          assembly TE, Eq. (4)
   //   e_dte = f_dte*gamma_max*sin(w_fe*t)            geometric TE, Eq. (5), w_fe = w_mesh/N_ap
-  // k_mod, e_extra, F_extra, contact and acc_sensor are hooks with neutral declaration equations;
+  // The kinematics run on t_angle, the pinion angle over its mean speed (= time).
+  // k_mod, e_extra, F_extra, contact, acc_sensor and t_angle are hooks with neutral declaration equations;
   // a model in Effects/ overrides one of them with a modifier on `extends GearPair(...)`.
 
   // ---- fault parameters (normalised, estimated by pydiag) ----
@@ -15,6 +17,14 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   parameter Real f_f(min=0, max=0.99) = 0.1 "Form factor of the stiffness wave: 0 cosine, towards 1 square";
   parameter Real f_ate(min=0, max=1) = 0 "Assembly transmission error level, 0..1 of xi_max";
   parameter Real f_dte(min=0, max=1) = 0 "Geometric transmission error level, 0..1 of gamma_max";
+
+  // ---- shape of the mesh stiffness wave beyond the paper's ----
+  // A contact ratio other than 1.5 (or tip relief) gives the healthy mesh's stiffness even
+  // harmonics that no form factor can: 0 is the paper's wave.
+  parameter Real k2(min=0, max=0.3) = 0 "Second mesh harmonic of the stiffness, relative to K";
+  parameter Real phi2(unit="rad") = 0 "Phase of the second mesh harmonic of the stiffness";
+  parameter Real k4(min=0, max=0.3) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
+  parameter Real phi4(unit="rad") = 0 "Phase of the fourth mesh harmonic of the stiffness";
 
   // ---- kinematics ----
   parameter Integer Np = 14 "Number of pinion teeth";
@@ -43,6 +53,7 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   Real F_extra(unit="N") = 0 "Extra force on the line of action (effects)";
   Real contact = 1 "Contact factor, 1 while the teeth touch (effects)";
   Real acc_sensor(unit="m/s2") = der(v) "What the acc sensor sees: the mesh acceleration (effects: a transfer path)";
+  Real t_angle(unit="s") = time "Pinion angle over its mean speed: the time a steady shaft has turned for (effects: a speed fluctuation)";
 
   // ---- states and internal variables ----
   // Nominals set the solvers' absolute tolerance (fmpy's CVode: atol = rtol*nominal).
@@ -62,12 +73,13 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
 equation
   // Tooth periods start a quarter mesh cycle early, where sigma = 0, so the jump of a
   // between teeth leaves k continuous and CVode sees no discontinuity.
-  toothIndex = mod(floor(f_mesh*time + 0.25), Np);
+  toothIndex = mod(floor(f_mesh*t_angle + 0.25), Np);
   a = if toothIndex < 0.5 then a_f else a0;
-  sigma = GearDiag.Functions.formWave(2*pi*f_mesh*time, f_f);
-  stiffness = K*(1 + a*sigma + k_mod);
-  e_ate = f_ate*xi_max*sin(2*pi*f_pinion*time);
-  e_dte = f_dte*gamma_max*sin(2*pi*f_fe*time);
+  sigma = GearDiag.Functions.formWave(2*pi*f_mesh*t_angle, f_f);
+  stiffness = K*(1 + a*sigma + k2*cos(4*pi*f_mesh*t_angle + phi2)
+    + k4*cos(8*pi*f_mesh*t_angle + phi4) + k_mod);
+  e_ate = f_ate*xi_max*sin(2*pi*f_pinion*t_angle);
+  e_dte = f_dte*gamma_max*sin(2*pi*f_fe*t_angle);
   mesh_force = contact*stiffness*(x - e_ate - e_dte - e_extra) + c*v;
   der(x) = v;
   m*der(v) + mesh_force = T/r_p + F_extra;

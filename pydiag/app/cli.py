@@ -252,11 +252,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
     p.add_argument("--effect", choices=list(EFFECTS), help="the FMU is this catalogue effect's "
                    "model (e.g. bearing_outer_race): also fit the effect's parameters")
+    p.add_argument("--no-validate", action="store_true", help="do not try the suggested "
+                   "effects held out (then none is confident)")
+    p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
+    p.add_argument("--build-dir", default="build/effects", help="where effect FMUs are built")
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("discover", help="try every catalogue effect, rank them by BIC")
+    p = sub.add_parser("discover", help="try every catalogue effect held out, rank them")
     p.add_argument("--fmu", required=True, help="the base model FMU")
     _measurement_args(p)
     p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG]")

@@ -66,23 +66,29 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
     shown = [s for s in c.suggested_effects if s.score > 0]
     lines.append("suggested  : " + ("none" if not shown else ""))
     for s in shown:
-        flag = "confident" if s.confident else "weak"
-        lines.append(f"  {s.effect:<26} confidence {s.confidence:.2f} ({flag}); "
-                     + "; ".join(s.evidence[:1]))
+        flag = "CONFIDENT" if s.confident else s.status
+        lines.append(f"  {s.effect:<26} score {s.score:.2f}: {flag}")
+        if s.evidence:
+            lines.append(f"  {'':<26} {s.evidence[0]}")
+        if s.competing:
+            lines.append(f"  {'':<26} competes for the same lines with {', '.join(s.competing)}")
     return "\n".join(lines)
 
 
 def format_discovery(base: Comparison, found: list[Discovery]) -> str:
-    lines = [f"base model error {base.error:.5f}; effects ranked by BIC (dBIC < 0: worth its "
-             "parameters)",
-             f"{'rank':>4} {'effect':<26} {'dBIC':>10} {'error':>8} {'reduction':>9}  parameters"]
+    lines = [f"base model error {base.error:.5f}; effects fitted on half the periods, ranked by "
+             "how far they lower the error on the other half (z: in noise standard deviations)",
+             f"{'rank':>4} {'effect':<26} {'z':>8} {'dBIC':>10} {'error':>8} {'reduction':>9}  "
+             "parameters"]
     for i, d in enumerate(found, 1):
         if d.status != "ok":
-            lines.append(f"{i:4d} {d.effect:<26} {'-':>10} {'-':>8} {'-':>9}  failed: {d.status}")
+            lines.append(f"{i:4d} {d.effect:<26} {'-':>8} {'-':>10} {'-':>8} {'-':>9}  "
+                         f"failed: {d.status}")
             continue
         params = ", ".join(f"{k}={v:.4g}" for k, v in d.parameters.items())
-        lines.append(f"{i:4d} {d.effect:<26} {d.delta_bic:10.1f} {d.error:8.4f} "
+        lines.append(f"{i:4d} {d.effect:<26} {d.z:8.1f} {d.delta_bic:10.1f} {d.error:8.4f} "
                      f"{100 * d.error_reduction:8.0f}%  {params}")
+        lines.append(f"{'':5}{'CONFIDENT' if d.confident else ''} {d.verdict}".rstrip())
     return "\n".join(lines)
 
 

@@ -17,6 +17,7 @@ class Parameter:
         low, high: bounds of the estimate, finite, ``low < high``
         variable: the FMU variable it sets (default: ``name``)
         scale: FMU value = ``scale`` x estimate (unit conversions such as um -> m)
+        periodic: an angle, ``[low, high]`` one turn: never "at a bound"
     """
 
     name: str
@@ -24,6 +25,7 @@ class Parameter:
     high: float
     variable: str | None = None
     scale: float = 1.0
+    periodic: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):

@@ -9,6 +9,7 @@ effect's score is the share of the unexplained peak energy its signature covers.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -25,6 +26,9 @@ class Effect:
     parameters: tuple[Parameter, ...]  # what the effect adds, named as its FMU variables
     weight: Callable[[KinematicLine | None, float, float], float]  # (line, freq, f_mesh) -> 0..1
     hint: Callable[[list, float], dict] | None = None  # (peaks, bin_hz) -> {name: (low, high)}
+    # the parameters are the base model's own (GearDiag.GearPair), neutral by default: the
+    # effect frees them in the base FMU instead of building a model of its own
+    in_base: bool = False
 
     def bounds(self, peaks: list, bin_hz: float) -> tuple[Parameter, ...]:
         """The effect's parameters, bounds narrowed by what the residual peaks say (if it can)."""
@@ -77,6 +81,13 @@ def _family(name):
     return weight
 
 
+def _stiffness_shape(line, freq, f_mesh):
+    # an even harmonic of the healthy mesh's stiffness: the mesh harmonics, 2x above all
+    if line is None or line.family != "mesh":
+        return 0.0
+    return 1.0 if line.order % 2 == 0 else 0.5
+
+
 def _housing(line, freq, f_mesh):
     # a housing mode reshapes every line near its frequency; it claims the mesh family
     # at half weight (a missing harmonic shape may explain the same lines)
@@ -101,16 +112,23 @@ def _load_fluctuation(line, freq, f_mesh):
     return 1.0 if freq <= MAX_RIPPLE_HZ or near_mesh else 0.0
 
 
-def _load_hint(peaks, bin_hz):
-    """The ripple frequency is the strongest unexplained line below 20 Hz, to within a bin."""
-    low = [p for p in peaks if p.family == "unexplained" and p.freq_hz <= MAX_RIPPLE_HZ]
-    if not low:
-        return {}
-    f = max(low, key=lambda p: p.energy_fraction).freq_hz
-    return {"f_load": (max(0.5, f - bin_hz), f + bin_hz)}
+def _ripple_hint(name):
+    def hint(peaks, bin_hz):
+        """The ripple frequency is the strongest unexplained line below 20 Hz, to within a bin."""
+        low = [p for p in peaks if p.family == "unexplained" and p.freq_hz <= MAX_RIPPLE_HZ]
+        if not low:
+            return {}
+        f = max(low, key=lambda p: p.energy_fraction).freq_hz
+        return {name: (max(0.5, f - bin_hz), f + bin_hz)}
+    return hint
 
 
 EFFECTS = {e.key: e for e in (
+    Effect("mesh_stiffness_shape", "GearDiag.GearPair",
+           "even harmonics of the mesh stiffness wave (contact ratio, tip relief)",
+           (Parameter("k2", 0.0, 0.3), Parameter("phi2", -math.pi, math.pi, periodic=True),
+            Parameter("k4", 0.0, 0.1), Parameter("phi4", -math.pi, math.pi, periodic=True)),
+           _stiffness_shape, in_base=True),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
            (Parameter("ecc_gear", 0.0, 50e-6),), _gear_eccentricity),
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
@@ -125,7 +143,13 @@ EFFECTS = {e.key: e for e in (
            "inner-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfi", "bpfi_sb"))),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
-           _load_hint),
+           _ripple_hint("f_load")),
+    # the same lines as a torque ripple (they compete): a ripple the shafts' inertia turns
+    # into a speed fluctuation modulates the mesh's phase rather than its force
+    Effect("speed_fluctuation", "GearDiag.Effects.SpeedFluctuation",
+           "the shafts' speed fluctuates (phase modulation of every line)",
+           (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
+           _load_fluctuation, _ripple_hint("f_speed")),
     # lower bounds: a mode below every line, where the housing passes the force as a mass
     # (accelerance 1/m): the level is the mesh's, and the channel gain takes the rest
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
@@ -135,4 +159,6 @@ EFFECTS = {e.key: e for e in (
 
 
 def model_file(effect: Effect, modelica_root) -> Path:
+    if effect.in_base:
+        return Path(modelica_root) / "GearDiag" / f"{effect.model.rsplit('.', 1)[1]}.mo"
     return Path(modelica_root) / "GearDiag" / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"

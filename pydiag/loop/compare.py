@@ -14,7 +14,9 @@ which missing effect they point to.
    their excess power R^2 - S^2 - P, divided by their channel's measured power on the
    compared bins (channels have different units), over the same sum for all peaks.
 6. Each catalogue effect scores the peak energy its signature covers
-   (:mod:`pydiag.gear.effects`); the score is also its confidence, 0 when there is no peak.
+   (:mod:`pydiag.gear.effects`), 0 when there is no peak; effects whose signatures claim
+   the same peaks compete. No suggestion is confident until held-out validation
+   (:mod:`pydiag.loop.validate`) confirms it.
    A peak no line of the gear pair explains is named by what it could be (its ratio to
    each shaft speed, a multiple of a mains frequency) and counts only for an effect whose
    signature predicts its frequency.
@@ -58,8 +60,8 @@ FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
                 "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing"}
 #: Mains frequencies a non-kinematic line is checked against, Hz.
 MAINS_HZ = (50.0, 60.0)
-#: A suggestion at or above this confidence is reported as confident.
-CONFIDENT = 0.5
+#: The status of a suggestion held-out validation has not looked at.
+NOT_VALIDATED = "not validated"
 #: The refit of an effect's few parameters: a smaller swarm than a full diagnosis.
 EFFECT_REFIT = dict(n_particles=8, iterations=6, polish_evaluations=60, polish_starts=2)
 
@@ -79,14 +81,18 @@ class Peak:
 
 @dataclass
 class Suggestion:
+    """A catalogue effect the residual points to. ``score``: the share of the unexplained
+    peak energy its signature covers; ``confident`` only once held-out validation
+    (:mod:`pydiag.loop.validate`) confirmed it, which ``status`` reports; ``competing``: the
+    effects whose signatures claim some of the same peaks."""
+
     effect: str
     score: float
-    confidence: float
     evidence: list[str]
-
-    @property
-    def confident(self) -> bool:
-        return self.confidence >= CONFIDENT
+    status: str = NOT_VALIDATED
+    confident: bool = False
+    competing: list[str] = field(default_factory=list)
+    held_out: dict | None = None
 
 
 @dataclass
@@ -246,16 +252,19 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                   line.family if line else "unexplained", line.order if line else None,
                   line.label if line else describe_non_kinematic(f, kin, bin_hz), p / total)
              for ch, p, line, f, m, s in candidates]
-    suggestions = []
+    suggestions, claims = [], {}
     for effect in EFFECTS.values():
-        support = [(effect.weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, pk)
-                   for pk, (_, _, line, f, _, _) in zip(peaks, candidates)]
-        support = [(w, pk) for w, pk in support if w > 0]
-        score = float(sum(w for w, _ in support))
+        support = [(effect.weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
+                   for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))]
+        support = [(w, i, pk) for w, i, pk in support if w > 0]
+        claims[effect.key] = {i for _, i, _ in support}
+        score = float(sum(w for w, _, _ in support))
         evidence = [f"{pk.channel} {pk.freq_hz:.2f} Hz ({pk.label or 'no kinematic line'}): "
                     f"{100 * pk.energy_fraction:.0f} % of the unexplained energy"
-                    for _, pk in sorted(support, key=lambda t: -t[0])[:3]]
-        suggestions.append(Suggestion(effect.key, score, min(1.0, score), evidence))
+                    for _, _, pk in sorted(support, key=lambda t: -t[0])[:3]]
+        suggestions.append(Suggestion(effect.key, score, evidence))
+    for s in suggestions:
+        s.competing = [o for o in EFFECTS if o != s.effect and claims[o] & claims[s.effect]]
     suggestions.sort(key=lambda s: -s.score)
     orders = {"pinion": 3, "gear": 3, "bpfo": 5, "bpfi": 5, "bsf": 5, "ftf": 5}
     markers = [{"freq_hz": l.freq_hz, "family": l.family, "label": l.label} for l in lines

@@ -1,18 +1,14 @@
 """Try every effect of the catalogue and rank them: which missing physics explains the
-measurement best for the parameters it adds?
+measurement, held out?
 
 For each effect: build its FMU from ``modelica/GearDiag/Effects`` (cached, rebuilt when a
-Modelica file is newer), refit its parameters (:func:`pydiag.loop.compare.refit_with_effect`)
-and compare on the same bins as the base model. Ranking by the Bayesian information
-criterion relative to the base model,
-
-    dBIC = n ln(RSS_effect / RSS_base) + k ln(n),
-
-with n the bins scored (all channels), RSS the weighted squared residual of Eq. (12)
-(``error_raw``^2 times the same measured power, which cancels) and k the effect's added
-parameters. BIC rather than AIC: its ln(n) penalty grows with the hundreds of bins
-compared, so an effect must explain real structure, not noise, to rank first. Negative
-dBIC means the effect is worth its parameters.
+Modelica file is newer; an effect whose parameters are the base model's own uses the
+base FMU), fit its parameters on half of the record's periods and score it on the other
+half (:func:`pydiag.loop.validate.held_out`). The ranking is by the held-out z: how far
+the effect lowers the error on data it was not fitted to, in standard deviations of what
+noise alone would do. The Bayesian information criterion on the fitted half (dBIC < 0:
+worth its parameters if the residual were white noise) is printed beside it; a misfit of
+the model's form is not white noise, so BIC alone is not the ranking.
 """
 
 from __future__ import annotations
@@ -20,8 +16,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
-
-import numpy as np
 
 from fmu_build import ModelicaBuildError as BuildError
 from fmu_build import build_fmu
@@ -31,7 +25,8 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.gear.kinematic_map import Bearing
-from pydiag.loop.compare import Comparison, compare, refit_with_effect
+from pydiag.loop.compare import Comparison, compare
+from pydiag.loop.validate import held_out
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
@@ -41,15 +36,19 @@ MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
 class Discovery:
     effect: str
     status: str  # "ok", or the error that stopped this effect
-    delta_bic: float
-    error: float
-    error_reduction: float  # 1 - error / base error
+    z: float  # held-out improvement, in noise standard deviations
+    delta_bic: float  # on the fitted half
+    error: float  # held out, with the effect
+    error_reduction: float  # 1 - error / base error, held out
     added_parameters: int
     parameters: dict[str, float]
+    confident: bool = False
+    verdict: str = ""
 
 
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
-    """The effect's FMU, built unless an up-to-date one exists."""
+    """The effect's FMU, built unless an up-to-date one exists (not for an ``in_base``
+    effect: its FMU is the base model's)."""
     effect = EFFECTS[key]
     out = Path(build_dir) / f"{effect.model.rsplit('.', 1)[1]}.fmu"
     sources = list(Path(modelica_root).rglob("*.mo"))
@@ -66,35 +65,40 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
              modelica_root: Path = MODELICA_ROOT, build_dir: Path = Path("build/effects"),
              progress: Callable[[str], None] | None = None,
              effect_estimator: FaultEstimator | None = None) -> tuple[Comparison, list[Discovery]]:
-    """Compare the base model (``problem``), then refit and rank every effect.
+    """Compare the base model (``problem``), then try every effect held out and rank them.
 
     ``estimator`` fits the base model, ``effect_estimator`` each effect's parameters
-    (default: :data:`pydiag.loop.compare.EFFECT_REFIT`).
+    (default: :data:`pydiag.loop.compare.EFFECT_REFIT`). Effects whose parameters the base
+    model already fits are left out.
     """
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:
         raise UsageError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
     base = compare(problem, estimator, bearing)
-    n = base.n_error_bins * len(base.spectra)
+    in_model = {p.fmu_variable for p in problem.parameters}
     found = []
     for key in effects or list(EFFECTS):
+        effect = EFFECTS[key]
+        if all(p.fmu_variable in in_model for p in effect.parameters):
+            continue
         if progress:
             progress(key)
-        k = len(EFFECTS[key].parameters)
+        k = len(effect.parameters)
         try:
-            fmu = effect_fmu(key, modelica_root, build_dir)
-            c = refit_with_effect(problem, base, EFFECTS[key], str(fmu), effect_estimator, bearing)
+            fmu = (problem.spec.fmu_path if effect.in_base
+                   else str(effect_fmu(key, modelica_root, build_dir)))
+            h = held_out(problem, base, effect, fmu, effect_estimator, bearing)
         except (PydiagError, BuildError) as err:  # one effect that cannot be built or fitted is a row
-            found.append(Discovery(key, f"{type(err).__name__}: {err}", float("inf"),
-                                   float("nan"), float("nan"), k, {}))
+            found.append(Discovery(key, f"{type(err).__name__}: {err}", float("-inf"),
+                                   float("inf"), float("nan"), float("nan"), k, {}))
             continue
-        ratio = max(c.error_raw, 1e-12) ** 2 / max(base.error_raw, 1e-12) ** 2
-        found.append(Discovery(key, "ok", float(n * np.log(ratio) + k * np.log(n)), c.error,
-                               1 - c.error / base.error if base.error > 0 else 0.0, k,
-                               {p.name: c.parameters[p.name] for p in EFFECTS[key].parameters}))
-    found.sort(key=lambda d: d.delta_bic)
+        found.append(Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
+                               1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
+                               k, h.parameters, h.confident, h.verdict))
+    found.sort(key=lambda d: -d.z)
     return base, found
 
 
 def as_dict(base: Comparison, found: list[Discovery]) -> dict:
-    return {"base_error": base.error, "criterion": "BIC", "ranking": [asdict(d) for d in found]}
+    return {"base_error": base.error, "criterion": "held-out z (dBIC on the fitted half beside it)",
+            "ranking": [asdict(d) for d in found]}

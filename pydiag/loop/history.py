@@ -84,7 +84,7 @@ def record(db: str | Path, comparison, measurement_path: str, model_name: str | 
     """Append one compare run; returns its id."""
     peaks = [{"channel": p.channel, "freq_hz": p.freq_hz, "family": p.family,
               "energy_fraction": p.energy_fraction} for p in comparison.peaks]
-    suggested = [{"effect": s.effect, "confidence": s.confidence}
+    suggested = [{"effect": s.effect, "score": s.score, "confident": s.confident}
                  for s in comparison.suggested_effects if s.score > 0]
     with _connect(db) as con:
         cur = con.execute(

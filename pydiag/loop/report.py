@@ -120,10 +120,12 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
         parts.append("<p>None.</p>")
     else:
         rows = "".join(f"<tr><td class='{'confident' if s.confident else ''}'>"
-                       f"{html.escape(s.effect)}</td><td class='num'>{s.confidence:.2f}</td>"
+                       f"{html.escape(s.effect)}</td><td class='num'>{s.score:.2f}</td>"
+                       f"<td>{html.escape('confident' if s.confident else s.status)}</td>"
+                       f"<td>{html.escape(', '.join(s.competing))}</td>"
                        f"<td>{html.escape('; '.join(s.evidence))}</td></tr>" for s in shown)
-        parts.append("<table><tr><th>effect</th><th>confidence</th><th>evidence</th></tr>"
-                     + rows + "</table>")
+        parts.append("<table><tr><th>effect</th><th>score</th><th>held out</th>"
+                     "<th>competes with</th><th>evidence</th></tr>" + rows + "</table>")
     if history_rows:
         with tempfile.TemporaryDirectory() as tmp:
             svg = plot_history(history_rows, Path(tmp) / "history.svg").read_text()

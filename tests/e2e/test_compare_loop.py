@@ -17,6 +17,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare, refit_with_effect
+from pydiag.loop.validate import validate
 from pydiag.signal.noise import add_white_noise
 
 BASE = dict(a_f=0.3, f_f=0.6, f_ate=0.1, f_dte=0.1)
@@ -29,6 +30,14 @@ SIGNATURE = {"bearing_outer_race": {"bpfo"}, "gear_eccentricity": {"gear", "mesh
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
 
 
+
+
+@pytest.fixture(scope="module")
+def effect_fmu_of(tmp_path_factory):
+    """Effect -> its FMU, built on first use (what compare's validation asks for)."""
+    from pydiag.loop.discover import effect_fmu
+    folder = tmp_path_factory.mktemp("catalogue")
+    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", folder))
 
 
 @pytest.fixture(scope="module")
@@ -48,21 +57,25 @@ def record(fmu, seed=5, periods=20):
 
 
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
-def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect):
-    c = compare(build_problem(str(gear_fmu), record(effect_fmus[effect])), FaultEstimator(**FAST),
-                BEARING)
+def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect_fmu_of, effect):
+    problem = build_problem(str(gear_fmu), record(effect_fmus[effect]))
+    c = compare(problem, FaultEstimator(**FAST), BEARING)
     top = c.suggested_effects[0]
     assert top.effect == effect, [(s.effect, round(s.score, 2)) for s in c.suggested_effects]
-    assert top.confidence >= 0.5 and top.evidence
+    assert top.score >= 0.5 and top.evidence and not top.confident  # not validated yet
     assert c.peaks[0].family in SIGNATURE[effect], c.peaks[:3]  # the largest residual is its line
     assert all(abs(v - BASE[k]) < 0.03 for k, v in c.parameters.items())  # the base fit holds
+    v = validate(problem, c, effect_fmu_of, bearing=BEARING)
+    assert [s.effect for s in v.suggested_effects if s.confident] == [effect], \
+        [(s.effect, s.status) for s in v.suggested_effects]
 
 
-def test_no_hidden_effect_no_confident_suggestion(gear_fmu):
+def test_no_hidden_effect_no_confident_suggestion(gear_fmu, effect_fmu_of):
     for seed in (5, 6, 7):
-        c = compare(build_problem(str(gear_fmu), record(gear_fmu, seed)), FaultEstimator(**FAST),
-                    BEARING)
-        assert not [s for s in c.suggested_effects if s.confidence >= 0.5], c.peaks
+        problem = build_problem(str(gear_fmu), record(gear_fmu, seed))
+        c = validate(problem, compare(problem, FaultEstimator(**FAST), BEARING), effect_fmu_of,
+                     bearing=BEARING)
+        assert not [s for s in c.suggested_effects if s.confident], c.suggested_effects
 
 
 @pytest.mark.slow
@@ -76,7 +89,7 @@ def test_adding_the_effect_recovers_it_and_explains_the_peaks(gear_fmu, effect_f
     with_effect = refit_with_effect(problem, base, EFFECTS[effect], str(effect_fmus[effect]),
                                     bearing=BEARING)
     assert with_effect.error < 0.5 * base.error
-    assert not [s for s in with_effect.suggested_effects if s.confidence >= 0.5]
+    assert not [s for s in with_effect.suggested_effects if s.score >= 0.5]
 
 
 def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
@@ -85,13 +98,17 @@ def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
     out, db = tmp_path / "c.json", tmp_path / "h.sqlite"
     args = ["-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--measurement", str(meas),
             "--json", str(out), "--history", str(db), "--source", str(GEARPAIR_MO),
-            "--particles", "8", "--iterations", "6", "--polish", "60", "--quiet"]
+            "--particles", "8", "--iterations", "6", "--polish", "60", "--quiet",
+            "--build-dir", str(tmp_path / "fmus")]
     res = run_cli(*args)
     assert res.returncode == 0, res.stderr
     data = json.loads(out.read_text())
     assert {"error", "peaks", "suggested_effects"} <= set(data)
     assert data["suggested_effects"][0]["effect"] == "gear_eccentricity"
-    assert set(data["suggested_effects"][0]) == {"effect", "score", "confidence", "evidence"}
+    top = data["suggested_effects"][0]
+    assert set(top) == {"effect", "score", "evidence", "status", "confident", "competing",
+                        "held_out"}
+    assert top["confident"] and top["held_out"]["z"] > top["held_out"]["threshold"]
     assert {"freq_hz", "amplitude", "family", "energy_fraction"} <= set(data["peaks"][0])
     for channel, groups in data["residual_by_family"].items():
         for share in ("measured", "residual"):
@@ -208,7 +225,7 @@ def test_cli_compare_effect_through_an_adapter_whose_roles_are_not_variables(eff
                   "--effect", "gear_eccentricity", "--adapter", str(adapter),
                   "--measurement", str(meas), "--json", str(out), "--history",
                   str(tmp_path / "h.sqlite"), "--particles", "8", "--iterations", "6",
-                  "--polish", "60", "--quiet")
+                  "--polish", "60", "--quiet", "--build-dir", str(tmp_path / "fmus"))
     assert res.returncode == 0, res.stderr
     data = json.loads(out.read_text())
     assert data["parameters"]["ecc_gear"] == pytest.approx(10e-6, rel=0.1)

@@ -1,0 +1,258 @@
+"""Held-out validation of a suggested effect: does it explain the measurement, or the noise
+and the base model's other misfits?
+
+A missing effect is real when adding it predicts data it was not fitted to. The record
+(order-tracked, whole fundamental periods) is cut into alternating periods: half A (0, 2,
+4, ...) and half B (1, 3, 5, ...), two records of the same machine with independent noise
+(:class:`pydiag.gear.features.FullSpectrumFeaturizer`, ``half``). The effect's parameters
+are fitted on A (the base parameters held at their fit), then base and effect are scored
+on B, on bins that A's measurement chose (so B's noise does not choose them).
+
+**The test.** On B, each compared bin holds a measured amplitude R, Rician around the
+true line with noise power P per bin. Let mu0, mu1 be the Rician means of the base and the
+effect model lines (:func:`pydiag.fit.objective.rician_mean`), V0 the Rician variance
+around the base line, w = 1/V0 and d = mu1 - mu0. The held-out improvement is
+
+    D = sum w [(R - mu0)^2 - (R - mu1)^2] = sum w d (2R - mu0 - mu1).
+
+If the base model is right and the effect only fits A's noise (H0), R has mean mu0 and
+variance V0 independently of d, so D is close to normal with mean -sum w d^2 and variance
+4 sum w d^2, and
+
+    z = (D + sum w d^2) / (2 sqrt(sum w d^2))
+
+is standard normal. The effect **lowers the held-out error by more than noise alone would**
+when z > the (1 - alpha) normal quantile; alpha (:data:`FALSE_ALARM_RATE`, 1 %) is the
+chance that an effect which only fits noise passes. The test is one-sided and per effect.
+
+A misfit of the base model's form is not noise: it is in both halves, and an effect that
+fits part of it passes the test. So a confident effect must also **explain its lines**:
+on B, the part of the residual above noise on the lines its signature claims, sum w
+[(R - mu0)^2 - V0], must fall by at least :data:`MIN_EXPLAINED` (a half). And no fitted
+parameter may sit at a bound of its range (an angle has none): then "the effect
+saturates: its range or the model form is wrong".
+
+``discover`` ranks effects by z and also reports the Bayesian information criterion on
+half A, dBIC = n ln(RSS_effect / RSS_base) + k ln n (n bins of all channels, RSS the
+weighted squared residual of Eq. (12), k the parameters the effect adds). BIC assumes the
+residual is white noise; a misfit of the model's form is not, so BIC alone takes any
+systematic misfit as evidence for some effect: the held-out z is the ranking.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.stats import norm
+
+from fmu_build import ModelicaBuildError as BuildError
+
+from pydiag.core.errors import EstimationError, PydiagError
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.objective import noise_corrected_error, rician_mean, spectral_error
+from pydiag.fit.problem import FitProblem
+from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.features import FullSpectrumFeaturizer
+from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
+from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, Suggestion,
+                                 error_bins)
+
+#: Chance that an effect which only fits noise passes the held-out test.
+FALSE_ALARM_RATE = 0.01
+#: The least share of the residual above noise on its own lines a confident effect removes.
+MIN_EXPLAINED = 0.5
+#: A parameter closer to a bound than this share of its range is at the bound.
+AT_BOUND = 0.01
+
+
+@dataclass
+class HeldOut:
+    """An effect fitted on half A of the record and scored on half B."""
+
+    effect: str
+    z: float  # held-out improvement in standard deviations of noise alone
+    threshold: float  # z above this: more than noise alone
+    explained: float  # share of the residual above noise on the effect's lines removed (B)
+    error_base: float  # noise-corrected Eq. (12) on B, base model
+    error_effect: float  # the same with the effect
+    parameters: dict[str, float]
+    at_bound: list[str] = field(default_factory=list)
+    n_periods: int = 0  # periods in each half
+    delta_bic: float = 0.0  # on half A, where the effect was fitted (module docstring)
+
+    @property
+    def significant(self) -> bool:
+        return self.z > self.threshold
+
+    @property
+    def confident(self) -> bool:
+        return self.significant and self.explained >= MIN_EXPLAINED and not self.at_bound
+
+    @property
+    def verdict(self) -> str:
+        if not self.significant:
+            return (f"not confirmed: held out, it lowers the error by no more than noise "
+                    f"would (z {self.z:.1f} <= {self.threshold:.1f})")
+        if self.explained < MIN_EXPLAINED:
+            return (f"partial: held out, it explains {100 * max(self.explained, 0):.0f} % of "
+                    "the residual on its lines; the model form there may be wrong")
+        if self.at_bound:
+            return (f"the effect saturates ({', '.join(self.at_bound)} at a bound): its range "
+                    "or the model form is wrong")
+        return (f"confirmed held out (z {self.z:.1f}, explains {100 * self.explained:.0f} % "
+                "of the residual on its lines)")
+
+    def to_dict(self) -> dict:
+        return {**asdict(self), "significant": self.significant, "confident": self.confident}
+
+
+def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarray,
+                       noise_power: float) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """Per-bin parts of the test (module docstring): returns (sum w d^2, the bins' D terms,
+    and the bins' base excess w [(R - mu0)^2 - V0]) as (S, D, excess) with S a float."""
+    mu0, mu1 = rician_mean(base, noise_power), rician_mean(effect, noise_power)
+    var0 = np.maximum(base ** 2 + noise_power - mu0 ** 2, 1e-300)
+    w, d = 1.0 / var0, mu1 - mu0
+    terms = w * d * (2 * measured - mu0 - mu1)
+    excess = w * ((measured - mu0) ** 2 - var0)
+    return float(np.sum(w * d * d)), terms, excess
+
+
+def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
+    out = []
+    for p in effect.parameters:
+        if p.periodic or p.name not in fitted:
+            continue
+        margin = AT_BOUND * (p.high - p.low)
+        if fitted[p.name] >= p.high - margin or (fitted[p.name] <= p.low + margin
+                                                   and p.low > 0):
+            out.append(p.name)
+    return out
+
+
+def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
+             estimator: FaultEstimator | None = None, bearing: Bearing | None = None,
+             false_alarm_rate: float = FALSE_ALARM_RATE) -> HeldOut:
+    """Fit ``effect`` on half A, score it against the base model on half B.
+
+    ``problem`` is the base fit's problem and ``base`` its comparison (parameters, peaks
+    for the effect's bounds); ``estimator`` defaults to
+    ``FaultEstimator(**EFFECT_REFIT)``."""
+    kin = problem.kinematics
+    n_half = base.n_periods // 2
+    if kin is None or n_half < 1:
+        raise EstimationError("held-out validation needs a gear model and a record of at "
+                              "least two fundamental periods")
+    m = problem.measurement
+    rate = m.sample_rate_hz
+    fit_half = FullSpectrumFeaturizer(kin, n_half, problem.featurizer.max_freq_hz, half=0)
+    bins = None
+    for channel in problem.channels:
+        freqs, amp, noise = fit_half.spectrum(m.channels[channel], rate)
+        margin = np.sqrt(noise * np.log(freqs.size / base.false_alarm_rate))
+        mask = error_bins(amp, margin, n_half)
+        bins = mask if bins is None else bins | mask
+    fit_half = fit_half.with_bins(bins)
+    test_half = fit_half.other_half()
+    effect_problem = problem.derive(fmu_path=effect_fmu,
+                                    parameters=effect.bounds(base.peaks, base.bin_hz),
+                                    fixed_values=problem.fmu_values(base.parameters),
+                                    featurizer=fit_half)
+    fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters
+    base_problem = problem.derive(featurizer=fit_half)
+    x0 = np.array([base.parameters[p.name] for p in base_problem.parameters])
+    x1 = np.array([fitted[p.name] for p in effect_problem.parameters])
+    with base_problem.spec.open() as plant:
+        y0 = base_problem.model_signals(plant, x0)  # channel gains fitted on half A
+    with effect_problem.spec.open() as plant:
+        y1 = effect_problem.model_signals(plant, x1)
+    lines = kinematic_map(kin, fit_half.max_freq_hz, bearing)
+    bin_hz = 1.0 / (n_half * kin.period_s)
+    total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
+    err0, err1, raw0, raw1 = [], [], [], []
+    for i, channel in enumerate(problem.channels):
+        _, meas_a, noise_a = fit_half.spectrum(m.channels[channel], rate)
+        raw0.append(spectral_error(fit_half.spectrum(y0[i], rate)[1][bins], meas_a[bins], noise_a))
+        raw1.append(spectral_error(fit_half.spectrum(y1[i], rate)[1][bins], meas_a[bins], noise_a))
+        freqs, meas, noise = test_half.spectrum(m.channels[channel], rate)
+        _, s0, _ = test_half.spectrum(y0[i], rate)
+        _, s1, _ = test_half.spectrum(y1[i], rate)
+        r, s0, s1, f = meas[bins], s0[bins], s1[bins], freqs[bins]
+        sw, terms, excess = held_out_statistic(r, s0, s1, noise)
+        total_w += sw
+        total_d += float(np.sum(terms))
+        claims = np.array([effect.weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
+                           for fk in f])
+        signature_d += float(np.sum(terms[claims]))
+        signature_excess += float(np.sum(excess[claims]))
+        err0.append(noise_corrected_error(s0, r, noise))
+        err1.append(noise_corrected_error(s1, r, noise))
+    z = (total_d + total_w) / (2 * math.sqrt(total_w)) if total_w > 0 else 0.0
+    explained = signature_d / signature_excess if signature_excess > 0 else 0.0
+    n, k = int(np.count_nonzero(bins)) * len(problem.channels), len(effect.parameters)
+    ratio = max(np.sum(np.square(raw1)), 1e-24) / max(np.sum(np.square(raw0)), 1e-24)
+    return HeldOut(effect.key, float(z), float(norm.ppf(1 - false_alarm_rate)),
+                   float(min(explained, 1.0)), float(np.linalg.norm(err0)),
+                   float(np.linalg.norm(err1)),
+                   {p.name: fitted[p.name] for p in effect.parameters if p.name in fitted},
+                   _at_bound(effect, fitted), n_half, float(n * np.log(ratio) + k * np.log(n)))
+
+
+#: Effects whose signature covers less of the unexplained energy than this are not tried.
+MIN_SCORE = 0.1
+
+
+def validate(problem: FitProblem, comparison: Comparison,
+             effect_fmu: Callable[[Effect], str], estimator: FaultEstimator | None = None,
+             bearing: Bearing | None = None, min_score: float = MIN_SCORE,
+             false_alarm_rate: float = FALSE_ALARM_RATE, present: tuple[str, ...] = (),
+             progress: Callable[[str], None] | None = None) -> Comparison:
+    """The comparison with every suggestion of score >= ``min_score`` tried held out.
+
+    ``effect_fmu``: the FMU of an effect (the base FMU itself for an ``in_base`` one); it
+    raises a :class:`PydiagError` (or a build error) when there is none. At most one effect
+    is confident among those that claim the same peaks: the one with the largest held-out
+    z; the others are told which effect explains their lines better. ``present``: effect
+    keys the model already has (compare of an effect's model)."""
+    in_model = {p.fmu_variable for p in problem.parameters}
+    suggestions = [dataclasses.replace(s) for s in comparison.suggested_effects]
+    for s in suggestions:
+        effect = EFFECTS[s.effect]
+        if s.score < min_score:
+            s.status = (f"not tried: its lines hold {100 * s.score:.0f} % of the unexplained "
+                        "energy")
+            continue
+        if s.effect in present or all(p.fmu_variable in in_model for p in effect.parameters):
+            s.status = "already in the model"
+            continue
+        if progress:
+            progress(s.effect)
+        try:
+            fmu = problem.spec.fmu_path if effect.in_base else effect_fmu(effect)
+            h = held_out(problem, comparison, effect, fmu, estimator, bearing, false_alarm_rate)
+        except (PydiagError, BuildError) as err:
+            s.status = f"{NOT_VALIDATED}: {err}"
+            continue
+        s.held_out, s.status, s.confident = h.to_dict(), h.verdict, h.confident
+    accepted: list[Suggestion] = []
+    for s in sorted((s for s in suggestions if s.confident), key=lambda s: -s.held_out["z"]):
+        rival = next((a for a in accepted if a.effect in s.competing), None)
+        if rival is None:
+            accepted.append(s)
+        else:
+            s.confident = False
+            s.status = (f"competes with {rival.effect} for the same lines, which explains "
+                        f"them better held out (z {rival.held_out['z']:.1f} > "
+                        f"{s.held_out['z']:.1f})")
+    return dataclasses.replace(comparison, suggested_effects=suggestions)
+
+
+def not_validated(comparison: Comparison, why: str) -> Comparison:
+    """The comparison with every suggestion marked as not validated, and why."""
+    return dataclasses.replace(comparison, suggested_effects=[
+        dataclasses.replace(s, status=f"{NOT_VALIDATED}: {why}")
+        for s in comparison.suggested_effects])

@@ -1,0 +1,270 @@
+"""An independent gear-pair simulator: the "truth" the loop's tests measure, written from the
+equations and not from the Modelica model, so that a fit of GearDiag.GearPair to its records
+is not an inverse crime.
+
+Where it differs from GearDiag.GearPair (same kinematics and physical defaults):
+
+- two rotating bodies (pinion and gear inertias, the load a dynamometer holding the gear
+  speed) instead of one equivalent mass: the speed itself moves when the torque does;
+- the mesh stiffness is a sum over the tooth pairs in contact, with a contact ratio of
+  1.6 (one pair 40 % of the mesh cycle, two pairs 60 %), each pair's stiffness a parabola
+  along its path of contact with tip relief at both ends, in series with the constant
+  stiffness of shafts, bearings and bodies, evaluated at the pinion's *angle*, not at
+  time; a faulty tooth is a weaker tooth over its whole contact;
+- transmission errors are runouts projected on the line of action, in shaft angles;
+- each effect of the catalogue is made its own way (see :class:`Effects`): bearing defects
+  are pulse trains with random slip through a structural resonance into the accelerometer
+  (not a force on the mesh), a torque ripple drives the shafts (and so the speed), the
+  housing is a resonance filtered onto the mesh force, backlash is a hard contact loss.
+
+Integrated with SciPy's LSODA (``odeint``); outputs ``acc`` (the acceleration of the mesh
+deflection, plus what the effects add at the sensor) and ``disp`` (the mesh deflection),
+like GearPair's channels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy import integrate, signal
+
+from pydiag.core.measurement import Measurement
+from pydiag.signal.noise import add_white_noise
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True)
+class Effects:
+    """The hidden effects; every magnitude 0 is the healthy-but-for-the-pinion-tooth gear."""
+
+    gear_runout_m: float = 0.0  # gear eccentricity, on the line of action
+    gear_tooth_loss: float = 0.0  # relative stiffness loss of gear tooth 0
+    second_pinion_tooth_loss: float = 0.0  # of pinion tooth 5
+    backlash_m: float = 0.0  # a gap opened when the deflection falls below zero
+    outer_race_acc: float = 0.0  # peak acceleration of each outer-race pulse response, m/s2
+    inner_race_acc: float = 0.0  # the same, inner race (modulated by the load zone)
+    torque_ripple: float = 0.0  # relative input torque ripple
+    ripple_hz: float = 7.3
+    housing_hz: float = 0.0  # > 0: the accelerometer sits on a housing mode at this frequency
+    housing_zeta: float = 0.05
+
+
+@dataclass(frozen=True)
+class TruthGear:
+    n_pinion: int = 14
+    n_gear: int = 21
+    f_pinion_hz: float = 25.0
+    r_pinion_m: float = 0.03
+    mass_kg: float = 0.5  # equivalent mass on the line of action, half from each body
+    stiffness_n_m: float = 2e8  # mean mesh stiffness
+    damping_n_s_m: float = 1000.0
+    torque_n_m: float = 50.0
+    contact_ratio: float = 1.6
+    profile_drop: float = 0.25  # a pair's stiffness at the ends of its path, below its middle
+    tip_relief: float = 0.25  # fraction of a pitch over which a pair loads and unloads
+    # shafts, bearings and gear bodies in series with the teeth, relative to the teeth's
+    # mean stiffness: what makes the variation of the whole mesh smaller than the teeth's
+    series_stiffness_ratio: float = 0.45
+    pinion_tooth_loss: float = 0.3  # pinion tooth 0 is weaker by this much
+    pinion_runout_m: float = 5e-6
+    pitch_error_m: float = 0.7e-6  # at the assembly-phase order
+    load_time_constant_s: float = 0.05  # of the dynamometer holding the speed
+    # the geometry of the pinion's bearing (the test's 6205-type bearing)
+    n_balls: int = 9
+    ball_to_pitch: float = 7.94 / 39.04
+    bearing_resonance_hz: float = 2800.0
+    slip: float = 0.005  # random spread of the ball-pass intervals
+    effects: Effects = field(default_factory=Effects)
+
+    @property
+    def r_gear_m(self) -> float:
+        return self.r_pinion_m * self.n_gear / self.n_pinion
+
+    @property
+    def period_s(self) -> float:
+        """The fundamental period: the pinion turns lcm(Np, Ng)/Np times."""
+        return math.lcm(self.n_pinion, self.n_gear) / self.n_pinion / self.f_pinion_hz
+
+    @property
+    def bpfo_hz(self) -> float:
+        return self.n_balls / 2 * self.f_pinion_hz * (1 - self.ball_to_pitch)
+
+    @property
+    def bpfi_hz(self) -> float:
+        return self.n_balls / 2 * self.f_pinion_hz * (1 + self.ball_to_pitch)
+
+    def with_effects(self, **magnitudes) -> "TruthGear":
+        return replace(self, effects=replace(self.effects, **magnitudes))
+
+
+def _pair_shape(s: float, g: TruthGear) -> float:
+    """A tooth pair's stiffness at roll position s (pitches since it came into contact)."""
+    eps = g.contact_ratio
+    if s <= 0.0 or s >= eps:
+        return 0.0
+    middle = 2.0 * s / eps - 1.0
+    value = 1.0 - g.profile_drop * middle * middle
+    for edge in (s, eps - s):  # tip relief: a smooth load-up and load-down
+        if edge < g.tip_relief:
+            x = edge / g.tip_relief
+            value *= x * x * (3.0 - 2.0 * x)
+    return value
+
+
+class _Mesh:
+    """The mesh stiffness as a function of the pinion angle."""
+
+    def __init__(self, g: TruthGear) -> None:
+        self.g = g
+        weights = np.ones(math.lcm(g.n_pinion, g.n_gear))
+        n = np.arange(weights.size)
+        weights[n % g.n_pinion == 0] *= 1 - g.pinion_tooth_loss
+        weights[n % g.n_pinion == 5] *= 1 - g.effects.second_pinion_tooth_loss
+        weights[n % g.n_gear == 0] *= 1 - g.effects.gear_tooth_loss
+        self.weights = weights
+        s = np.linspace(0, 1, 2001)[:-1]  # a healthy mesh cycle
+        teeth = np.array([_pair_shape(x, g) + _pair_shape(x + 1, g) for x in s])
+        self.series = g.series_stiffness_ratio * np.mean(teeth)
+        self.k_pair = g.stiffness_n_m / np.mean(1 / (1 / teeth + 1 / self.series))
+
+    def stiffness(self, theta_p: float) -> float:
+        g = self.g
+        u = theta_p * g.n_pinion / TWO_PI  # mesh cycles since the start
+        n0 = math.floor(u)
+        total = 0.0
+        for n in (n0, n0 - 1):  # pairs that came into contact in this cycle and the last
+            shape = _pair_shape(u - n, g)
+            if shape:
+                total += shape * self.weights[n % self.weights.size]
+        return self.k_pair / (1 / total + 1 / self.series) if total > 0 else 0.0
+
+
+def _dynamics(y, t, g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
+              omega_g0: float, load_damping: float) -> tuple[list[float], float]:
+    """(the state's derivatives, the mesh force)"""
+    theta_p, omega_p, d, dv = y
+    e = g.effects
+    r_p, r_g = g.r_pinion_m, g.r_gear_m
+    theta_g = (r_p * theta_p - d) / r_g
+    omega_g = (r_p * omega_p - dv) / r_g
+    assembly = g.n_pinion / (math.lcm(g.n_pinion, g.n_gear) / g.n_pinion)
+    te = (g.pinion_runout_m * math.sin(theta_p) + g.pitch_error_m * math.sin(assembly * theta_p)
+          + e.gear_runout_m * math.sin(theta_g + 0.7))
+    te_rate = (g.pinion_runout_m * math.cos(theta_p) * omega_p
+               + g.pitch_error_m * assembly * math.cos(assembly * theta_p) * omega_p
+               + e.gear_runout_m * math.cos(theta_g + 0.7) * omega_g)
+    stretch = d - te
+    if e.backlash_m > 0.0 and stretch < 0.0:  # the teeth separate: no force across the gap
+        stretch = min(stretch + e.backlash_m, 0.0)
+        force = mesh.stiffness(theta_p) * stretch + (g.damping_n_s_m * (dv - te_rate)
+                                                     if stretch < 0.0 else 0.0)
+    else:
+        force = mesh.stiffness(theta_p) * stretch + g.damping_n_s_m * (dv - te_rate)
+    t_in = g.torque_n_m * (1.0 + e.torque_ripple * math.sin(TWO_PI * e.ripple_hz * t))
+    t_load = g.torque_n_m * g.n_gear / g.n_pinion + load_damping * (omega_g - omega_g0)
+    acc_p = (t_in - r_p * force) / inertia_p
+    acc_g = (r_g * force - t_load) / inertia_g
+    return [omega_p, acc_p, dv, r_p * acc_p - r_g * acc_g], force
+
+
+def _rhs(y, t, *args):
+    return _dynamics(y, t, *args)[0]
+
+
+def _pulse_train(rate_hz: float, t: np.ndarray, spread: float, rng: np.random.Generator,
+                 width_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gaussian pulses at intervals 1/rate_hz (each interval spread by ``spread``), on t;
+    returns (pulses, pulse times)."""
+    n = int(np.ceil(t[-1] * rate_hz)) + 2
+    times = np.cumsum(np.full(n, 1.0 / rate_hz) * (1 + spread * rng.standard_normal(n)))
+    pulses = np.zeros_like(t)
+    dt = t[1] - t[0]
+    half = int(np.ceil(5 * width_s / dt))
+    for tk in times:
+        k = int(round(tk / dt))
+        lo, hi = max(k - half, 0), min(k + half + 1, t.size)
+        if lo < hi:
+            pulses[lo:hi] += np.exp(-0.5 * ((t[lo:hi] - tk) / width_s) ** 2)
+    return pulses, times
+
+
+def _resonance(x: np.ndarray, fs: float, f_hz: float, zeta: float, acceleration: bool):
+    """x through one structural mode (unit static gain; acceleration: its second derivative
+    scaled to unit gain far above the mode)."""
+    w = TWO_PI * f_hz
+    num = [1.0, 0.0, 0.0] if acceleration else [w * w]
+    b, a = signal.bilinear(num, [1.0, 2 * zeta * w, w * w], fs)
+    return signal.lfilter(b, a, x)
+
+
+def simulate(g: TruthGear, duration_s: float, sample_rate_hz: float,
+             warmup_s: float = 0.3, effect_seed: int = 0) -> dict[str, np.ndarray]:
+    """The noise-free channels ``acc`` (m/s2) and ``disp`` (m) over ``duration_s`` after
+    ``warmup_s``; ``effect_seed`` draws the bearing's slip."""
+    mesh = _Mesh(g)
+    r_p, r_g = g.r_pinion_m, g.r_gear_m
+    inertia_p = 2 * g.mass_kg * r_p ** 2  # each body contributes 1/(2 m) of 1/m_eq
+    inertia_g = 2 * g.mass_kg * r_g ** 2
+    omega_p0 = TWO_PI * g.f_pinion_hz
+    omega_g0 = omega_p0 * g.n_pinion / g.n_gear
+    j_gear = inertia_g + inertia_p * (g.n_gear / g.n_pinion) ** 2  # both, seen at the gear
+    load_damping = j_gear / g.load_time_constant_s
+    d0 = g.torque_n_m / r_p / mesh.stiffness(0.0)
+    n = int(round((warmup_s + duration_s) * sample_rate_hz))
+    t = np.arange(n + 1) / sample_rate_hz
+    args = (g, mesh, inertia_p, inertia_g, omega_g0, load_damping)
+    y = integrate.odeint(_rhs, [0.0, omega_p0, d0, 0.0], t, args=args, rtol=1e-9,
+                         atol=[1e-9, 1e-6, 1e-13, 1e-9], hmax=0.25 / sample_rate_hz,
+                         mxstep=100_000)
+    out = [_dynamics(yk, tk, *args) for yk, tk in zip(y, t)]
+    acc = np.array([d[3] for d, _ in out])
+    e = g.effects
+    if e.housing_hz > 0:  # the sensor sees the housing's response to the mesh force
+        force = np.array([f for _, f in out])
+        acc = _resonance(force / g.mass_kg, sample_rate_hz, e.housing_hz, e.housing_zeta, True)
+    rng = np.random.default_rng(effect_seed)
+    if e.outer_race_acc > 0:
+        pulses, _ = _pulse_train(g.bpfo_hz, t, g.slip, rng, 0.1e-3)
+        acc = acc + e.outer_race_acc * _unit_peak(
+            _resonance(pulses, sample_rate_hz, g.bearing_resonance_hz, 0.05, True))
+    if e.inner_race_acc > 0:
+        pulses, _ = _pulse_train(g.bpfi_hz, t, g.slip, rng, 0.1e-3)
+        zone = 0.5 * (1 + np.cos(y[:, 0]))  # the defect passes the load zone once a turn
+        acc = acc + e.inner_race_acc * _unit_peak(
+            _resonance(pulses * zone, sample_rate_hz, g.bearing_resonance_hz, 0.05, True))
+    keep = t >= warmup_s - 1e-12
+    keep[np.flatnonzero(keep)[int(round(duration_s * sample_rate_hz)):]] = False
+    return {"acc": acc[keep], "disp": y[keep, 2]}
+
+
+def _unit_peak(x: np.ndarray) -> np.ndarray:
+    return x / (np.max(np.abs(x)) or 1.0)
+
+
+def record(g: TruthGear, periods: int, seed: int, sample_rate_hz: float = 10_000.0,
+           snr: float = 10.0, clean: dict[str, np.ndarray] | None = None) -> Measurement:
+    """A noisy measurement (white noise at ``snr`` per channel) of ``periods`` fundamental
+    periods; ``clean``: the noise-free channels when already simulated."""
+    clean = clean or simulate(g, periods * g.period_s, sample_rate_hz)
+    rng = np.random.default_rng(seed)
+    return Measurement({k: add_white_noise(v, snr, rng) for k, v in clean.items()},
+                       sample_rate_hz)
+
+
+def line_margin_db(with_effect: np.ndarray, without: np.ndarray, snr: float,
+                   sample_rate_hz: float, max_freq_hz: float) -> tuple[float, float]:
+    """(frequency, margin in dB) of the strongest spectral line an effect changes below
+    ``max_freq_hz``, over the mean amplitude of a noise bin at ``snr`` (noise-free inputs
+    of equal length)."""
+    n = with_effect.size
+    freqs = np.fft.rfftfreq(n, 1 / sample_rate_hz)
+    change = 2 * np.abs(np.fft.rfft(with_effect - np.mean(with_effect))
+                        - np.fft.rfft(without - np.mean(without))) / n
+    keep = (freqs > 0) & (freqs <= max_freq_hz)
+    k = np.argmax(np.where(keep, change, 0))
+    sigma = np.sqrt(np.var(with_effect) / snr)
+    noise_bin = sigma * np.sqrt(np.pi / n)  # mean amplitude of a white-noise bin
+    return float(freqs[k]), float(20 * np.log10(change[k] / noise_bin))

@@ -1,0 +1,68 @@
+"""The held-out test's statistic: its false-alarm rate under noise alone, its power when
+the effect is real; the half featurizer's two halves."""
+
+import numpy as np
+from scipy.stats import norm
+
+from pydiag.gear.features import FullSpectrumFeaturizer
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.loop.validate import FALSE_ALARM_RATE, held_out_statistic
+
+
+def rician(amplitude, noise_power, rng, size):
+    """|A + n| with n complex Gaussian of power noise_power (per bin)."""
+    n = rng.normal(0, np.sqrt(noise_power / 2), (size, amplitude.size, 2))
+    return np.hypot(amplitude + n[..., 0], n[..., 1])
+
+
+def z_of(measured, base, effect, noise):
+    total_w, terms, _ = held_out_statistic(measured, base, effect, noise)
+    return (terms.sum() + total_w) / (2 * np.sqrt(total_w))
+
+
+def test_false_alarm_rate_when_the_effect_only_fits_noise():
+    """Base lines right; the 'effect' moved the lines by what a fit to other noise would:
+    z exceeds its threshold in about alpha of the trials (2000 trials, 300 bins)."""
+    rng = np.random.default_rng(1)
+    base = np.concatenate([rng.uniform(0.5, 5, 60), np.zeros(240)])  # lines and empty bins
+    noise = 0.3
+    threshold = norm.ppf(1 - FALSE_ALARM_RATE)
+    held = rician(base, noise, rng, 2000)
+    fitted_to = rician(base, noise, rng, 2000)  # the other half's noise, which the effect fits
+    z = np.array([z_of(r, base, base + 0.3 * (f - base), noise)
+                  for r, f in zip(held, fitted_to)])
+    rate = np.mean(z > threshold)
+    assert 0.002 < rate < 0.025, rate  # 0.01 +- 3.5 binomial standard deviations
+    assert abs(np.mean(z)) < 0.15 and 0.85 < np.std(z) < 1.15  # standard normal
+
+
+def test_a_real_effect_passes_and_a_wrong_one_does_not():
+    rng = np.random.default_rng(2)
+    base = rng.uniform(0.5, 5, 80)
+    truth = base.copy()
+    truth[::8] += 1.0  # the lines a missing effect raises
+    measured = rician(truth, 0.3, rng, 1)[0]
+    threshold = norm.ppf(1 - FALSE_ALARM_RATE)
+    assert z_of(measured, base, truth, 0.3) > 3 * threshold
+    wrong = base.copy()
+    wrong[4::8] += 1.0  # raises other lines: as noise alone, z is about standard normal
+    assert z_of(measured, base, wrong, 0.3) < threshold
+
+
+def test_halves_hold_the_same_lines_and_independent_noise():
+    kin = GearKinematics(14, 21, 25.0)
+    rate = 10_000.0
+    n = int(round(8 * kin.period_s * rate))
+    t = np.arange(n) / rate
+    rng = np.random.default_rng(3)
+    x = 2.0 * np.sin(2 * np.pi * kin.f_mesh_hz * t) + rng.normal(0, 1, n)
+    halves = [FullSpectrumFeaturizer(kin, 4, 1000.0, half=h) for h in (0, 1)]
+    assert halves[0].duration_s == 8 * kin.period_s
+    spectra = [h.spectrum(x, rate) for h in halves]
+    k = int(round(kin.f_mesh_hz * 4 * kin.period_s)) - 1  # the mesh line's bin
+    for freqs, amp, _ in spectra:
+        assert abs(freqs[k] - kin.f_mesh_hz) < 1e-9 and abs(amp[k] - 2.0) < 0.1
+    noise = [np.delete(amp, k) for _, amp, _ in spectra]
+    assert abs(np.corrcoef(noise[0], noise[1])[0, 1]) < 0.1  # other periods, other noise
+    whole = FullSpectrumFeaturizer(kin, 4, 1000.0).spectrum(x[:n // 2], rate)[1]
+    assert not np.allclose(whole, spectra[0][1])  # half 0 is not the first half
