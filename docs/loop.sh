@@ -14,7 +14,8 @@ cd "$WORK"
 
 # 1. hold the base model against it: residual peaks, named, and the suggested effect
 "$PYDIAG" compare --fmu "$ROOT/build/GearPair.fmu" --measurement meas.csv --bearing 9,7.94,39.04 \
-    --source "$ROOT/modelica/GearDiag/GearPair.mo" --history loop.sqlite --quiet
+    --source "$ROOT/modelica/GearDiag/GearPair.mo" --history loop.sqlite --quiet \
+    --build-dir "$ROOT/build/effects"
 
 # 2. add the effect: a model that extends the base (here the catalogue's own), rebuild
 cp -r "$ROOT/modelica" modelica

@@ -5,8 +5,10 @@ A missing effect is real when adding it predicts data it was not fitted to. The 
 (order-tracked, whole fundamental periods) is cut into alternating periods: half A (0, 2,
 4, ...) and half B (1, 3, 5, ...), two records of the same machine with independent noise
 (:class:`pydiag.gear.features.FullSpectrumFeaturizer`, ``half``). The effect's parameters
-are fitted on A (the base parameters held at their fit), then base and effect are scored
-on B, on bins that A's measurement chose (so B's noise does not choose them).
+(and the channel gains) are fitted on A, the base parameters held at their fit, then base
+and effect are scored on B, on bins that A's measurement chose (so B's noise does not
+choose them). The base parameters come from the whole record, B included: a few
+parameters over hundreds of lines, which leans the test slightly towards the base model.
 
 **The test.** On B, each compared bin holds a measured amplitude R, Rician around the
 true line with noise power P per bin. Let mu0, mu1 be the Rician means of the base and the

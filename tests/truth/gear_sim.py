@@ -267,4 +267,4 @@ def line_margin_db(with_effect: np.ndarray, without: np.ndarray, snr: float,
     k = np.argmax(np.where(keep, change, 0))
     sigma = np.sqrt(np.var(with_effect) / snr)
     noise_bin = sigma * np.sqrt(np.pi / n)  # mean amplitude of a white-noise bin
-    return float(freqs[k]), float(20 * np.log10(change[k] / noise_bin))
+    return float(freqs[k]), float(20 * np.log10(max(change[k], 1e-300) / noise_bin))
