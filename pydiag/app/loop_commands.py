@@ -18,13 +18,8 @@ from pydiag.io.outputs import write_text
 from pydiag.loop import history
 from pydiag.loop.compare import EFFECT_REFIT, compare, refit_with_effect
 from pydiag.loop.discover import MODELICA_ROOT, as_dict, discover, effect_fmu
-from pydiag.loop.validate import not_validated, validate
+from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
-
-
-#: Parameters every model that extends GearDiag.GearPair has: what the effects build on.
-GEARPAIR_VARIABLES = {"a0", "a_f", "f_f", "f_ate", "f_dte", "k2", "phi2", "k4", "phi4", "Np",
-                      "Ng", "f_pinion", "m", "K", "c", "T", "r_p", "xi_max", "gamma_max"}
 
 
 def _effect_estimator(args) -> FaultEstimator:
@@ -40,7 +35,6 @@ def cmd_compare(args) -> int:
     m = read_input(args)
     # with an effect model, the base fit runs with the effect switched off (lower bounds)
     problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
-    md, _ = read_model_description(args.fmu)
     update, close = progress_bar(args.quiet, "compare")
     try:
         c = compare(problem, FaultEstimator(**estimator_settings(args), progress=update),
@@ -50,18 +44,14 @@ def cmd_compare(args) -> int:
                                   args.bearing)
     finally:
         close()
-    if args.no_validate:
-        pass
-    elif not GEARPAIR_VARIABLES <= {v.name for v in md.modelVariables}:
-        c = not_validated(c, f"the catalogue's effects extend GearDiag.GearPair, and "
-                             f"{md.modelName} is not one of its models")
-    else:
+    if not args.no_validate:
         root = Path(args.modelica) if args.modelica else MODELICA_ROOT
         c = validate(problem, c, lambda e: str(effect_fmu(e.key, root, Path(args.build_dir))),
                      _effect_estimator(args), args.bearing,
                      present=(args.effect,) if args.effect else (),
                      progress=None if args.quiet else
                      (lambda key: print(f"validating {key} held out ...", file=sys.stderr)))
+    md, _ = read_model_description(args.fmu)
     run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c

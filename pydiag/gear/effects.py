@@ -159,6 +159,4 @@ EFFECTS = {e.key: e for e in (
 
 
 def model_file(effect: Effect, modelica_root) -> Path:
-    if effect.in_base:
-        return Path(modelica_root) / "GearDiag" / f"{effect.model.rsplit('.', 1)[1]}.mo"
     return Path(modelica_root) / "GearDiag" / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"

@@ -183,7 +183,10 @@ class MeasuredSpectra:
 
 
 def measured_spectra(problem: FitProblem, false_alarm_rate: float,
-                     max_periods: int | None = None) -> MeasuredSpectra:
+                     max_periods: int | None = None,
+                     featurizer: FullSpectrumFeaturizer | None = None) -> MeasuredSpectra:
+    """The measurement's spectra on ``featurizer`` (default: all the record's whole
+    periods, at most ``max_periods``), its peak margins, and the bins scored."""
     kin = problem.kinematics
     if kin is None:
         raise EstimationError("compare names peaks by gear kinematics: give the FMU's Np, Ng, "
@@ -196,8 +199,8 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
     if n_periods < 1:
         raise EstimationError(f"record of {m.duration_s:.4g} s is shorter than one fundamental "
                               f"period ({kin.period_s:.4g} s)")
-    featurizer = FullSpectrumFeaturizer(kin, min(n_periods, max_periods or n_periods),
-                                        problem.featurizer.max_freq_hz)
+    featurizer = featurizer or FullSpectrumFeaturizer(
+        kin, min(n_periods, max_periods or n_periods), problem.featurizer.max_freq_hz)
     spectra, margin, bins = {}, {}, None
     for channel in problem.channels:
         freqs, amp, noise = featurizer.spectrum(m.channels[channel], m.sample_rate_hz)

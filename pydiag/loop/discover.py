@@ -26,7 +26,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.loop.compare import Comparison, compare
-from pydiag.loop.validate import held_out
+from pydiag.loop.validate import held_out, in_model
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
@@ -47,9 +47,11 @@ class Discovery:
 
 
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
-    """The effect's FMU, built unless an up-to-date one exists (not for an ``in_base``
-    effect: its FMU is the base model's)."""
+    """The effect's FMU, built unless an up-to-date one exists. An ``in_base`` effect has
+    none: its FMU is the base model's."""
     effect = EFFECTS[key]
+    if effect.in_base:
+        raise ValueError(f"{key} frees parameters of the base model: it has no FMU of its own")
     out = Path(build_dir) / f"{effect.model.rsplit('.', 1)[1]}.fmu"
     sources = list(Path(modelica_root).rglob("*.mo"))
     if not sources:
@@ -75,11 +77,10 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     if unknown:
         raise UsageError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
     base = compare(problem, estimator, bearing)
-    in_model = {p.fmu_variable for p in problem.parameters}
     found = []
     for key in effects or list(EFFECTS):
         effect = EFFECTS[key]
-        if all(p.fmu_variable in in_model for p in effect.parameters):
+        if in_model(problem, effect):
             continue
         if progress:
             progress(key)

@@ -57,11 +57,12 @@ from pydiag.core.errors import EstimationError, PydiagError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, rician_mean, spectral_error
 from pydiag.fit.problem import FitProblem
+from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
 from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, Suggestion,
-                                 error_bins)
+                                 measured_spectra)
 
 #: Chance that an effect which only fits noise passes the held-out test.
 FALSE_ALARM_RATE = 0.01
@@ -69,6 +70,9 @@ FALSE_ALARM_RATE = 0.01
 MIN_EXPLAINED = 0.5
 #: A parameter closer to a bound than this share of its range is at the bound.
 AT_BOUND = 0.01
+#: Parameters every model that extends GearDiag.GearPair has: what the effects build on.
+GEARPAIR_PARAMETERS = {"a0", "a_f", "f_f", "f_ate", "f_dte", "k2", "phi2", "k4", "phi4", "Np",
+                       "Ng", "f_pinion", "m", "K", "c", "T", "r_p", "xi_max", "gamma_max"}
 
 
 @dataclass
@@ -113,15 +117,21 @@ class HeldOut:
 
 
 def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarray,
-                       noise_power: float) -> tuple[float, float, np.ndarray, np.ndarray]:
-    """Per-bin parts of the test (module docstring): returns (sum w d^2, the bins' D terms,
-    and the bins' base excess w [(R - mu0)^2 - V0]) as (S, D, excess) with S a float."""
+                       noise_power: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """The parts of the test (module docstring) on some bins: sum w d^2, each bin's term
+    of D, and each bin's base excess w [(R - mu0)^2 - V0]."""
     mu0, mu1 = rician_mean(base, noise_power), rician_mean(effect, noise_power)
     var0 = np.maximum(base ** 2 + noise_power - mu0 ** 2, 1e-300)
     w, d = 1.0 / var0, mu1 - mu0
     terms = w * d * (2 * measured - mu0 - mu1)
     excess = w * ((measured - mu0) ** 2 - var0)
     return float(np.sum(w * d * d)), terms, excess
+
+
+def in_model(problem: FitProblem, effect: Effect) -> bool:
+    """The base problem already fits every parameter of ``effect``."""
+    fitted = {p.fmu_variable for p in problem.parameters}
+    return all(p.fmu_variable in fitted for p in effect.parameters)
 
 
 def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
@@ -151,14 +161,10 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
                               "least two fundamental periods")
     m = problem.measurement
     rate = m.sample_rate_hz
-    fit_half = FullSpectrumFeaturizer(kin, n_half, problem.featurizer.max_freq_hz, half=0)
-    bins = None
-    for channel in problem.channels:
-        freqs, amp, noise = fit_half.spectrum(m.channels[channel], rate)
-        margin = np.sqrt(noise * np.log(freqs.size / base.false_alarm_rate))
-        mask = error_bins(amp, margin, n_half)
-        bins = mask if bins is None else bins | mask
-    fit_half = fit_half.with_bins(bins)
+    half_a = FullSpectrumFeaturizer(kin, n_half, problem.featurizer.max_freq_hz, half=0)
+    measured_a = measured_spectra(problem, base.false_alarm_rate, featurizer=half_a)
+    fit_half = measured_a.featurizer
+    bins = fit_half.bins
     test_half = fit_half.other_half()
     effect_problem = problem.derive(fmu_path=effect_fmu,
                                     parameters=effect.bounds(base.peaks, base.bin_hz),
@@ -177,7 +183,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
     err0, err1, raw0, raw1 = [], [], [], []
     for i, channel in enumerate(problem.channels):
-        _, meas_a, noise_a = fit_half.spectrum(m.channels[channel], rate)
+        _, meas_a, noise_a = measured_a.spectra[channel]
         raw0.append(spectral_error(fit_half.spectrum(y0[i], rate)[1][bins], meas_a[bins], noise_a))
         raw1.append(spectral_error(fit_half.spectrum(y1[i], rate)[1][bins], meas_a[bins], noise_a))
         freqs, meas, noise = test_half.spectrum(m.channels[channel], rate)
@@ -219,8 +225,12 @@ def validate(problem: FitProblem, comparison: Comparison,
     raises a :class:`PydiagError` (or a build error) when there is none. At most one effect
     is confident among those that claim the same peaks: the one with the largest held-out
     z; the others are told which effect explains their lines better. ``present``: effect
-    keys the model already has (compare of an effect's model)."""
-    in_model = {p.fmu_variable for p in problem.parameters}
+    keys the model already has (compare of an effect's model). An FMU that is not a
+    GearDiag.GearPair model gets every suggestion "not validated": the effects extend it."""
+    model = read_model_description(problem.spec.fmu_path)[0]
+    if not GEARPAIR_PARAMETERS <= {v.name for v in model.modelVariables}:
+        return not_validated(comparison, f"the catalogue's effects extend GearDiag.GearPair, "
+                                         f"and {model.modelName} is not one of its models")
     suggestions = [dataclasses.replace(s) for s in comparison.suggested_effects]
     for s in suggestions:
         effect = EFFECTS[s.effect]
@@ -228,7 +238,7 @@ def validate(problem: FitProblem, comparison: Comparison,
             s.status = (f"not tried: its lines hold {100 * s.score:.0f} % of the unexplained "
                         "energy")
             continue
-        if s.effect in present or all(p.fmu_variable in in_model for p in effect.parameters):
+        if s.effect in present or in_model(problem, effect):
             s.status = "already in the model"
             continue
         if progress:

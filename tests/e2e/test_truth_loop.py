@@ -51,13 +51,14 @@ def validated(gear_fmu, clean, seed, effect_fmu_of):
 
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_hidden_lines_stand_above_the_noise(truth_records, effect):
+    margins = []
     for channel in ("acc", "disp"):
         freq, margin = line_margin_db(truth_records[effect][channel],
                                       truth_records["none"][channel], 10.0, RATE_HZ, 1575.0)
         print(f"{effect} {channel}: strongest change at {freq:.1f} Hz, {margin:.1f} dB over "
               "the noise")
-    assert max(line_margin_db(truth_records[effect][c], truth_records["none"][c], 10.0, RATE_HZ,
-                              1575.0)[1] for c in ("acc", "disp")) > 20
+        margins.append(margin)
+    assert max(margins) > 20
 
 
 def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effect_fmu_of):
