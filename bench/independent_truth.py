@@ -49,7 +49,8 @@ def main() -> None:
     seeds = [int(s) for s in args.seeds.split(",")]
     g = TruthGear()
     parameters = (gear_default(["acc", "disp"]).fault_parameters + (HEALTHY_TOOTH,)
-                  + EFFECTS["mesh_stiffness_shape"].parameters)
+                  + EFFECTS["mesh_stiffness_shape"].parameters
+                  + EFFECTS["pinion_tooth_softening"].parameters)
     build = Path(tempfile.mkdtemp(prefix="truth_fmus_"))
     fmu_of = lambda e: str(effect_fmu(e.key, ROOT / "modelica", build))  # noqa: E731
     clean_none = simulate(g, PERIODS * g.period_s, RATE_HZ)

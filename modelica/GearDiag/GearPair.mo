@@ -3,7 +3,7 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   // Paper Eq. (6), written as a balance of forces along the line of action:
   //   m*x'' + c*x' + k_eff(t)*(x - e(t)) = T/r_p + F_extra
   //   k(t)  = K*(1 + a(tooth)*sigma(theta_mesh, f_f) + k2*cos(2*theta_mesh + phi2)
-  //                      + k4*cos(4*theta_mesh + phi4) + k_mod)
+  //                      + k4*cos(4*theta_mesh + phi4) - d_f*w0(theta_mesh) + k_mod)
   //   e(t)  = e_ate + e_dte + e_extra
   //   e_ate = f_ate*xi_max*sin(w_pinion*t)          assembly TE, Eq. (4)
   //   e_dte = f_dte*gamma_max*sin(w_fe*t)            geometric TE, Eq. (5), w_fe = w_mesh/N_ap
@@ -25,6 +25,12 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   parameter Real phi2(unit="rad") = 0 "Phase of the second mesh harmonic of the stiffness";
   parameter Real k4(min=0, max=0.3) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
   parameter Real phi4(unit="rad") = 0 "Phase of the fourth mesh harmonic of the stiffness";
+  // A cracked or chipped tooth is also softer over its whole contact (single and double
+  // contact alike), which the paper's amplitude a_f cannot say: the mesh stiffness drops by
+  // d_f of K while the faulty tooth is in contact, w0 a smooth bump over eps_c mesh cycles
+  // (GearDiag.Functions.toothWindow). 0 is the paper's tooth.
+  parameter Real d_f(min=0, max=0.9) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is in contact";
+  parameter Real eps_c(min=1, max=2.5) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
 
   // ---- kinematics ----
   parameter Integer Np = 14 "Number of pinion teeth";
@@ -44,7 +50,8 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   parameter Real N_ap = GearDiag.Functions.lcm(Np, Ng)/Np "Number of assembly phases, lcm(Np, Ng)/Np";
   parameter Real f_mesh(unit="Hz") = Np*f_pinion "Mesh frequency";
   parameter Real f_fe(unit="Hz") = f_mesh/N_ap "Geometric TE (assembly-phase) frequency";
-  parameter Real x_static(unit="m") = T/r_p/(K*(1 + a_f*GearDiag.Functions.formWave(0, f_f)))
+  parameter Real x_static(unit="m") = T/r_p/(K*(1 + a_f*GearDiag.Functions.formWave(0, f_f)
+    - d_f*GearDiag.Functions.toothWindow(0, Np, 0, eps_c)))
     "Static deflection at t = 0 (faulty tooth in mesh, zero TE): the start point";
 
   // ---- effect hooks (neutral here) ----
@@ -77,7 +84,8 @@ equation
   a = if toothIndex < 0.5 then a_f else a0;
   sigma = GearDiag.Functions.formWave(2*pi*f_mesh*t_angle, f_f);
   stiffness = K*(1 + a*sigma + k2*cos(4*pi*f_mesh*t_angle + phi2)
-    + k4*cos(8*pi*f_mesh*t_angle + phi4) + k_mod);
+    + k4*cos(8*pi*f_mesh*t_angle + phi4)
+    - d_f*GearDiag.Functions.toothWindow(f_mesh*t_angle, Np, 0, eps_c) + k_mod);
   e_ate = f_ate*xi_max*sin(2*pi*f_pinion*t_angle);
   e_dte = f_dte*gamma_max*sin(2*pi*f_fe*t_angle);
   mesh_force = contact*stiffness*(x - e_ate - e_dte - e_extra) + c*v;

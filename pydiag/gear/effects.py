@@ -25,14 +25,16 @@ class Effect:
     description: str
     parameters: tuple[Parameter, ...]  # what the effect adds, named as its FMU variables
     weight: Callable[[KinematicLine | None, float, float], float]  # (line, freq, f_mesh) -> 0..1
-    hint: Callable[[list, float], dict] | None = None  # (peaks, bin_hz) -> {name: (low, high)}
+    # (peaks, bin_hz, kinematics) -> {name: (low, high)}
+    hint: Callable[[list, float, object], dict] | None = None
     # the parameters are the base model's own (GearDiag.GearPair), neutral by default: the
     # effect frees them in the base FMU instead of building a model of its own
     in_base: bool = False
 
-    def bounds(self, peaks: list, bin_hz: float) -> tuple[Parameter, ...]:
-        """The effect's parameters, bounds narrowed by what the residual peaks say (if it can)."""
-        narrowed = self.hint(peaks, bin_hz) if self.hint else {}
+    def bounds(self, peaks: list, bin_hz: float, kinematics=None) -> tuple[Parameter, ...]:
+        """The effect's parameters, bounds narrowed by what the residual peaks (and the gear
+        pair's ``kinematics``: :class:`pydiag.gear.kinematics.Kinematics`) say, if it can."""
+        narrowed = self.hint(peaks, bin_hz, kinematics) if self.hint else {}
         return tuple(dataclasses.replace(p, low=narrowed[p.name][0], high=narrowed[p.name][1])
                      if p.name in narrowed else p for p in self.parameters)
 
@@ -112,14 +114,49 @@ def _load_fluctuation(line, freq, f_mesh):
     return 1.0 if freq <= MAX_RIPPLE_HZ or near_mesh else 0.0
 
 
+def ripple_frequency(peaks: list, bin_hz: float, f_mesh_hz: float) -> float | None:
+    """The torque-ripple frequency the unexplained peaks agree on, Hz, or None.
+
+    A ripple f puts lines at f and its harmonics and modulates the mesh: sidebands at
+    n f_mesh +- k f, the higher k the stronger the modulation. Each unexplained peak's
+    offset from 0 or from the nearest mesh harmonic (up to half the mesh frequency) is a
+    multiple of f; a candidate (every offset <= MAX_RIPPLE_HZ) is supported by the
+    unexplained energy of the peaks whose offset is within k bins of its k-th multiple.
+    The largest candidate with 90 % of the best support wins: a subharmonic f/2 is
+    supported by every peak f is, and a single strong line near a shaft order by itself.
+    """
+    unexplained = [p for p in peaks if p.family == "unexplained"]
+    def offset(f):
+        harmonic = round(f / f_mesh_hz)
+        return abs(f - harmonic * f_mesh_hz) if harmonic >= 1 else f
+    offsets = [(offset(p.freq_hz), p.energy_fraction) for p in unexplained]
+    candidates = {o for o, _ in offsets if 0.5 <= o <= MAX_RIPPLE_HZ}
+    if not candidates:
+        return None
+    def support(d):
+        # the k-th multiple carries k times the candidate's error of up to half a bin
+        return sum(e for o, e in offsets
+                   if round(o / d) >= 1 and abs(o - round(o / d) * d) <= round(o / d) * bin_hz)
+    best = max(support(d) for d in candidates)
+    return max(d for d in candidates if support(d) >= 0.9 * best)
+
+
 def _ripple_hint(name):
-    def hint(peaks, bin_hz):
-        """The ripple frequency is the strongest unexplained line below 20 Hz, to within a bin."""
-        low = [p for p in peaks if p.family == "unexplained" and p.freq_hz <= MAX_RIPPLE_HZ]
-        if not low:
+    def hint(peaks, bin_hz, kin):
+        """The ripple frequency from the unexplained peaks' spacing, to within a bin."""
+        f = ripple_frequency(peaks, bin_hz, kin.f_mesh_hz) if kin is not None else None
+        return {} if f is None else {name: (max(0.5, f - bin_hz), f + bin_hz)}
+    return hint
+
+
+def _tooth_hint(name, teeth, other_than_zero=False):
+    def hint(peaks, bin_hz, kin):
+        """The faulty tooth may be any of the wheel's (one turn of its index), or any but
+        tooth 0 (the base model's faulty tooth) when ``other_than_zero``."""
+        if kin is None:
             return {}
-        f = max(low, key=lambda p: p.energy_fraction).freq_hz
-        return {name: (max(0.5, f - bin_hz), f + bin_hz)}
+        n = float(getattr(kin, teeth))
+        return {name: (0.5, n - 0.5) if other_than_zero else (0.0, n)}
     return hint
 
 
@@ -129,18 +166,31 @@ EFFECTS = {e.key: e for e in (
            (Parameter("k2", 0.0, 0.3), Parameter("phi2", -math.pi, math.pi, periodic=True),
             Parameter("k4", 0.0, 0.1), Parameter("phi4", -math.pi, math.pi, periodic=True)),
            _stiffness_shape, in_base=True),
+    Effect("pinion_tooth_softening", "GearDiag.GearPair",
+           "the faulty pinion tooth is also softer over its contact (a crack, a chip)",
+           (Parameter("d_f", 0.0, 0.6),), _second_pinion_tooth, in_base=True),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
            (Parameter("ecc_gear", 0.0, 50e-6),), _gear_eccentricity),
+    # a softer tooth over its contact; which tooth is unknown (one turn of the index, the
+    # bump moving smoothly with it; the hint sets the turn from the wheel's teeth)
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
-           (Parameter("a_g", 0.1, 0.9),), _gear_tooth_fault),
+           (Parameter("d_g", 0.0, 0.6), Parameter("tooth_g", 0.0, 21.0, periodic=True)),
+           _gear_tooth_fault, _tooth_hint("tooth_g", "n_gear")),
+    # a second tooth is not tooth 0: an index fitted next to it (at a bound) says the
+    # first tooth's form is wrong (pinion_tooth_softening), not that there is a second
     Effect("second_pinion_tooth_fault", "GearDiag.Effects.SecondPinionToothFault",
-           "a second faulty pinion tooth", (Parameter("a_f2", 0.1, 0.9),), _second_pinion_tooth),
+           "a second faulty pinion tooth",
+           (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5)),
+           _second_pinion_tooth, _tooth_hint("tooth2", "n_pinion", other_than_zero=True)),
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
            (Parameter("delta_c", 0.05e-6, 2e-6),), _backlash),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
-           "outer-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfo",))),
+           "outer-race defect, pinion bearing (strikes ringing a structural mode)",
+           (Parameter("A_b", 0.0, 500.0),), _family(("bpfo",))),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
-           "inner-race defect, pinion bearing", (Parameter("F_b", 0.0, 500.0),), _family(("bpfi", "bpfi_sb"))),
+           "inner-race defect, pinion bearing (strikes ringing a structural mode)",
+           (Parameter("A_b", 0.0, 500.0), Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
+           _family(("bpfi", "bpfi_sb"))),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
            _ripple_hint("f_load")),

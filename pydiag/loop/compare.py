@@ -269,9 +269,11 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     for s in suggestions:
         s.competing = [o for o in EFFECTS if o != s.effect and claims[o] & claims[s.effect]]
     suggestions.sort(key=lambda s: -s.score)
-    orders = {"pinion": 3, "gear": 3, "bpfo": 5, "bpfi": 5, "bsf": 5, "ftf": 5}
+    # the plots' cursors: mesh harmonics, low shaft orders and their mesh sidebands, bearings
+    orders = {"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3, "bpfo": 5,
+              "bpfi": 5, "bsf": 5, "ftf": 5}
     markers = [{"freq_hz": l.freq_hz, "family": l.family, "label": l.label} for l in lines
-               if l.family == "mesh" or 0 < l.order <= orders.get(l.family, 0)]
+               if l.family == "mesh" or 0 < abs(l.order) <= orders.get(l.family, 0)]
     return Comparison(problem.spec.fmu_path, float(np.sqrt(np.sum(np.square(errors)))),
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
                       peaks, suggestions, false_alarm_rate, featurizer.n_periods,
@@ -290,7 +292,8 @@ def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, eff
     """
     measured = measured_spectra(problem, base.false_alarm_rate, base.n_periods)
     effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect.bounds(base.peaks, base.bin_hz),
+                                    parameters=effect.bounds(base.peaks, base.bin_hz,
+                                                              problem.kinematics),
                                     fixed_values=problem.fmu_values(base.parameters),
                                     featurizer=measured.featurizer)
     fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters

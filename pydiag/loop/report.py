@@ -1,78 +1,129 @@
-"""One self-contained HTML page for a comparison: no scripts, no external files.
+"""One self-contained HTML page for a comparison: interactive plots, no network.
 
-Sections: the measured and model spectra of each channel with the main kinematic lines
-marked, the residual with numbered unexplained peaks, the peak table, the suggested
-effects, and the error history. Figures are inline SVG made with matplotlib.
+Sections: each channel's measured and model spectra, zoomable, with cursors on the mesh
+harmonics, the shaft orders and their mesh sidebands and the bearing lines (hover names a
+line and its family), and the residual with numbered unexplained peaks (hover: what each
+could be); the residual by family; the peak table; the suggested effects; the error
+history across model revisions. The plots are plotly's, its script embedded once in the
+page, so the file opens anywhere without a network.
 """
 
 from __future__ import annotations
 
 import html
-import io
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from pydiag.io.outputs import write_text
-from pydiag.loop.compare import Comparison
-from pydiag.loop.history import plot as plot_history
+from pydiag.loop.compare import RESIDUAL_GROUPS, Comparison
 
-FAMILY_COLOURS = {"mesh": "#c0392b", "pinion": "#2e86c1", "gear": "#27ae60", "bpfo": "#8e44ad",
+FAMILY_COLOURS = {"mesh": "#c0392b", "pinion": "#2e86c1", "mesh_sb_pinion": "#5dade2",
+                  "gear": "#27ae60", "mesh_sb_gear": "#82e0aa", "bpfo": "#8e44ad",
                   "bpfi": "#d35400", "bsf": "#7f8c8d", "ftf": "#7f8c8d"}
 CSS = """
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 980px; color: #222; }
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
 h1 { font-size: 1.5em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
 table { border-collapse: collapse; font-size: 0.9em; }
 td, th { border-bottom: 1px solid #ddd; padding: 3px 10px; text-align: left; }
 .num { text-align: right; font-variant-numeric: tabular-nums; }
 .confident { font-weight: bold; color: #1a7f37; }
 .meta { color: #555; font-size: 0.9em; }
-figure { margin: 0.5em 0; } svg { max-width: 100%; height: auto; }
 """
+PLOT_CONFIG = {"displaylogo": False, "responsive": True, "scrollZoom": True}
 
 
-def _svg(fig) -> str:
-    buf = io.StringIO()
-    fig.savefig(buf, format="svg")
-    text = buf.getvalue()
-    return text[text.index("<svg"):]
+def _html(fig, div_id: str, first: bool) -> str:
+    """The figure as a div; the first of the page carries plotly's script, inline."""
+    return fig.to_html(full_html=False, include_plotlyjs=True if first else False,
+                       div_id=div_id, config=PLOT_CONFIG)
 
 
-def _spectrum_figure(name: str, spec, markers: list[dict], peaks: list) -> str:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def _spectrum_figure(name: str, spec, markers: list[dict], peaks: list):
+    """Measured and model spectra (log) above the residual, x shared: zoom one, both follow."""
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
 
     f = np.asarray(spec.freq_hz)
     meas, model = np.asarray(spec.measured), np.asarray(spec.model)
     floor = max(np.sqrt(spec.noise_power), 1e-300)
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9.5, 5.6), dpi=100, sharex=True)
-    ax1.semilogy(f, np.maximum(meas, floor / 10), lw=0.7, color="#444", label="measured")
+    fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06,
+                        row_heights=[0.62, 0.38])
+    fig.add_trace(go.Scatter(x=f, y=np.maximum(meas, floor / 10), name="measured",
+                             mode="lines", line=dict(width=1, color="#444"),
+                             hovertemplate="%{x:.2f} Hz: %{y:.4g}<extra>measured</extra>"),
+                  row=1, col=1)
     shown = model > floor / 10  # lines the model really produces, not numerical zeros
-    ax1.semilogy(f[shown], model[shown], "o", ms=2.5, color="#e67e22", label="model (lines)")
-    for m in markers:
-        ax1.axvline(m["freq_hz"], color=FAMILY_COLOURS.get(m["family"], "#999"), lw=0.6,
-                    alpha=0.5)
-    handles = [plt.Line2D([], [], color=c, lw=1.5, label=k) for k, c in FAMILY_COLOURS.items()
-               if any(m["family"] == k for m in markers)]
-    ax1.legend(handles=ax1.get_legend_handles_labels()[0] + handles, fontsize=7, ncol=4,
-               loc="upper right")
-    ax1.set_ylabel("amplitude")
-    ax1.set_title(f"channel {name}: measured vs model, kinematic lines marked", fontsize=10)
-    residual = meas - model
-    ax2.plot(f, residual, lw=0.7, color="#1f5fa8")
-    ax2.axhline(0, color="#999", lw=0.5)
-    for i, p in peaks:
-        ax2.annotate(str(i), (p.freq_hz, p.amplitude), textcoords="offset points", xytext=(0, 4),
-                     ha="center", fontsize=8, color="#c0392b", fontweight="bold")
-        ax2.plot(p.freq_hz, p.amplitude, "v", color="#c0392b", ms=4)
-    ax2.set_xlabel("frequency (Hz)")
-    ax2.set_ylabel("measured - model")
-    fig.tight_layout()
-    out = _svg(fig)
-    plt.close(fig)
-    return out
+    fig.add_trace(go.Scatter(x=f[shown], y=model[shown], name="model", mode="markers",
+                             marker=dict(size=4, color="#e67e22"),
+                             hovertemplate="%{x:.2f} Hz: %{y:.4g}<extra>model</extra>"),
+                  row=1, col=1)
+    # the cursors: a vertical line per kinematic line, topped by a hoverable tick above the
+    # spectrum naming the line and its family (one legend entry per family)
+    top = 2.0 * float(np.max(meas)) if f.size else 1.0
+    for family in dict.fromkeys(m["family"] for m in markers):
+        mine = [m for m in markers if m["family"] == family]
+        colour = FAMILY_COLOURS.get(family, "#999")
+        fig.add_trace(go.Scatter(
+            x=[m["freq_hz"] for m in mine], y=[top] * len(mine), name=family, mode="markers",
+            legendgroup=family, marker=dict(symbol="triangle-down", size=9, color=colour),
+            text=[f"{m['label']} ({family})" for m in mine],
+            hovertemplate="%{text}<br>%{x:.2f} Hz<extra></extra>"), row=1, col=1)
+        for m in mine:
+            fig.add_vline(x=m["freq_hz"], line=dict(color=colour, width=0.6), opacity=0.35,
+                          row=1, col=1)
+    fig.add_trace(go.Scatter(x=f, y=meas - model, name="measured - model", mode="lines",
+                             line=dict(width=1, color="#1f5fa8"),
+                             hovertemplate="%{x:.2f} Hz: %{y:.4g}<extra>residual</extra>"),
+                  row=2, col=1)
+    if peaks:
+        fig.add_trace(go.Scatter(
+            x=[p.freq_hz for _, p in peaks], y=[p.amplitude for _, p in peaks],
+            name="unexplained peaks", mode="markers+text",
+            marker=dict(symbol="triangle-down", size=8, color="#c0392b"),
+            text=[str(i) for i, _ in peaks], textposition="top center",
+            customdata=[f"#{i} {p.label} ({p.family}), {100 * p.energy_fraction:.1f} % of the "
+                        "unexplained energy" for i, p in peaks],
+            hovertemplate="%{customdata}<br>%{x:.2f} Hz<extra></extra>"), row=2, col=1)
+    fig.update_yaxes(type="log", title_text="amplitude", exponentformat="power", row=1, col=1)
+    fig.update_yaxes(title_text="measured - model", row=2, col=1)
+    fig.update_xaxes(title_text="frequency (Hz)", row=2, col=1)
+    fig.update_layout(title=f"channel {name}: measured vs model, kinematic lines marked",
+                      height=620, margin=dict(l=60, r=20, t=50, b=50), hovermode="closest",
+                      template="plotly_white")
+    return fig
+
+
+def _family_figure(by_family: dict[str, dict[str, dict[str, float]]]):
+    """Each group's share of the measured and of the residual energy, per channel."""
+    import plotly.graph_objects as go
+
+    fig = go.Figure()
+    for channel, groups in by_family.items():
+        for what, colour in (("measured", "#95a5a6"), ("residual", "#c0392b")):
+            fig.add_trace(go.Bar(
+                x=list(RESIDUAL_GROUPS), y=[100 * groups[g][what] for g in RESIDUAL_GROUPS],
+                name=f"{channel}: of the {what} energy", offsetgroup=f"{channel}-{what}",
+                marker_color=colour, opacity=1.0 if channel == next(iter(by_family)) else 0.6,
+                hovertemplate="%{x}: %{y:.1f} %<extra>" + f"{channel}, {what}</extra>"))
+    fig.update_layout(barmode="group", height=360, yaxis_title="share, %",
+                      margin=dict(l=60, r=20, t=20, b=60), template="plotly_white")
+    return fig
+
+
+def _history_figure(rows: list[dict]):
+    import plotly.graph_objects as go
+
+    names = [r.get("model_name") or Path(r["fmu"]).stem for r in rows]
+    fig = go.Figure(go.Scatter(
+        x=[r["id"] for r in rows], y=[r["error"] for r in rows], mode="lines+markers+text",
+        text=names, textposition="top center", line=dict(color="#1f5fa8"),
+        hovertemplate="run %{x}: %{text}<br>error %{y:.4f}<extra></extra>"))
+    fig.update_layout(height=320, xaxis_title="compare run",
+                      yaxis_title="spectral error (Eq. 12, relative)",
+                      yaxis_rangemode="tozero", xaxis_dtick=1,
+                      margin=dict(l=60, r=20, t=20, b=50), template="plotly_white")
+    return fig
 
 
 def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
@@ -90,11 +141,13 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
              f"<p>Spectral error <b>{c.error:.4f}</b> (Eq. 12 less its noise part; "
              f"{c.error_raw:.4f} raw) on {c.n_error_bins} bins. Fitted parameters: "
              + ", ".join(f"{html.escape(k)} = {v:.4g}" for k, v in c.parameters.items()) + "</p>"]
+    plots = 0
     for name, spec in c.spectra.items():
-        parts.append(f"<h2>Channel {html.escape(name)}</h2><figure>"
-                     + _spectrum_figure(name, spec, c.markers,
-                                        [(i, p) for i, p in numbered if p.channel == name])
-                     + "</figure>")
+        fig = _spectrum_figure(name, spec, c.markers,
+                               [(i, p) for i, p in numbered if p.channel == name])
+        parts.append(f"<h2>Channel {html.escape(name)}</h2>"
+                     + _html(fig, f"spectrum-{plots}", plots == 0))
+        plots += 1
     parts.append("<h2>Unexplained peaks</h2>")
     if not c.peaks:
         parts.append("<p>None: the model explains every line above the noise floor.</p>")
@@ -107,7 +160,11 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
         parts.append("<table><tr><th>#</th><th>channel</th><th>Hz</th><th>family</th>"
                      "<th>line</th><th>excess</th><th>energy</th></tr>" + rows + "</table>")
     if c.residual_by_family:
-        parts.append("<h2>Residual by family</h2><table><tr><th>channel</th><th>lines</th>"
+        parts.append("<h2>Residual by family</h2>"
+                     + _html(_family_figure(c.residual_by_family), "residual-by-family",
+                             plots == 0))
+        plots += 1
+        parts.append("<table><tr><th>channel</th><th>lines</th>"
                      "<th>of the measured energy</th><th>of the residual energy</th></tr>")
         parts += [f"<tr><td>{html.escape(ch)}</td><td>{html.escape(g)}</td>"
                   f"<td class='num'>{100 * v['measured']:.1f} %</td>"
@@ -127,8 +184,7 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
         parts.append("<table><tr><th>effect</th><th>score</th><th>held out</th>"
                      "<th>competes with</th><th>evidence</th></tr>" + rows + "</table>")
     if history_rows:
-        with tempfile.TemporaryDirectory() as tmp:
-            svg = plot_history(history_rows, Path(tmp) / "history.svg").read_text()
-        parts.append("<h2>Error history</h2><figure>" + svg[svg.index("<svg"):] + "</figure>")
+        parts.append("<h2>Error history</h2>"
+                     + _html(_history_figure(history_rows), "history", plots == 0))
     parts.append("</body></html>")
     return write_text(out, "\n".join(parts), force)

@@ -167,7 +167,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
     bins = fit_half.bins
     test_half = fit_half.other_half()
     effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect.bounds(base.peaks, base.bin_hz),
+                                    parameters=effect.bounds(base.peaks, base.bin_hz,
+                                                              problem.kinematics),
                                     fixed_values=problem.fmu_values(base.parameters),
                                     featurizer=fit_half)
     fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters

@@ -1,10 +1,15 @@
 within GearDiag.Effects;
-model BearingInnerRace "Inner-race defect of the pinion bearing: pulses at BPFI, modulated by the shaft turn"
-  extends GearDiag.GearPair(F_extra = F_b*(1 + m_shaft*cos(2*pi*f_pinion*time))
-                                      *exp(kappa*(cos(2*pi*f_bpfi*time) - 1)));
-  parameter Real F_b(unit="N", min=0) = 150 "Peak defect force";
-  parameter Real m_shaft(min=0, max=1) = 0.5 "Modulation depth by the load zone, once per turn";
-  parameter Real kappa = 20 "Pulse sharpness";
+model BearingInnerRace "Inner-race defect of the pinion bearing: strikes at BPFI ring a structural mode, stronger in the load zone"
+  // As BearingOuterRace, but the spall turns with the shaft: its strikes are strongest when
+  // it passes the load zone, once a pinion turn (depth m_shaft, the zone at phase phi_zone).
+  extends GearDiag.GearPair(acc_sensor = der(v)
+    + A_b*(1 - m_shaft/2*(1 - cos(2*pi*f_pinion*t_angle - phi_zone)))
+      *GearDiag.Functions.ringDown(t_angle, f_bpfi, f_mode, zeta_mode));
+  parameter Real A_b(unit="m/s2", min=0) = 60 "Peak acceleration of one strike's ring-down in the load zone";
+  parameter Real m_shaft(min=0, max=1) = 1 "Modulation depth by the load zone, once per turn (1: no strike opposite it)";
+  parameter Real phi_zone(unit="rad") = 0 "Pinion angle of the load zone";
+  parameter Real f_mode(unit="Hz") = 3000 "Natural frequency of the structural mode the strikes ring";
+  parameter Real zeta_mode(min=1e-3, max=0.5) = 0.05 "Damping ratio of that mode";
   parameter Integer n_balls = 9 "Number of rolling elements (6205-type bearing)";
   parameter Real d_ball(unit="m") = 7.94e-3 "Ball diameter";
   parameter Real d_pitch(unit="m") = 39.04e-3 "Pitch diameter";

@@ -1,9 +1,13 @@
 within GearDiag.Effects;
-model BearingOuterRace "Outer-race defect of the pinion bearing: force pulses at BPFO"
-  // A smooth periodic pulse train exp(kappa*(cos(theta) - 1)), one pulse per ball pass.
-  extends GearDiag.GearPair(F_extra = F_b*exp(kappa*(cos(2*pi*f_bpfo*time) - 1)));
-  parameter Real F_b(unit="N", min=0) = 150 "Peak defect force";
-  parameter Real kappa = 20 "Pulse sharpness";
+model BearingOuterRace "Outer-race defect of the pinion bearing: strikes at BPFO ring a structural mode at the sensor"
+  // Each rolling element passing the spall strikes the housing; the accelerometer sees a
+  // structural mode ringing down after every strike (McFadden and Smith's model), added to
+  // what it sees of the mesh. The mesh itself (disp) does not feel it.
+  extends GearDiag.GearPair(acc_sensor = der(v)
+    + A_b*GearDiag.Functions.ringDown(t_angle, f_bpfo, f_mode, zeta_mode));
+  parameter Real A_b(unit="m/s2", min=0) = 60 "Peak acceleration of one strike's ring-down at the sensor";
+  parameter Real f_mode(unit="Hz") = 3000 "Natural frequency of the structural mode the strikes ring";
+  parameter Real zeta_mode(min=1e-3, max=0.5) = 0.05 "Damping ratio of that mode";
   parameter Integer n_balls = 9 "Number of rolling elements (6205-type bearing)";
   parameter Real d_ball(unit="m") = 7.94e-3 "Ball diameter";
   parameter Real d_pitch(unit="m") = 39.04e-3 "Pitch diameter";

@@ -1,8 +1,8 @@
 within GearDiag.Effects;
-model GearToothFault "A faulty tooth on the driven gear: extra stiffness variation once per gear turn"
-  // Gear tooth 0 meshes once every Ng mesh cycles; the extra amplitude (a_g - a0) rides on
-  // the same wave sigma, so the stiffness stays continuous at tooth changes.
-  extends GearDiag.GearPair(k_mod = if mod(floor(f_mesh*time + 0.25), Ng) < 0.5
-                                    then (a_g - a0)*sigma else 0);
-  parameter Real a_g(min=0, max=0.9) = 0.3 "Stiffness variation amplitude of the faulty gear tooth";
+model GearToothFault "A faulty tooth on the driven gear: the mesh is softer while it is in contact"
+  // As the pinion's d_f (GearPair): the mesh stiffness drops by d_g of K while the faulty
+  // gear tooth is in contact, once a gear turn (GearDiag.Functions.toothWindow).
+  extends GearDiag.GearPair(k_mod = -d_g*GearDiag.Functions.toothWindow(f_mesh*t_angle, Ng, tooth_g, eps_c));
+  parameter Real d_g(min=0, max=0.9) = 0.2 "Relative loss of mesh stiffness while the faulty gear tooth is in contact";
+  parameter Real tooth_g(min=0) = 0 "Index of the faulty gear tooth: the one meshing with pinion tooth 0 at the start is 0";
 end GearToothFault;
