@@ -281,6 +281,21 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                       int(np.count_nonzero(bins)), fit_error, gains, spectra, markers, by_family)
 
 
+def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
+               featurizer: FullSpectrumFeaturizer, estimator: FaultEstimator | None = None
+               ) -> tuple[FitProblem, dict[str, float]]:
+    """(the effect's problem, its fitted parameters): the effect's parameters, bounds
+    narrowed by ``base``'s peaks, fitted on ``featurizer``'s bins with the base parameters
+    held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``."""
+    effect_problem = problem.derive(fmu_path=effect_fmu,
+                                    parameters=effect.bounds(base.peaks, base.bin_hz,
+                                                              problem.kinematics),
+                                    fixed_values=problem.fmu_values(base.parameters),
+                                    featurizer=featurizer)
+    return effect_problem, (estimator or FaultEstimator(**EFFECT_REFIT)).fit(
+        effect_problem).parameters
+
+
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
                       estimator: FaultEstimator | None = None,
                       bearing: Bearing | None = None) -> Comparison:
@@ -291,12 +306,8 @@ def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, eff
     variables); ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``.
     """
     measured = measured_spectra(problem, base.false_alarm_rate, base.n_periods)
-    effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect.bounds(base.peaks, base.bin_hz,
-                                                              problem.kinematics),
-                                    fixed_values=problem.fmu_values(base.parameters),
-                                    featurizer=measured.featurizer)
-    fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters
+    effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, measured.featurizer,
+                                        estimator)
     c = compare(effect_problem, None, bearing, base.false_alarm_rate, base.n_periods,
                 parameters=fitted, measured=measured)
     return dataclasses.replace(c, parameters={**base.parameters, **fitted})

@@ -33,10 +33,10 @@ td, th { border-bottom: 1px solid #ddd; padding: 3px 10px; text-align: left; }
 PLOT_CONFIG = {"displaylogo": False, "responsive": True, "scrollZoom": True}
 
 
-def _html(fig, div_id: str, first: bool) -> str:
-    """The figure as a div; the first of the page carries plotly's script, inline."""
-    return fig.to_html(full_html=False, include_plotlyjs=True if first else False,
-                       div_id=div_id, config=PLOT_CONFIG)
+def _html(fig, div_id: str) -> str:
+    """The figure as a div (plotly's script is in the page's head, once)."""
+    return fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id,
+                       config=PLOT_CONFIG)
 
 
 def _spectrum_figure(name: str, spec, markers: list[dict], peaks: list):
@@ -129,11 +129,13 @@ def _history_figure(rows: list[dict]):
 def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
                  history_rows: list[dict] | None = None, force: bool = False) -> Path:
     """Write the page to ``out`` under the output policy (:mod:`pydiag.io.outputs`)."""
+    from plotly.offline import get_plotlyjs
+
     c = comparison
     numbered = list(enumerate(c.peaks, 1))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
              f"<title>pydiag compare: {html.escape(Path(c.fmu).name)}</title>"
-             f"<style>{CSS}</style></head><body>",
+             f"<style>{CSS}</style><script>{get_plotlyjs()}</script></head><body>",
              "<h1>Model vs measurement</h1>",
              f"<p class='meta'>model {html.escape(Path(c.fmu).name)}; measurement "
              f"{html.escape(str(measurement))}; {c.n_periods} fundamental periods, "
@@ -141,13 +143,11 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
              f"<p>Spectral error <b>{c.error:.4f}</b> (Eq. 12 less its noise part; "
              f"{c.error_raw:.4f} raw) on {c.n_error_bins} bins. Fitted parameters: "
              + ", ".join(f"{html.escape(k)} = {v:.4g}" for k, v in c.parameters.items()) + "</p>"]
-    plots = 0
-    for name, spec in c.spectra.items():
+    for k, (name, spec) in enumerate(c.spectra.items()):
         fig = _spectrum_figure(name, spec, c.markers,
                                [(i, p) for i, p in numbered if p.channel == name])
         parts.append(f"<h2>Channel {html.escape(name)}</h2>"
-                     + _html(fig, f"spectrum-{plots}", plots == 0))
-        plots += 1
+                     + _html(fig, f"spectrum-{k}"))
     parts.append("<h2>Unexplained peaks</h2>")
     if not c.peaks:
         parts.append("<p>None: the model explains every line above the noise floor.</p>")
@@ -161,9 +161,7 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
                      "<th>line</th><th>excess</th><th>energy</th></tr>" + rows + "</table>")
     if c.residual_by_family:
         parts.append("<h2>Residual by family</h2>"
-                     + _html(_family_figure(c.residual_by_family), "residual-by-family",
-                             plots == 0))
-        plots += 1
+                     + _html(_family_figure(c.residual_by_family), "residual-by-family"))
         parts.append("<table><tr><th>channel</th><th>lines</th>"
                      "<th>of the measured energy</th><th>of the residual energy</th></tr>")
         parts += [f"<tr><td>{html.escape(ch)}</td><td>{html.escape(g)}</td>"
@@ -185,6 +183,6 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
                      "<th>competes with</th><th>evidence</th></tr>" + rows + "</table>")
     if history_rows:
         parts.append("<h2>Error history</h2>"
-                     + _html(_history_figure(history_rows), "history", plots == 0))
+                     + _html(_history_figure(history_rows), "history"))
     parts.append("</body></html>")
     return write_text(out, "\n".join(parts), force)

@@ -61,7 +61,7 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
-from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, Suggestion,
+from pydiag.loop.compare import (NOT_VALIDATED, Comparison, Suggestion, fit_effect,
                                  measured_spectra)
 
 #: Chance that an effect which only fits noise passes the held-out test.
@@ -166,12 +166,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
     fit_half = measured_a.featurizer
     bins = fit_half.bins
     test_half = fit_half.other_half()
-    effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect.bounds(base.peaks, base.bin_hz,
-                                                              problem.kinematics),
-                                    fixed_values=problem.fmu_values(base.parameters),
-                                    featurizer=fit_half)
-    fitted = (estimator or FaultEstimator(**EFFECT_REFIT)).fit(effect_problem).parameters
+    effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half, estimator)
     base_problem = problem.derive(featurizer=fit_half)
     x0 = np.array([base.parameters[p.name] for p in base_problem.parameters])
     x1 = np.array([fitted[p.name] for p in effect_problem.parameters])
