@@ -4,6 +4,11 @@ frequency signature that points to it.
 A signature weighs unexplained residual peaks by their kinematic family and order:
 1 for the effect's defining lines, 0.5 for lines it also produces, 0 otherwise. An
 effect's score is the share of the unexplained peak energy its signature covers.
+
+Most signatures are fixed. A structural resonance's is not: a housing mode amplifies
+whatever lines the gear pair makes near its own frequency, so its signature is the band
+where those lines' unexplained energy bunches (:func:`resonance_band`), found from the
+residual itself (``Effect.focus``); the mode's frequency is then fitted inside that band.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from pathlib import Path
 from typing import Callable
 
 from pydiag.core.parameters import Parameter
+from pydiag.gear.features import max_band_freq_hz
 from pydiag.gear.kinematic_map import KinematicLine
 
 
@@ -30,6 +36,15 @@ class Effect:
     # the parameters are the base model's own (GearDiag.GearPair), neutral by default: the
     # effect frees them in the base FMU instead of building a model of its own
     in_base: bool = False
+    # (peaks, bin_hz, kinematics) -> the weight for this residual, for a signature that
+    # depends on where the residual lies (a resonance); None: ``weight`` always
+    focus: Callable[[list, float, object], Callable] | None = None
+
+    def signature(self, peaks: list, bin_hz: float, kinematics=None
+                  ) -> Callable[[KinematicLine | None, float, float], float]:
+        """The weight (line, freq, f_mesh) -> 0..1 this effect gives peaks of a residual
+        whose unexplained ``peaks`` are these."""
+        return self.focus(peaks, bin_hz, kinematics) if self.focus else self.weight
 
     def bounds(self, peaks: list, bin_hz: float, kinematics=None) -> tuple[Parameter, ...]:
         """The effect's parameters, bounds narrowed by what the residual peaks (and the gear
@@ -90,12 +105,60 @@ def _stiffness_shape(line, freq, f_mesh):
     return 1.0 if line.order % 2 == 0 else 0.5
 
 
-def _housing(line, freq, f_mesh):
-    # a housing mode reshapes every line near its frequency; it claims the mesh family
-    # at half weight (a missing harmonic shape may explain the same lines)
-    if line is None:
-        return 0.0
-    return 0.5 if line.family in ("mesh", "mesh_sb_pinion", "mesh_sb_gear") else 0.0
+#: Kinematic families the base gear pair (GearDiag.GearPair) makes: the lines a transfer
+#: path between its mesh and the sensor can reshape.
+GEAR_PAIR_FAMILIES = ("mesh", "mesh_sb_pinion", "pinion", "assembly")
+#: Half-width of a housing mode's band, relative to its frequency. A mode of damping
+#: ratio zeta amplifies lines within about +-zeta of f_n by more than 1/sqrt(2) of its
+#: peak; housing modes have zeta of 0.01-0.05, so +-10 % holds what it amplifies.
+MODE_BAND = 0.1
+#: The highest housing-mode frequency the housing-sensor effect fits, Hz.
+MAX_HOUSING_HZ = 10_000.0
+
+
+def resonance_band(peaks: list, families: tuple[str, ...] = GEAR_PAIR_FAMILIES,
+                   half_width: float = MODE_BAND) -> tuple[float, float] | None:
+    """The band (low, high), Hz, of relative half-width ``half_width`` around the peak
+    frequency that gathers the most unexplained energy of lines of ``families``; None
+    when there are no such peaks. The centre is the energy-weighted mean frequency of the
+    peaks in the best window."""
+    lines = [(p.freq_hz, p.energy_fraction) for p in peaks if p.family in families]
+    if not lines:
+        return None
+    def window(fc):
+        return [(f, e) for f, e in lines if abs(f - fc) <= half_width * fc]
+    best = max((f for f, _ in lines), key=lambda fc: sum(e for _, e in window(fc)))
+    inside = window(best)
+    energy = sum(e for _, e in inside)
+    fc = sum(f * e for f, e in inside) / energy if energy > 0 else best
+    return fc * (1 - half_width), fc * (1 + half_width)
+
+
+def _no_line(line, freq, f_mesh):
+    return 0.0
+
+
+def _housing_focus(peaks, bin_hz, kin):
+    # a housing mode reshapes the lines the gear pair makes near its frequency: it claims
+    # those in the band where their unexplained energy bunches, and nothing else
+    band = resonance_band(peaks)
+    def weight(line, freq, f_mesh):
+        if band is None or line is None or line.family not in GEAR_PAIR_FAMILIES:
+            return 0.0
+        return 1.0 if band[0] <= freq <= band[1] else 0.0
+    return weight
+
+
+def _housing_hint(peaks, bin_hz, kin):
+    """The mode's frequency inside the band its signature claims; when that band reaches
+    the top of the analysed range, the lines there may be the skirt of a mode above it, so
+    the mode may lie anywhere above the band's lower edge."""
+    band = resonance_band(peaks)
+    if band is None:
+        return {}
+    if kin is not None and band[1] >= max_band_freq_hz(kin):
+        return {"f_housing": (band[0], MAX_HOUSING_HZ)}
+    return {"f_housing": band}
 
 
 #: The highest torque-ripple frequency the load-fluctuation effect models, Hz.
@@ -200,11 +263,14 @@ EFFECTS = {e.key: e for e in (
            "the shafts' speed fluctuates (phase modulation of every line)",
            (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
            _load_fluctuation, _ripple_hint("f_speed")),
-    # lower bounds: a mode below every line, where the housing passes the force as a mass
-    # (accelerance 1/m): the level is the mesh's, and the channel gain takes the rest
+    # the mode's frequency is fitted in the band where the residual of the gear pair's
+    # lines bunches (the hint; its signature claims only lines there); damping from a
+    # sharp structural mode to a heavily damped one. Lower bounds: a mode below every
+    # line passes the force as a mass (accelerance 1/m), the channel gain takes the rest
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
            "accelerometer on the housing, behind one housing mode",
-           (Parameter("f_housing", 20.0, 10000.0), Parameter("zeta_housing", 0.02, 0.5)), _housing),
+           (Parameter("f_housing", 20.0, MAX_HOUSING_HZ), Parameter("zeta_housing", 0.005, 0.5)),
+           _no_line, _housing_hint, focus=_housing_focus),
 )}
 
 

@@ -257,7 +257,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
              for ch, p, line, f, m, s in candidates]
     suggestions, claims = [], {}
     for effect in EFFECTS.values():
-        support = [(effect.weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
+        weight = effect.signature(peaks, bin_hz, kin)
+        support = [(weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
                    for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))]
         support = [(w, i, pk) for w, i, pk in support if w > 0]
         claims[effect.key] = {i for _, i, _ in support}

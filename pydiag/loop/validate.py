@@ -176,6 +176,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
         y1 = effect_problem.model_signals(plant, x1)
     lines = kinematic_map(kin, fit_half.max_freq_hz, bearing)
     bin_hz = 1.0 / (n_half * kin.period_s)
+    weight = effect.signature(base.peaks, base.bin_hz, kin)
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
     err0, err1, raw0, raw1 = [], [], [], []
     for i, channel in enumerate(problem.channels):
@@ -189,7 +190,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
         sw, terms, excess = held_out_statistic(r, s0, s1, noise)
         total_w += sw
         total_d += float(np.sum(terms))
-        claims = np.array([effect.weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
+        claims = np.array([weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
                            for fk in f])
         signature_d += float(np.sum(terms[claims]))
         signature_excess += float(np.sum(excess[claims]))

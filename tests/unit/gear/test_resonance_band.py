@@ -1,0 +1,57 @@
+"""The housing mode's signature: the band where the gear pair's unexplained lines bunch."""
+
+import dataclasses
+
+import pytest
+
+from pydiag.gear.effects import EFFECTS, MODE_BAND, resonance_band
+from pydiag.gear.kinematic_map import KinematicLine
+from pydiag.gear.kinematics import GearKinematics
+
+KIN = GearKinematics(32, 80, 29.84)
+
+
+@dataclasses.dataclass
+class Peak:  # the fields of pydiag.loop.compare.Peak the signatures read
+    freq_hz: float
+    family: str
+    energy_fraction: float
+
+
+def comb(center_hz, n, energy, family="pinion"):
+    """n lines a pinion order apart around ``center_hz``, ``energy`` in all."""
+    f0 = round(center_hz / KIN.f_pinion_hz) - n // 2
+    return [Peak((f0 + i) * KIN.f_pinion_hz, family, energy / n) for i in range(n)]
+
+
+def test_the_band_is_where_the_gear_pairs_lines_bunch_not_the_strongest_line():
+    # one strong line at 300 Hz, a comb of weaker pinion orders around 1.3 kHz that holds
+    # more energy in all, and a strong line no gear-pair family makes at 2 kHz
+    peaks = ([Peak(300.0, "mesh_sb_pinion", 0.2)] + comb(1300.0, 9, 0.5)
+             + [Peak(2000.0, "gear", 0.3)])
+    low, high = resonance_band(peaks)
+    centre = (low + high) / 2
+    assert centre == pytest.approx(1300.0, rel=0.02)
+    assert high / low == pytest.approx((1 + MODE_BAND) / (1 - MODE_BAND))
+    hint = EFFECTS["housing_sensor"].bounds(peaks, 0.1, KIN)
+    f_housing = next(p for p in hint if p.name == "f_housing")
+    assert (f_housing.low, f_housing.high) == (low, high)
+
+
+def test_the_housing_claims_only_the_gear_pairs_lines_inside_its_band():
+    peaks = comb(1300.0, 9, 0.6) + [Peak(2000.0, "gear", 0.4)]
+    weight = EFFECTS["housing_sensor"].signature(peaks, 0.1, KIN)
+    inside = KinematicLine(1290.0, "pinion", 43, "43x pinion")
+    assert weight(inside, inside.freq_hz, KIN.f_mesh_hz) == 1.0
+    assert weight(KinematicLine(800.0, "pinion", 27, ""), 800.0, KIN.f_mesh_hz) == 0.0
+    # a gear order in the band: the base gear pair does not make it, no mode reshapes it
+    assert weight(KinematicLine(1300.0, "gear", 109, ""), 1300.0, KIN.f_mesh_hz) == 0.0
+    assert weight(None, 1300.0, KIN.f_mesh_hz) == 0.0
+
+
+def test_no_peaks_of_the_gear_pair_no_band_no_claim():
+    peaks = [Peak(2000.0, "gear", 1.0), Peak(123.4, "unexplained", 0.5)]
+    assert resonance_band(peaks) is None
+    weight = EFFECTS["housing_sensor"].signature(peaks, 0.1, KIN)
+    assert weight(KinematicLine(1000.0, "mesh", 1, ""), 1000.0, KIN.f_mesh_hz) == 0.0
+    assert EFFECTS["housing_sensor"].bounds(peaks, 0.1, KIN) == EFFECTS["housing_sensor"].parameters
