@@ -26,7 +26,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.loop.compare import Comparison, compare
-from pydiag.loop.validate import held_out, in_model
+from pydiag.loop.validate import held_out, in_model, outcompeted
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
@@ -71,7 +71,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
 
     ``estimator`` fits the base model, ``effect_estimator`` each effect's parameters
     (default: :data:`pydiag.loop.compare.EFFECT_REFIT`). Effects whose parameters the base
-    model already fits are left out.
+    model already fits are left out. As in validation, at most one effect is confident
+    among those that claim the same peaks (the largest z).
     """
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:
@@ -97,6 +98,11 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
                                1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
                                k, h.parameters, h.confident, h.verdict))
     found.sort(key=lambda d: -d.z)
+    beaten = outcompeted({d.effect: d.z for d in found if d.confident},
+                         {s.effect: s.competing for s in base.suggested_effects})
+    for d in found:
+        if d.effect in beaten:
+            d.confident, d.verdict = False, beaten[d.effect]
     return base, found
 
 

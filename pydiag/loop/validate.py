@@ -61,7 +61,7 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
-from pydiag.loop.compare import (NOT_VALIDATED, Comparison, Suggestion, fit_effect,
+from pydiag.loop.compare import (NOT_VALIDATED, Comparison, fit_effect,
                                  measured_spectra)
 
 #: Chance that an effect which only fits noise passes the held-out test.
@@ -247,17 +247,31 @@ def validate(problem: FitProblem, comparison: Comparison,
             s.status = f"{NOT_VALIDATED}: {err}"
             continue
         s.held_out, s.status, s.confident = h.to_dict(), h.verdict, h.confident
-    accepted: list[Suggestion] = []
-    for s in sorted((s for s in suggestions if s.confident), key=lambda s: -s.held_out["z"]):
-        rival = next((a for a in accepted if a.effect in s.competing), None)
-        if rival is None:
-            accepted.append(s)
-        else:
+    beaten = outcompeted({s.effect: s.held_out["z"] for s in suggestions if s.confident},
+                         {s.effect: s.competing for s in suggestions})
+    for s in suggestions:
+        if s.effect in beaten:
             s.confident = False
-            s.status = (f"competes with {rival.effect} for the same lines, which explains "
-                        f"them better held out (z {rival.held_out['z']:.1f} > "
-                        f"{s.held_out['z']:.1f})")
+            s.status = beaten[s.effect]
     return dataclasses.replace(comparison, suggested_effects=suggestions)
+
+
+def outcompeted(confident_z: dict[str, float], competing: dict[str, list[str]]
+                ) -> dict[str, str]:
+    """At most one confident effect among those that claim the same peaks: of the
+    ``confident_z`` effects (key -> held-out z), those a competitor (``competing``, as
+    compare lists them) with a larger z beats, each with the sentence that says so."""
+    kept: list[str] = []
+    beaten = {}
+    for key in sorted(confident_z, key=lambda k: -confident_z[k]):
+        rival = next((k for k in kept if k in competing.get(key, ())), None)
+        if rival is None:
+            kept.append(key)
+        else:
+            beaten[key] = (f"competes with {rival} for the same lines, which explains them "
+                           f"better held out (z {confident_z[rival]:.1f} > "
+                           f"{confident_z[key]:.1f})")
+    return beaten
 
 
 def not_validated(comparison: Comparison, why: str) -> Comparison:

@@ -6,7 +6,7 @@ from scipy.stats import norm
 
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.validate import FALSE_ALARM_RATE, held_out_statistic
+from pydiag.loop.validate import FALSE_ALARM_RATE, held_out_statistic, outcompeted
 
 
 def rician(amplitude, noise_power, rng, size):
@@ -66,3 +66,14 @@ def test_halves_hold_the_same_lines_and_independent_noise():
     assert abs(np.corrcoef(noise[0], noise[1])[0, 1]) < 0.1  # other periods, other noise
     whole = FullSpectrumFeaturizer(kin, 4, 1000.0).spectrum(x[:n // 2], rate)[1]
     assert not np.allclose(whole, spectra[0][1])  # half 0 is not the first half
+
+
+def test_one_confident_effect_per_set_of_competing_lines():
+    competing = {"shape": ["backlash", "housing"], "backlash": ["shape", "housing"],
+                 "housing": ["shape", "backlash"], "runout": ["tooth"], "tooth": ["runout"]}
+    beaten = outcompeted({"shape": 120.0, "housing": 80.0, "runout": 600.0, "backlash": 3.0},
+                         competing)
+    # the runout claims other lines than the shape: both stay; housing and backlash lose
+    assert set(beaten) == {"housing", "backlash"}
+    assert beaten["housing"].startswith("competes with shape") and "120.0 > 80.0" in beaten["housing"]
+    assert outcompeted({"tooth": 5.0}, competing) == {}
