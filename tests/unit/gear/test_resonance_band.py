@@ -5,6 +5,7 @@ import dataclasses
 import pytest
 
 from pydiag.gear.effects import EFFECTS, MODE_BAND, resonance_band
+from pydiag.gear.features import max_band_freq_hz
 from pydiag.gear.kinematic_map import KinematicLine
 from pydiag.gear.kinematics import GearKinematics
 
@@ -55,3 +56,12 @@ def test_no_peaks_of_the_gear_pair_no_band_no_claim():
     weight = EFFECTS["housing_sensor"].signature(peaks, 0.1, KIN)
     assert weight(KinematicLine(1000.0, "mesh", 1, ""), 1000.0, KIN.f_mesh_hz) == 0.0
     assert EFFECTS["housing_sensor"].bounds(peaks, 0.1, KIN) == EFFECTS["housing_sensor"].parameters
+
+
+def test_a_bunch_at_the_top_of_the_analysed_range_leaves_the_mode_free_above_it():
+    top = max_band_freq_hz(KIN)
+    peaks = comb(0.97 * top, 7, 1.0)
+    low, _ = resonance_band(peaks)
+    f_housing = next(p for p in EFFECTS["housing_sensor"].bounds(peaks, 0.1, KIN)
+                     if p.name == "f_housing")
+    assert f_housing.low == low < top and f_housing.high == EFFECTS["housing_sensor"].parameters[0].high
