@@ -10,10 +10,15 @@ after ``numpy.random.seed(seed)``, so results equal pyswarms' bit for bit
 (tests/unit/fit/test_pso.py runs both).
 
 Coefficients: Clerc's constriction values (c1 = c2 = 1.49618, w = 0.7298).
+
+Early stop, as pyswarms' ``ftol``/``ftol_iter``: the swarm stops when, in each of the
+last ``ftol_iter`` iterations, the global best cost moved by less than
+``ftol x (1 + |best cost before|)``. The default (``ftol = -inf``) never stops early.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -51,10 +56,12 @@ def periodic(position: np.ndarray, lows: np.ndarray, highs: np.ndarray) -> np.nd
 
 def global_best_pso(cost: Callable[[np.ndarray], np.ndarray], init_pos: np.ndarray,
                     lows: np.ndarray, highs: np.ndarray, iterations: int, seed: int,
-                    options: dict[str, float] | None = None) -> SwarmResult:
+                    options: dict[str, float] | None = None, ftol: float = -np.inf,
+                    ftol_iter: int = 1) -> SwarmResult:
     """Minimise ``cost`` (rows of positions -> costs, ``inf`` for a failure) from ``init_pos``.
 
-    ``init_pos``: (n_particles, dimensions) start positions inside ``[lows, highs]``.
+    ``init_pos``: (n_particles, dimensions) start positions inside ``[lows, highs]``;
+    ``ftol``, ``ftol_iter``: the early stop of the module docstring.
     """
     opts = {**CLERC, **(options or {})}
     rng = np.random.RandomState(seed)
@@ -65,18 +72,21 @@ def global_best_pso(cost: Callable[[np.ndarray], np.ndarray], init_pos: np.ndarr
     pbest_cost = np.full(position.shape[0], np.inf)
     best_pos, best_cost = None, np.inf
     history: list[float] = []
+    still = deque(maxlen=ftol_iter)  # did the best cost stand still, in the last iterations
     for i in range(iterations):
         current = np.asarray(cost(position), dtype=float)
         better = current < pbest_cost
         pbest_pos = np.where(better[:, None], position, pbest_pos)
         pbest_cost = np.where(better, current, pbest_cost)
+        before = best_cost
         if np.min(pbest_cost) < best_cost:
             best_pos = pbest_pos[np.argmin(pbest_cost)]
             best_cost = float(np.min(pbest_cost))
         if best_pos is None:
             break
         history.append(best_cost)
-        if i == iterations - 1:
+        still.append(abs(best_cost - before) < ftol * (1 + abs(before)))
+        if i == iterations - 1 or (i >= ftol_iter and all(still)):
             break  # pyswarms moves the swarm once more, but never evaluates that move
         cognitive = opts["c1"] * rng.uniform(0, 1, position.shape) * (pbest_pos - position)
         social = opts["c2"] * rng.uniform(0, 1, position.shape) * (best_pos - position)

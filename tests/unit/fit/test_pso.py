@@ -37,6 +37,11 @@ for seed in range(4):
     pso.optimize(rugged, iters=12, verbose=False)
     out[f"pos{seed}"], out[f"cost{seed}"] = pso.swarm.pbest_pos, pso.swarm.pbest_cost
     out[f"hist{seed}"] = np.array(pso.cost_history)
+    np.random.seed(seed)  # the early stop
+    pso = GlobalBestPSO(16, 4, options={"c1": 1.49618, "c2": 1.49618, "w": 0.7298},
+                        bounds=(lows, highs), init_pos=init, ftol=1e-4, ftol_iter=2)
+    pso.optimize(rugged, iters=60, verbose=False)
+    out[f"stop_pos{seed}"], out[f"stop_hist{seed}"] = pso.swarm.pbest_pos, np.array(pso.cost_history)
 np.savez(sys.argv[1], **out)
 """
 
@@ -54,6 +59,11 @@ def test_equals_pyswarms_bit_for_bit(tmp_path):
         assert np.array_equal(ours.pbest_pos, ref[f"pos{seed}"])
         assert np.array_equal(ours.pbest_cost, ref[f"cost{seed}"])
         assert ours.best_cost_history == list(ref[f"hist{seed}"])
+        stopped = global_best_pso(rugged, start(seed), LOWS, HIGHS, 60, seed, ftol=1e-4,
+                                  ftol_iter=2)
+        assert len(stopped.best_cost_history) < 60  # it did stop early, where pyswarms does
+        assert stopped.best_cost_history == list(ref[f"stop_hist{seed}"])
+        assert np.array_equal(stopped.pbest_pos, ref[f"stop_pos{seed}"])
 
 
 def test_same_seed_same_swarm_in_concurrent_threads():
