@@ -74,8 +74,14 @@ class FaultEstimator:
     Args:
         n_particles, iterations: swarm size and iterations
         seed: seed of the swarm; the same seed gives the same answer
+        swarm_ftol, swarm_ftol_iter: stop the swarm early when its best cost moved by less
+            than ``swarm_ftol x (1 + best)`` in each of its last ``swarm_ftol_iter``
+            iterations (pyswarms' ``ftol``; the default never stops early)
         polish_evaluations: simulation budget of each least-squares polish (0 disables it)
         polish_starts: how many distinct swarm positions to polish from
+        polish_xtol: the polish stops when its step is below this share of the parameters'
+            ranges (it works on the parameters scaled to 0..1)
+        polish_ftol: ... or when a step lowers the squared error by less than this share
         n_workers: worker processes (default: all cores, at most one per particle). The FMU
             always runs in workers (:mod:`pydiag.fmu.isolation`), except inside a daemonic
             process (a Dask worker), which may not start children: there it runs in-process.
@@ -86,25 +92,32 @@ class FaultEstimator:
     """
 
     def __init__(self, n_particles: int = 16, iterations: int = 20, seed: int = 0,
+                 swarm_ftol: float = -np.inf, swarm_ftol_iter: int = 1,
                  polish_evaluations: int = 150, polish_starts: int = 3,
-                 n_workers: int | None = None, eval_timeout_s: float | None = None,
+                 polish_xtol: float = 1e-6, polish_ftol: float = 1e-8, n_workers: int | None = None, eval_timeout_s: float | None = None,
                  max_consecutive_failures: int = DEFAULT_MAX_CONSECUTIVE_FAILURES,
                  progress: Callable[[int, int, float], None] | None = None) -> None:
         self.n_particles = n_particles
         self.iterations = iterations
         self.seed = seed
+        self.swarm_ftol = swarm_ftol
+        self.swarm_ftol_iter = swarm_ftol_iter
         self.polish_evaluations = polish_evaluations
         self.polish_starts = polish_starts
+        self.polish_xtol = polish_xtol
+        self.polish_ftol = polish_ftol
         self.n_workers = n_workers
         self.eval_timeout_s = eval_timeout_s
         self.max_consecutive_failures = max_consecutive_failures
         self.progress = progress
 
     def _validate(self) -> None:
-        if self.n_particles < 2 or self.iterations < 1:
-            raise UsageError("need at least 2 particles and 1 iteration")
-        if self.polish_evaluations < 0 or self.polish_starts < 1:
-            raise UsageError("the polish budget must not be negative and needs at least 1 start")
+        if self.n_particles < 2 or self.iterations < 1 or self.swarm_ftol_iter < 1:
+            raise UsageError("need at least 2 particles, 1 iteration and swarm_ftol_iter >= 1")
+        if self.polish_evaluations < 0 or self.polish_starts < 1 or \
+                not (self.polish_xtol > 0 and self.polish_ftol > 0):
+            raise UsageError("the polish budget must not be negative, needs at least 1 start "
+                             "and positive tolerances")
         if self.n_workers is not None and self.n_workers < 1:
             raise UsageError(f"need at least 1 worker, got {self.n_workers}")
         if (self.eval_timeout_s is not None and not self.eval_timeout_s > 0) or \
@@ -126,9 +139,12 @@ class FaultEstimator:
             workers = self.n_workers or min(os.cpu_count() or 1, self.n_particles)
             pool = IsolatedPool(objective, workers, timeout_s, self.max_consecutive_failures)
 
+        seen: dict[bytes, np.ndarray | None] = {}  # the swarm's residuals, for the polish
+
         def residuals(xs: np.ndarray) -> list[np.ndarray | None]:
             xs = np.clip(np.atleast_2d(xs), lows, highs)
             out = pool.map(xs) if pool else [objective.residuals_or_none(x) for x in xs]
+            seen.update((x.tobytes(), r) for x, r in zip(xs, out))
             costs = [np.inf if r is None else float(np.linalg.norm(r)) for r in out]
             counter["n"] += len(xs)
             counter["best"] = min(counter["best"], min(costs))
@@ -142,14 +158,16 @@ class FaultEstimator:
         try:
             init = lows + np.random.default_rng(self.seed).random((self.n_particles, lows.size)) \
                 * (highs - lows)
-            swarm = global_best_pso(costs, init, lows, highs, self.iterations, self.seed)
+            swarm = global_best_pso(costs, init, lows, highs, self.iterations, self.seed,
+                                    ftol=self.swarm_ftol, ftol_iter=self.swarm_ftol_iter)
             starts, start_costs = self._distinct_starts(swarm.pbest_pos, swarm.pbest_cost,
                                                         lows, highs)
             best_x, best_cost = starts[0], start_costs[0]
             if self.polish_evaluations > 0:
                 for x0, c0 in zip(starts, start_costs):
                     if np.isfinite(c0):
-                        x, c = self._polish(residuals, x0, c0, lows, highs)
+                        x, c = self._polish(residuals, x0, c0, lows, highs,
+                                            seen.get(np.clip(x0, lows, highs).tobytes()))
                         if c < best_cost:
                             best_x, best_cost = x, c
         except TooManyFailures as err:
@@ -191,36 +209,45 @@ class FaultEstimator:
                 break
         return starts, chosen
 
-    def _polish(self, residuals, x0, cost0, lows, highs) -> tuple[np.ndarray, float]:
-        """Bounded trust-region least squares from a swarm position, parallel FD Jacobian."""
+    def _polish(self, residuals, x0, cost0, lows, highs,
+                r0: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+        """Bounded trust-region least squares from a swarm position, parallel FD Jacobian.
+
+        It works on the parameters scaled to 0..1 (``polish_xtol`` is a share of each
+        range); ``r0``, the residuals at ``x0`` when the swarm has them, saves a simulation.
+        """
         n = x0.size
-        step = 1e-3 * (highs - lows)
+        span = highs - lows
+        step = 1e-3
         cache: dict[bytes, np.ndarray] = {}
         last = None
 
-        def fun(x: np.ndarray) -> np.ndarray:
+        def fun(u: np.ndarray) -> np.ndarray:
             nonlocal last
-            key = np.asarray(x, dtype=float).tobytes()
+            key = np.asarray(u, dtype=float).tobytes()
             if key not in cache:
-                r = residuals(x)[0]
+                r = residuals(lows + u * span)[0]
                 if r is None:  # a failed simulation: a large, finite residual keeps trf going
                     r = np.full(last.size if last is not None else 1, 1e3)
                 cache[key] = r
                 last = r
             return cache[key]
 
-        def jac(x: np.ndarray) -> np.ndarray:
-            r0 = fun(x)
-            h = np.where(x + step <= highs, step, -step)
-            cols = residuals(x + np.diag(h))
-            return np.column_stack([((c if c is not None else r0) - r0) / h[j]
+        def jac(u: np.ndarray) -> np.ndarray:
+            f0 = fun(u)
+            h = np.where(u + step <= 1.0, step, -step)
+            cols = residuals(lows + (u + np.diag(h)) * span)
+            return np.column_stack([((c if c is not None else f0) - f0) / h[j]
                                     for j, c in enumerate(cols)])
 
+        u0 = (np.clip(x0, lows, highs) - lows) / span
+        if r0 is not None:
+            cache[u0.tobytes()] = last = r0
         budget = max(1, self.polish_evaluations // (n + 1))
-        res = scipy.optimize.least_squares(fun, x0, jac=jac, bounds=(lows, highs), method="trf",
-                                           x_scale=highs - lows, max_nfev=budget,
-                                           xtol=1e-6, ftol=1e-8, gtol=1e-8)
+        res = scipy.optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf",
+                                           max_nfev=budget, xtol=self.polish_xtol,
+                                           ftol=self.polish_ftol, gtol=1e-8)
         cost = float(np.linalg.norm(fun(res.x)))
         if cost < cost0:
-            return np.asarray(res.x, dtype=float), cost
+            return lows + np.asarray(res.x, dtype=float) * span, cost
         return x0, cost0
