@@ -72,7 +72,8 @@ def cmd_compare(args) -> int:
 def cmd_discover(args) -> int:
     check_outputs(args, "json")
     m = read_input(args)
-    progress = None if args.quiet else (lambda key: print(f"trying {key} ...", file=sys.stderr))
+    progress = None if args.quiet else (lambda d: print(f"{d.effect}: tried in {d.elapsed_s:.1f} s",
+                                                        file=sys.stderr))
     base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
                            args.bearing, args.effects,
                            Path(args.modelica) if args.modelica else MODELICA_ROOT,

@@ -217,8 +217,8 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     A gear model whose inputs are all synchronous with the fundamental period settles to a
     response of that period: then two periods after the warm-up are simulated and, when
     they agree (:data:`PERIODIC_TOLERANCE`), the second one is repeated over the duration.
-    A record of 33 periods then costs 2 simulated periods instead of 33 (measured: 9 ms
-    instead of 126 ms on GearPair, bench/discover_speed.py). Anything that is not periodic
+    A record of 33 periods then costs 2 simulated periods instead of 33 (measured on
+    GearPair, 2 cores x86_64: 10 ms instead of 134 ms). Anything that is not periodic
     in ``period_s`` (a bearing's strikes, a ripple at a free frequency, a subharmonic, a
     transient still decaying) makes the two periods differ, and the whole duration is
     simulated as before.

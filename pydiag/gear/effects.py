@@ -39,6 +39,11 @@ class Effect:
     # (peaks, bin_hz, kinematics) -> the weight for this residual, for a signature that
     # depends on where the residual lies (a resonance); None: ``weight`` always
     focus: Callable[[list, float, object], Callable] | None = None
+    # every line it makes is an order of the fundamental period: its model settles to a
+    # periodic response, simulated over one period and repeated (pydiag.fit.problem);
+    # False for strikes at a bearing's frequencies and a ripple at a frequency of its own,
+    # whose records must be simulated whole (discover starts those first)
+    synchronous: bool = True
 
     def signature(self, peaks: list, bin_hz: float, kinematics=None
                   ) -> Callable[[KinematicLine | None, float, float], float]:
@@ -249,20 +254,20 @@ EFFECTS = {e.key: e for e in (
            (Parameter("delta_c", 0.05e-6, 2e-6),), _backlash),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
-           (Parameter("A_b", 0.0, 500.0),), _family(("bpfo",))),
+           (Parameter("A_b", 0.0, 500.0),), _family(("bpfo",)), synchronous=False),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, 500.0), Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
-           _family(("bpfi", "bpfi_sb"))),
+           _family(("bpfi", "bpfi_sb")), synchronous=False),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
-           _ripple_hint("f_load")),
+           _ripple_hint("f_load"), synchronous=False),
     # the same lines as a torque ripple (they compete): a ripple the shafts' inertia turns
     # into a speed fluctuation modulates the mesh's phase rather than its force
     Effect("speed_fluctuation", "GearDiag.Effects.SpeedFluctuation",
            "the shafts' speed fluctuates (phase modulation of every line)",
            (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
-           _load_fluctuation, _ripple_hint("f_speed")),
+           _load_fluctuation, _ripple_hint("f_speed"), synchronous=False),
     # the mode's frequency is fitted in the band where the residual of the gear pair's
     # lines bunches (the hint; its signature claims only lines there); damping from a
     # sharp structural mode to a heavily damped one. Lower bounds: a mode below every

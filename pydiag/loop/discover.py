@@ -9,10 +9,23 @@ the effect lowers the error on data it was not fitted to, in standard deviations
 noise alone would do. The Bayesian information criterion on the fitted half (dBIC < 0:
 worth its parameters if the residual were white noise) is printed beside it; a misfit of
 the model's form is not white noise, so BIC alone is not the ranking.
+
+Effects are fitted side by side, one per core (each in a process of its own that holds
+one isolated FMU worker, as ``batch`` does with records): an effect's fit keeps a core
+busy only part of the time (its least-squares polish asks for one simulation at a time),
+so running them one after another with all cores each left about a third of the machine
+idle (bench/discover_speed.py). The effects that are not synchronous with the shafts
+(``Effect.synchronous``) start first: their records are simulated whole, the others'
+over one period. The ranking does not depend on how many run at once, nor on the order.
 """
 
 from __future__ import annotations
 
+import copy
+import multiprocessing as mp
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -25,7 +38,7 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.gear.kinematic_map import Bearing
-from pydiag.loop.compare import Comparison, compare
+from pydiag.loop.compare import EFFECT_REFIT, Comparison, compare
 from pydiag.loop.validate import held_out, in_model, outcompeted
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
@@ -44,6 +57,7 @@ class Discovery:
     parameters: dict[str, float]
     confident: bool = False
     verdict: str = ""
+    elapsed_s: float = 0.0  # wall time of this effect's build, fit and test
 
 
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
@@ -62,41 +76,76 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
     return out
 
 
+def _try_effect(problem: FitProblem, base: Comparison, key: str, modelica_root: Path,
+                build_dir: Path, estimator: FaultEstimator,
+                bearing: Bearing | None) -> Discovery:
+    """One effect held out, as a row (an effect that cannot be built or fitted is a row too).
+    Takes the effect's key, not the effect: it runs in a worker process."""
+    started = time.perf_counter()
+    effect = EFFECTS[key]
+    k = len(effect.parameters)
+    try:
+        fmu = (problem.spec.fmu_path if effect.in_base
+               else str(effect_fmu(key, modelica_root, build_dir)))
+        h = held_out(problem, base, effect, fmu, estimator, bearing)
+    except (PydiagError, BuildError) as err:
+        return Discovery(key, f"{type(err).__name__}: {err}", float("-inf"), float("inf"),
+                         float("nan"), float("nan"), k, {},
+                         elapsed_s=time.perf_counter() - started)
+    return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
+                     1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
+                     k, h.parameters, h.confident, h.verdict, time.perf_counter() - started)
+
+
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
              bearing: Bearing | None = None, effects: list[str] | None = None,
              modelica_root: Path = MODELICA_ROOT, build_dir: Path = Path("build/effects"),
-             progress: Callable[[str], None] | None = None,
+             progress: Callable[[Discovery], None] | None = None,
              effect_estimator: FaultEstimator | None = None) -> tuple[Comparison, list[Discovery]]:
     """Compare the base model (``problem``), then try every effect held out and rank them.
 
     ``estimator`` fits the base model, ``effect_estimator`` each effect's parameters
-    (default: :data:`pydiag.loop.compare.EFFECT_REFIT`). Effects whose parameters the base
-    model already fits are left out. As in validation, at most one effect is confident
-    among those that claim the same peaks (the largest z).
+    (default: :data:`pydiag.loop.compare.EFFECT_REFIT`); the effect estimator's
+    ``n_workers`` (default: all cores) is the number of cores the effects share, one
+    effect per core (module docstring). Effects whose parameters the base model already
+    fits are left out. ``progress`` gets each effect's row as it is done. As in
+    validation, at most one effect is confident among those that claim the same peaks
+    (the largest z).
     """
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:
         raise UsageError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
     base = compare(problem, estimator, bearing)
-    found = []
-    for key in effects or list(EFFECTS):
-        effect = EFFECTS[key]
-        if in_model(problem, effect):
-            continue
-        if progress:
-            progress(key)
-        k = len(effect.parameters)
-        try:
-            fmu = (problem.spec.fmu_path if effect.in_base
-                   else str(effect_fmu(key, modelica_root, build_dir)))
-            h = held_out(problem, base, effect, fmu, effect_estimator, bearing)
-        except (PydiagError, BuildError) as err:  # one effect that cannot be built or fitted is a row
-            found.append(Discovery(key, f"{type(err).__name__}: {err}", float("-inf"),
-                                   float("inf"), float("nan"), float("nan"), k, {}))
-            continue
-        found.append(Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
-                               1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
-                               k, h.parameters, h.confident, h.verdict))
+    keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
+    # the longest first, so the short ones fill the cores at the end: an effect that is not
+    # synchronous is simulated over the whole record, the others over one period
+    keys.sort(key=lambda key: EFFECTS[key].synchronous)
+    for key in keys:  # build in this process: two workers must not build one FMU at once
+        if not EFFECTS[key].in_base:
+            try:
+                effect_fmu(key, modelica_root, build_dir)
+            except (PydiagError, BuildError):
+                pass  # the effect's own task reports it as its row
+    effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
+    cores = effect_estimator.n_workers or os.cpu_count() or 1
+    jobs = min(cores, len(keys))
+    found: list[Discovery] = []
+    if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
+        for key in keys:
+            found.append(_try_effect(problem, base, key, modelica_root, build_dir,
+                                     effect_estimator, bearing))
+            if progress:
+                progress(found[-1])
+    else:
+        one = copy.copy(effect_estimator)
+        one.n_workers, one.progress = max(1, cores // jobs), None
+        with ProcessPoolExecutor(jobs) as pool:
+            tasks = [pool.submit(_try_effect, problem, base, key, modelica_root, build_dir,
+                                 one, bearing) for key in keys]
+            for task in tasks:
+                found.append(task.result())
+                if progress:
+                    progress(found[-1])
     found.sort(key=lambda d: -d.z)
     beaten = outcompeted({d.effect: d.z for d in found if d.confident},
                          {s.effect: s.competing for s in base.suggested_effects})

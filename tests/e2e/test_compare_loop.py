@@ -146,6 +146,26 @@ def test_cli_discover_ranks_the_hidden_effect_first(gear_fmu, effect_fmus, tmp_p
         "GearEccentricity.fmu", "LoadFluctuation.fmu"]
 
 
+def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, effect_fmus,
+                                                                       tmp_path):
+    """discover fits effects side by side, one per core, the ones that are not synchronous
+    first; the same rows come out of one effect at a time."""
+    from pydiag.loop.compare import EFFECT_REFIT
+    from pydiag.loop.discover import discover
+    problem = build_problem(str(gear_fmu), record(effect_fmus["gear_eccentricity"], periods=10))
+    runs = {}
+    for workers in (1, 2):
+        seen = []
+        _, found = discover(problem, FaultEstimator(**FAST), BEARING,
+                            effects=["gear_eccentricity", "load_fluctuation"], build_dir=tmp_path,
+                            progress=lambda d: seen.append(d.effect),
+                            effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=workers))
+        assert sorted(seen) == ["gear_eccentricity", "load_fluctuation"]
+        runs[workers] = [(d.effect, d.z, d.parameters, d.confident) for d in found]
+    assert runs[1] == runs[2]
+    assert runs[1][0][0] == "gear_eccentricity" and runs[1][0][3]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_discover_picks_the_hidden_effect(gear_fmu, effect_fmus, effect, tmp_path):
