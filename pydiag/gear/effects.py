@@ -44,6 +44,14 @@ class Effect:
     # False for strikes at a bearing's frequencies and a ripple at a frequency of its own,
     # whose records must be simulated whole (discover starts those first)
     synchronous: bool = True
+    # the outputs of GearDiag.GearPair whose lines it changes (None: all of them): a housing
+    # mode or a bearing's strikes ring the acceleration at the sensor, not the mesh's
+    # displacement, so peaks of disp are no evidence for them
+    outputs: tuple[str, ...] | None = None
+
+    def changes(self, output: str) -> bool:
+        """Whether the effect changes the model output ``output`` (an FMU variable)."""
+        return self.outputs is None or output in self.outputs
 
     def signature(self, peaks: list, bin_hz: float, kinematics=None
                   ) -> Callable[[KinematicLine | None, float, float], float]:
@@ -254,11 +262,12 @@ EFFECTS = {e.key: e for e in (
            (Parameter("delta_c", 0.05e-6, 2e-6),), _backlash),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
-           (Parameter("A_b", 0.0, 500.0),), _family(("bpfo",)), synchronous=False),
+           (Parameter("A_b", 0.0, 500.0),), _family(("bpfo",)), synchronous=False,
+           outputs=("acc",)),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, 500.0), Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
-           _family(("bpfi", "bpfi_sb")), synchronous=False),
+           _family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",)),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
            _ripple_hint("f_load"), synchronous=False),
@@ -275,7 +284,7 @@ EFFECTS = {e.key: e for e in (
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
            "accelerometer on the housing, behind one housing mode",
            (Parameter("f_housing", 20.0, MAX_HOUSING_HZ), Parameter("zeta_housing", 0.005, 0.5)),
-           _no_line, _housing_hint, focus=_housing_focus),
+           _no_line, _housing_hint, focus=_housing_focus, outputs=("acc",)),
 )}
 
 

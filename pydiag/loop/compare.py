@@ -265,10 +265,12 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                   line.label if line else describe_non_kinematic(f, kin, bin_hz), p / total)
              for ch, p, line, f, m, s in candidates]
     suggestions, claims = [], {}
+    output = dict(zip(problem.channels, problem.spec.sensors))
     for effect in EFFECTS.values():
-        weight = effect.signature(peaks, bin_hz, kin)
+        weight = effect.signature(effect_peaks(problem, effect, peaks), bin_hz, kin)
         support = [(weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
-                   for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))]
+                   for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))
+                   if effect.changes(output[pk.channel])]
         support = [(w, i, pk) for w, i, pk in support if w > 0]
         claims[effect.key] = {i for _, i, _ in support}
         score = float(sum(w for w, _, _ in support))
@@ -291,6 +293,13 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                       int(np.count_nonzero(bins)), fit_error, gains, spectra, markers, by_family)
 
 
+def effect_peaks(problem: FitProblem, effect: Effect, peaks: list[Peak]) -> list[Peak]:
+    """The ``peaks`` on channels whose model output ``effect`` changes (the others are no
+    evidence for it, nor a place to look for its parameters)."""
+    output = dict(zip(problem.channels, problem.spec.sensors))
+    return [pk for pk in peaks if effect.changes(output.get(pk.channel, pk.channel))]
+
+
 def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
                featurizer: FullSpectrumFeaturizer, estimator: FaultEstimator | None = None
                ) -> tuple[FitProblem, dict[str, float]]:
@@ -298,8 +307,9 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     narrowed by ``base``'s peaks, fitted on ``featurizer``'s bins with the base parameters
     held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``."""
     effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect.bounds(base.peaks, base.bin_hz,
-                                                              problem.kinematics),
+                                    parameters=effect.bounds(
+                                        effect_peaks(problem, effect, base.peaks), base.bin_hz,
+                                        problem.kinematics),
                                     fixed_values=problem.fmu_values(base.parameters),
                                     featurizer=featurizer)
     return effect_problem, (estimator or FaultEstimator(**EFFECT_REFIT)).fit(

@@ -61,7 +61,7 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
-from pydiag.loop.compare import (NOT_VALIDATED, Comparison, fit_effect,
+from pydiag.loop.compare import (NOT_VALIDATED, Comparison, effect_peaks, fit_effect,
                                  measured_spectra)
 
 #: Chance that an effect which only fits noise passes the held-out test.
@@ -176,7 +176,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
         y1 = effect_problem.model_signals(plant, x1)
     lines = kinematic_map(kin, fit_half.max_freq_hz, bearing)
     bin_hz = 1.0 / (n_half * kin.period_s)
-    weight = effect.signature(base.peaks, base.bin_hz, kin)
+    weight = effect.signature(effect_peaks(problem, effect, base.peaks), base.bin_hz, kin)
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
     err0, err1, raw0, raw1 = [], [], [], []
     for i, channel in enumerate(problem.channels):
@@ -190,8 +190,9 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
         sw, terms, excess = held_out_statistic(r, s0, s1, noise)
         total_w += sw
         total_d += float(np.sum(terms))
-        claims = np.array([weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
-                           for fk in f])
+        changed = effect.changes(problem.spec.sensors[i])  # else none of its lines are here
+        claims = np.array([changed and weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
+                           for fk in f], dtype=bool)
         signature_d += float(np.sum(terms[claims]))
         signature_excess += float(np.sum(excess[claims]))
         err0.append(noise_corrected_error(s0, r, noise))

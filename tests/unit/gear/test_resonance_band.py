@@ -65,3 +65,27 @@ def test_a_bunch_at_the_top_of_the_analysed_range_leaves_the_mode_free_above_it(
     f_housing = next(p for p in EFFECTS["housing_sensor"].bounds(peaks, 0.1, KIN)
                      if p.name == "f_housing")
     assert f_housing.low == low < top and f_housing.high == EFFECTS["housing_sensor"].parameters[0].high
+
+
+def test_the_housing_looks_for_its_band_on_the_channels_it_changes_only():
+    """A housing mode rings the acceleration, not the mesh's displacement: a bunch of disp
+    lines is no band of it, and those peaks are none of its evidence."""
+    from types import SimpleNamespace
+
+    from pydiag.loop.compare import Peak as ComparePeak
+    from pydiag.loop.compare import effect_peaks
+
+    def on(channel, peaks):
+        return [ComparePeak(channel, p.freq_hz, 0.0, 0.0, 0.0, p.family, 1, "", p.energy_fraction)
+                for p in peaks]
+    peaks = on("disp", comb(600.0, 9, 0.7)) + on("acc", comb(1300.0, 5, 0.3))
+    problem = SimpleNamespace(channels=("acc", "disp"), spec=SimpleNamespace(sensors=("acc", "disp")))
+    housing = EFFECTS["housing_sensor"]
+    own = effect_peaks(problem, housing, peaks)
+    assert {p.channel for p in own} == {"acc"} and len(own) == 5
+    low, high = resonance_band(own)
+    assert low < 1300.0 < high  # all peaks together: the disp bunch at 600 Hz
+    assert resonance_band(peaks)[0] < 600.0 < resonance_band(peaks)[1]
+    assert effect_peaks(problem, EFFECTS["gear_eccentricity"], peaks) == peaks
+    assert not housing.changes("disp") and housing.changes("acc")
+    assert EFFECTS["gear_tooth_fault"].changes("disp")
