@@ -94,7 +94,8 @@ class FaultEstimator:
     def __init__(self, n_particles: int = 16, iterations: int = 20, seed: int = 0,
                  swarm_ftol: float = -np.inf, swarm_ftol_iter: int = 1,
                  polish_evaluations: int = 150, polish_starts: int = 3,
-                 polish_xtol: float = 1e-6, polish_ftol: float = 1e-8, n_workers: int | None = None, eval_timeout_s: float | None = None,
+                 polish_xtol: float = 1e-6, polish_ftol: float = 1e-8,
+                 n_workers: int | None = None, eval_timeout_s: float | None = None,
                  max_consecutive_failures: int = DEFAULT_MAX_CONSECUTIVE_FAILURES,
                  progress: Callable[[int, int, float], None] | None = None) -> None:
         self.n_particles = n_particles

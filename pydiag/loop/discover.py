@@ -13,8 +13,8 @@ the model's form is not white noise, so BIC alone is not the ranking.
 Effects are fitted side by side, one per core (each in a process of its own that holds
 one isolated FMU worker, as ``batch`` does with records): an effect's fit keeps a core
 busy only part of the time (its least-squares polish asks for one simulation at a time),
-so running them one after another with all cores each left about a third of the machine
-idle (bench/discover_speed.py). The effects that are not synchronous with the shafts
+so running them one after another with all cores each left about a fifth of the machine
+idle (bench/discover_speed.py, RESULTS section 11). The effects that are not synchronous with the shafts
 (``Effect.synchronous``) start first: their records are simulated whole, the others'
 over one period. The ranking does not depend on how many run at once, nor on the order.
 """
@@ -25,7 +25,7 @@ import copy
 import multiprocessing as mp
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -140,12 +140,14 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
         one = copy.copy(effect_estimator)
         one.n_workers, one.progress = max(1, cores // jobs), None
         with ProcessPoolExecutor(jobs) as pool:
-            tasks = [pool.submit(_try_effect, problem, base, key, modelica_root, build_dir,
-                                 one, bearing) for key in keys]
-            for task in tasks:
-                found.append(task.result())
+            tasks = {pool.submit(_try_effect, problem, base, key, modelica_root, build_dir,
+                                 one, bearing): key for key in keys}
+            rows = {}
+            for task in as_completed(tasks):
+                rows[tasks[task]] = task.result()
                 if progress:
-                    progress(found[-1])
+                    progress(rows[tasks[task]])
+        found = [rows[key] for key in keys]
     found.sort(key=lambda d: -d.z)
     beaten = outcompeted({d.effect: d.z for d in found if d.confident},
                          {s.effect: s.competing for s in base.suggested_effects})
