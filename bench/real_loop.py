@@ -37,7 +37,7 @@ from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.compare import RESIDUAL_GROUPS, compare, effect_peaks  # noqa: E402
+from pydiag.loop.compare import RESIDUAL_GROUPS, compare, effect_parameters  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
 
@@ -90,8 +90,7 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
             print(f"  {s.effect} needs a model combined with {accepted[-1]}: stop", flush=True)
             break
         accepted.append(s.effect)
-        parameters = parameters + effect.bounds(effect_peaks(problem, effect, c.peaks), c.bin_hz,
-                                                problem.kinematics)
+        parameters = parameters + effect_parameters(problem, c, effect)
         if not effect.in_base:
             fmu = fmu_of(effect)
     return rows

@@ -145,7 +145,6 @@ class FaultEstimator:
         def residuals(xs: np.ndarray) -> list[np.ndarray | None]:
             xs = np.clip(np.atleast_2d(xs), lows, highs)
             out = pool.map(xs) if pool else [objective.residuals_or_none(x) for x in xs]
-            seen.update((x.tobytes(), r) for x, r in zip(xs, out))
             costs = [np.inf if r is None else float(np.linalg.norm(r)) for r in out]
             counter["n"] += len(xs)
             counter["best"] = min(counter["best"], min(costs))
@@ -153,8 +152,10 @@ class FaultEstimator:
                 self.progress(counter["n"], total, counter["best"])
             return out
 
-        def costs(xs: np.ndarray) -> np.ndarray:
-            return np.array([np.inf if r is None else np.linalg.norm(r) for r in residuals(xs)])
+        def costs(xs: np.ndarray) -> np.ndarray:  # the swarm's
+            out = residuals(xs)
+            seen.update((x.tobytes(), r) for x, r in zip(np.clip(xs, lows, highs), out))
+            return np.array([np.inf if r is None else np.linalg.norm(r) for r in out])
 
         try:
             init = lows + np.random.default_rng(self.seed).random((self.n_particles, lows.size)) \

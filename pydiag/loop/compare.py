@@ -43,6 +43,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from pydiag.core.errors import EstimationError
+from pydiag.core.parameters import Parameter
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
@@ -265,12 +266,12 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                   line.label if line else describe_non_kinematic(f, kin, bin_hz), p / total)
              for ch, p, line, f, m, s in candidates]
     suggestions, claims = [], {}
-    output = dict(zip(problem.channels, problem.spec.sensors))
     for effect in EFFECTS.values():
         weight = effect.signature(effect_peaks(problem, effect, peaks), bin_hz, kin)
+        changed = changed_channels(problem, effect)
         support = [(weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
                    for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))
-                   if effect.changes(output[pk.channel])]
+                   if pk.channel in changed]
         support = [(w, i, pk) for w, i, pk in support if w > 0]
         claims[effect.key] = {i for _, i, _ in support}
         score = float(sum(w for w, _, _ in support))
@@ -293,11 +294,25 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                       int(np.count_nonzero(bins)), fit_error, gains, spectra, markers, by_family)
 
 
+def changed_channels(problem: FitProblem, effect: Effect) -> set[str]:
+    """The channels of ``problem`` whose model output ``effect`` changes."""
+    return {c for c, output in zip(problem.channels, problem.spec.sensors)
+            if effect.changes(output)}
+
+
 def effect_peaks(problem: FitProblem, effect: Effect, peaks: list[Peak]) -> list[Peak]:
     """The ``peaks`` on channels whose model output ``effect`` changes (the others are no
     evidence for it, nor a place to look for its parameters)."""
-    output = dict(zip(problem.channels, problem.spec.sensors))
-    return [pk for pk in peaks if effect.changes(output.get(pk.channel, pk.channel))]
+    changed = changed_channels(problem, effect)
+    return [pk for pk in peaks if pk.channel in changed]
+
+
+def effect_parameters(problem: FitProblem, base: Comparison, effect: Effect
+                      ) -> tuple[Parameter, ...]:
+    """The effect's parameters, bounds narrowed by ``base``'s peaks on the channels it
+    changes: what its refit searches, and what a model that accepts it fits."""
+    return effect.bounds(effect_peaks(problem, effect, base.peaks), base.bin_hz,
+                         problem.kinematics)
 
 
 def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
@@ -307,9 +322,7 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     narrowed by ``base``'s peaks, fitted on ``featurizer``'s bins with the base parameters
     held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``."""
     effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect.bounds(
-                                        effect_peaks(problem, effect, base.peaks), base.bin_hz,
-                                        problem.kinematics),
+                                    parameters=effect_parameters(problem, base, effect),
                                     fixed_values=problem.fmu_values(base.parameters),
                                     featurizer=featurizer)
     return effect_problem, (estimator or FaultEstimator(**EFFECT_REFIT)).fit(

@@ -61,8 +61,8 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
-from pydiag.loop.compare import (NOT_VALIDATED, Comparison, effect_peaks, fit_effect,
-                                 measured_spectra)
+from pydiag.loop.compare import (NOT_VALIDATED, Comparison, changed_channels, effect_peaks,
+                                 fit_effect, measured_spectra)
 
 #: Chance that an effect which only fits noise passes the held-out test.
 FALSE_ALARM_RATE = 0.01
@@ -177,6 +177,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
     lines = kinematic_map(kin, fit_half.max_freq_hz, bearing)
     bin_hz = 1.0 / (n_half * kin.period_s)
     weight = effect.signature(effect_peaks(problem, effect, base.peaks), base.bin_hz, kin)
+    changed = changed_channels(problem, effect)  # on the others, none of its lines
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
     err0, err1, raw0, raw1 = [], [], [], []
     for i, channel in enumerate(problem.channels):
@@ -190,8 +191,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
         sw, terms, excess = held_out_statistic(r, s0, s1, noise)
         total_w += sw
         total_d += float(np.sum(terms))
-        changed = effect.changes(problem.spec.sensors[i])  # else none of its lines are here
-        claims = np.array([changed and weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
+        claims = np.array([channel in changed
+                           and weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
                            for fk in f], dtype=bool)
         signature_d += float(np.sum(terms[claims]))
         signature_excess += float(np.sum(excess[claims]))
