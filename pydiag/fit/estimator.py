@@ -24,6 +24,8 @@ gives the same result in any thread.
 
 from __future__ import annotations
 
+import contextlib
+import inspect
 import multiprocessing as mp
 import os
 import time
@@ -112,6 +114,16 @@ class FaultEstimator:
         self.max_consecutive_failures = max_consecutive_failures
         self.progress = progress
 
+    def replace(self, **settings) -> "FaultEstimator":
+        """A new estimator with these settings changed (scikit-learn's ``clone`` then
+        ``set_params``); this one is unchanged."""
+        names = inspect.signature(FaultEstimator.__init__).parameters
+        unknown = sorted(set(settings) - set(names))
+        if unknown:
+            raise UsageError(f"FaultEstimator has no setting {', '.join(unknown)}")
+        return FaultEstimator(**{**{k: getattr(self, k) for k in names if k != "self"},
+                                 **settings})
+
     def _validate(self) -> None:
         if self.n_particles < 2 or self.iterations < 1 or self.swarm_ftol_iter < 1:
             raise UsageError("need at least 2 particles, 1 iteration and swarm_ftol_iter >= 1")
@@ -127,37 +139,18 @@ class FaultEstimator:
 
     # ------------------------------------------------------------------ fit
     def fit(self, problem: FitProblem) -> DiagnosisResult:
+        """The swarm over ``problem``'s box, then the polish from its best distinct
+        positions."""
         self._validate()
-        started = time.perf_counter()
-        params = problem.parameters
         lows, highs = problem.lows, problem.highs
-        total = self.n_particles * self.iterations + self.polish_evaluations * self.polish_starts
-        counter = {"n": 0, "best": float("inf")}
-        objective = ProblemObjective(problem)
-        pool = None
-        timeout_s = self.eval_timeout_s or problem.adapter.eval_timeout_s or DEFAULT_EVAL_TIMEOUT_S
-        if not mp.current_process().daemon:
-            workers = self.n_workers or min(os.cpu_count() or 1, self.n_particles)
-            pool = IsolatedPool(objective, workers, timeout_s, self.max_consecutive_failures)
-
         seen: dict[bytes, np.ndarray | None] = {}  # the swarm's residuals, for the polish
+        with self._evaluations(problem, self.n_particles * self.iterations
+                               + self.polish_evaluations * self.polish_starts) as run:
+            def costs(xs: np.ndarray) -> np.ndarray:  # the swarm's
+                out = run.residuals(xs)
+                seen.update((x.tobytes(), r) for x, r in zip(np.clip(xs, lows, highs), out))
+                return np.array([np.inf if r is None else np.linalg.norm(r) for r in out])
 
-        def residuals(xs: np.ndarray) -> list[np.ndarray | None]:
-            xs = np.clip(np.atleast_2d(xs), lows, highs)
-            out = pool.map(xs) if pool else [objective.residuals_or_none(x) for x in xs]
-            costs = [np.inf if r is None else float(np.linalg.norm(r)) for r in out]
-            counter["n"] += len(xs)
-            counter["best"] = min(counter["best"], min(costs))
-            if self.progress:
-                self.progress(counter["n"], total, counter["best"])
-            return out
-
-        def costs(xs: np.ndarray) -> np.ndarray:  # the swarm's
-            out = residuals(xs)
-            seen.update((x.tobytes(), r) for x, r in zip(np.clip(xs, lows, highs), out))
-            return np.array([np.inf if r is None else np.linalg.norm(r) for r in out])
-
-        try:
             init = lows + np.random.default_rng(self.seed).random((self.n_particles, lows.size)) \
                 * (highs - lows)
             swarm = global_best_pso(costs, init, lows, highs, self.iterations, self.seed,
@@ -168,22 +161,58 @@ class FaultEstimator:
             if self.polish_evaluations > 0:
                 for x0, c0 in zip(starts, start_costs):
                     if np.isfinite(c0):
-                        x, c = self._polish(residuals, x0, c0, lows, highs,
+                        x, c = self._polish(run.residuals, x0, c0, lows, highs,
                                             seen.get(np.clip(x0, lows, highs).tobytes()))
                         if c < best_cost:
                             best_x, best_cost = x, c
+        return self._result(problem, run, best_x, best_cost, swarm.best_cost_history)
+
+    def refine(self, problem: FitProblem, start: dict[str, float]) -> DiagnosisResult:
+        """The polish alone (``polish_evaluations`` simulations), from ``start``: a value of
+        each of ``problem``'s parameters, e.g. a fit of fewer parameters extended by the
+        new ones' fitted values. No swarm: it stays in the basin it starts in."""
+        self._validate()
+        missing = [p.name for p in problem.parameters if p.name not in start]
+        if missing:
+            raise UsageError(f"refine needs a start value of {', '.join(missing)}")
+        lows, highs = problem.lows, problem.highs
+        x0 = np.clip([start[p.name] for p in problem.parameters], lows, highs)
+        with self._evaluations(problem, 1 + self.polish_evaluations) as run:
+            r0 = run.residuals(x0)[0]
+            best_x, best_cost = x0, (np.inf if r0 is None else float(np.linalg.norm(r0)))
+            if self.polish_evaluations > 0 and r0 is not None:
+                best_x, best_cost = self._polish(run.residuals, x0, best_cost, lows, highs, r0)
+        return self._result(problem, run, best_x, best_cost, [best_cost])
+
+    @contextlib.contextmanager
+    def _evaluations(self, problem: FitProblem, total: int):
+        """A :class:`_Run` of ``problem``'s simulations (worker pool, counters), closed on
+        exit; ``total``: the evaluations expected, for progress."""
+        started = time.perf_counter()
+        objective = ProblemObjective(problem)
+        pool = None
+        timeout_s = self.eval_timeout_s or problem.adapter.eval_timeout_s or DEFAULT_EVAL_TIMEOUT_S
+        if not mp.current_process().daemon:
+            workers = self.n_workers or min(os.cpu_count() or 1, self.n_particles)
+            pool = IsolatedPool(objective, workers, timeout_s, self.max_consecutive_failures)
+        run = _Run(problem.lows, problem.highs, objective, pool, total, self.progress, started)
+        try:
+            yield run
         except TooManyFailures as err:
             raise TooManyFailures(f"stopped: {err}", err.count, err.consecutive, err.last) from err
         finally:
             if pool is not None:
                 pool.close()
             objective.close()
-        failures = pool.failures if pool is not None else None
+
+    def _result(self, problem: FitProblem, run: "_Run", best_x: np.ndarray, best_cost: float,
+                history: list[float]) -> DiagnosisResult:
+        failures = run.pool.failures if run.pool is not None else None
         if not np.isfinite(best_cost):
             why = f"; the first failed with: {failures.first}" if failures and failures.first else ""
-            raise EstimationError(f"every simulation of the plant failed ({counter['n']} "
+            raise EstimationError(f"every simulation of the plant failed ({run.count} "
                                   f"evaluations){why}")
-        estimate = {p.name: float(v) for p, v in zip(params, best_x)}
+        estimate = {p.name: float(v) for p, v in zip(problem.parameters, best_x)}
         contrast = None
         if any(name in estimate for name in CLASSIFIED_PARAMETERS):
             cls = classify({**problem.fixed_values, **estimate})
@@ -192,8 +221,8 @@ class FaultEstimator:
                 contrast = tooth_contrast({**problem.fixed_values, **estimate})
         else:
             labels = ("not_classified",) + ("unknown",) * 3
-        return DiagnosisResult(estimate, *labels, best_cost, counter["n"],
-                               time.perf_counter() - started, swarm.best_cost_history,
+        return DiagnosisResult(estimate, *labels, best_cost, run.count,
+                               time.perf_counter() - run.started, history,
                                failures.count if failures else 0,
                                dict(failures.reasons) if failures else {}, contrast)
 
@@ -253,3 +282,25 @@ class FaultEstimator:
         if cost < cost0:
             return lows + np.asarray(res.x, dtype=float) * span, cost
         return x0, cost0
+
+
+class _Run:
+    """The simulations of one fit: clipped to the box, on the pool (or in-process),
+    counted, progress reported."""
+
+    def __init__(self, lows, highs, objective, pool, total, progress, started: float) -> None:
+        self.lows, self.highs = lows, highs
+        self.objective, self.pool = objective, pool
+        self.total, self.progress = total, progress
+        self.count, self.best = 0, float("inf")
+        self.started = started
+
+    def residuals(self, xs: np.ndarray) -> list[np.ndarray | None]:
+        xs = np.clip(np.atleast_2d(xs), self.lows, self.highs)
+        out = (self.pool.map(xs) if self.pool
+               else [self.objective.residuals_or_none(x) for x in xs])
+        self.count += len(xs)
+        self.best = min([self.best] + [float(np.linalg.norm(r)) for r in out if r is not None])
+        if self.progress:
+            self.progress(self.count, self.total, self.best)
+        return out

@@ -2,8 +2,10 @@
 the worker count, a fit writes nothing."""
 
 import numpy as np
+import pytest
 from conftest import NAMES, noisy_measurement
 
+from pydiag.core.errors import UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import ProblemObjective, build_problem
 from pydiag.gear.paper_cases import case
@@ -32,6 +34,35 @@ def test_result_does_not_depend_on_worker_count(gear_fmu):
     other_seed = FaultEstimator(n_workers=2, **{**kwargs, "seed": 4}).fit(m)
     assert other_seed.parameters != one.parameters
 
+
+
+def test_refine_polishes_from_its_start_and_stays_in_its_basin(gear_fmu):
+    """refine: the polish alone, from a given start: it lowers the error of a start off the
+    truth towards the truth, and stops near the start when that is already the minimum."""
+    c = case(5)
+    problem = build_problem(gear_fmu, noisy_measurement(gear_fmu, 5, 0, periods=2))
+    truth = {n: c.parameters[n] for n in NAMES}
+    off = {**truth, "a_f": truth["a_f"] + 0.04, "f_ate": truth["f_ate"] - 0.04}
+    objective = ProblemObjective(problem)
+    start_error = objective(np.array([off[n] for n in NAMES]))
+    objective.close()
+    est = FaultEstimator(polish_evaluations=60, n_workers=2)
+    r = est.refine(problem, off)
+    assert r.error < 0.5 * start_error
+    assert abs(r.parameters["a_f"] - truth["a_f"]) < 0.02
+    assert abs(r.parameters["f_ate"] - truth["f_ate"]) < 0.02
+    assert r.evaluations <= 1 + 60 + len(NAMES) + 1  # its budget (one last Jacobian over)
+    with pytest.raises(UsageError, match="start value of f_dte"):
+        est.refine(problem, {k: v for k, v in off.items() if k != "f_dte"})
+
+
+def test_replace_gives_a_new_estimator_with_other_settings():
+    est = FaultEstimator(n_particles=8, polish_evaluations=60)
+    other = est.replace(polish_evaluations=0)
+    assert (other.n_particles, other.polish_evaluations) == (8, 0)
+    assert est.polish_evaluations == 60
+    with pytest.raises(UsageError, match="no setting polish_budget"):
+        est.replace(polish_budget=1)
 
 def test_fit_writes_no_files_and_leaves_logging_alone(gear_fmu, tmp_path):
     """A fit writes nothing in the current folder and leaves the root logger alone (pyswarms
