@@ -14,14 +14,13 @@ Effects are fitted side by side, one per core (each in a process of its own that
 one isolated FMU worker, as ``batch`` does with records): an effect's fit keeps a core
 busy only part of the time (its least-squares polish asks for one simulation at a time),
 so running them one after another with all cores each left about a fifth of the machine
-idle (bench/discover_speed.py, RESULTS section 11). The effects that are not synchronous with the shafts
-(``Effect.synchronous``) start first: their records are simulated whole, the others'
-over one period. The ranking does not depend on how many run at once, nor on the order.
+idle (bench/discover_speed.py, RESULTS section 11). The effects that are not synchronous
+with the shafts (``Effect.synchronous``) start first: their records are simulated whole,
+the others' over one period. The ranking does not depend on how many run at once, nor on the order.
 """
 
 from __future__ import annotations
 
-import copy
 import multiprocessing as mp
 import os
 import time
@@ -137,8 +136,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
             if progress:
                 progress(found[-1])
     else:
-        one = copy.copy(effect_estimator)
-        one.n_workers, one.progress = max(1, cores // jobs), None
+        one = effect_estimator.replace(n_workers=max(1, cores // jobs), progress=None)
         with ProcessPoolExecutor(jobs) as pool:
             tasks = {pool.submit(_try_effect, problem, base, key, modelica_root, build_dir,
                                  one, bearing): key for key in keys}
