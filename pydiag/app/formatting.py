@@ -6,6 +6,7 @@ from pydiag.fit.estimator import DiagnosisResult
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.loop.compare import Comparison
 from pydiag.loop.discover import Discovery
+from pydiag.loop.validate import NOT_TRIED
 from pydiag.loop.regress import RegressionReport
 
 
@@ -83,7 +84,7 @@ def format_discovery(base: Comparison, found: list[Discovery]) -> str:
     for i, d in enumerate(found, 1):
         if d.status != "ok":
             lines.append(f"{i:4d} {d.effect:<26} {'-':>8} {'-':>10} {'-':>8} {'-':>9}  "
-                         f"failed: {d.status}")
+                         + (d.verdict if d.status == NOT_TRIED else f"failed: {d.status}"))
             continue
         params = ", ".join(f"{k}={v:.4g}" for k, v in d.parameters.items())
         lines.append(f"{i:4d} {d.effect:<26} {d.z:8.1f} {d.delta_bic:10.1f} {d.error:8.4f} "

@@ -10,17 +10,27 @@ noise alone would do. The Bayesian information criterion on the fitted half (dBI
 worth its parameters if the residual were white noise) is printed beside it; a misfit of
 the model's form is not white noise, so BIC alone is not the ranking.
 
-Effects are fitted side by side, one per core (each in a process of its own that holds
-one isolated FMU worker, as ``batch`` does with records): an effect's fit keeps a core
-busy only part of the time (its least-squares polish asks for one simulation at a time),
-so running them one after another with all cores each left about a fifth of the machine
-idle (bench/discover_speed.py, RESULTS section 11). The effects that are not synchronous
-with the shafts (``Effect.synchronous``) start first: their records are simulated whole,
-the others' over one period. The ranking does not depend on how many run at once, nor on the order.
+An effect none of whose lines is among the bins the test scores (the synchronous lines
+and the peaks of the fitted half) has no residual to explain and could not be
+confident: it is not fitted, and its row says so (bearing strikes on a record whose
+bearing lines are all in the noise, a ripple on a record with no line between the
+shaft orders).
+
+Effects are fitted side by side, one per core (each in a process of its own): an
+effect's fit keeps a core busy only part of the time (its least-squares polish asks for
+one simulation at a time), so running them one after another with all cores each left
+about a fifth of the machine idle (bench/discover_speed.py, RESULTS section 11). Each
+effect's fit may use every core (its swarm's particles, its polish's Jacobian columns):
+when the others are done, the last one's polish runs on all of them. The effects that
+are not synchronous with the shafts (``Effect.synchronous``) start first, those that
+also refit the base parameters (``Effect.reshapes_base``) before them: their records are
+simulated whole, the others' over one period. The ranking does not depend on how many
+run at once, nor on the order.
 """
 
 from __future__ import annotations
 
+import math
 import multiprocessing as mp
 import os
 import time
@@ -38,7 +48,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.loop.compare import EFFECT_REFIT, Comparison, compare
-from pydiag.loop.validate import held_out, in_model, outcompeted
+from pydiag.loop.validate import NOT_TRIED, held_out, in_model, outcompeted
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
@@ -47,7 +57,7 @@ MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
 @dataclass
 class Discovery:
     effect: str
-    status: str  # "ok", or the error that stopped this effect
+    status: str  # "ok", "not tried" (none of its lines to explain), or the error that stopped it
     z: float  # held-out improvement, in noise standard deviations
     delta_bic: float  # on the fitted half
     error: float  # held out, with the effect
@@ -91,6 +101,9 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, modelica_root: 
         return Discovery(key, f"{type(err).__name__}: {err}", float("-inf"), float("inf"),
                          float("nan"), float("nan"), k, {},
                          elapsed_s=time.perf_counter() - started)
+    if not h.tried:
+        return Discovery(key, NOT_TRIED, math.nan, math.nan, math.nan, math.nan, k, {},
+                         verdict=h.verdict, elapsed_s=time.perf_counter() - started)
     return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
                      1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
                      k, h.parameters, h.confident, h.verdict, time.perf_counter() - started)
@@ -106,7 +119,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     ``estimator`` fits the base model, ``effect_estimator`` each effect's parameters
     (default: :data:`pydiag.loop.compare.EFFECT_REFIT`); the effect estimator's
     ``n_workers`` (default: all cores) is the number of cores the effects share, one
-    effect per core (module docstring). Effects whose parameters the base model already
+    effect per core, each fit free to use them all (module docstring). Effects whose parameters the base model already
     fits are left out. ``progress`` gets each effect's row as it is done. As in
     validation, at most one effect is confident among those that claim the same peaks
     (the largest z).
@@ -117,8 +130,9 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     base = compare(problem, estimator, bearing)
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
     # the longest first, so the short ones fill the cores at the end: an effect that is not
-    # synchronous is simulated over the whole record, the others over one period
-    keys.sort(key=lambda key: EFFECTS[key].synchronous)
+    # synchronous is simulated over the whole record, the others over one period, and one
+    # that reshapes the base is polished with the base parameters free as well
+    keys.sort(key=lambda key: (EFFECTS[key].synchronous, not EFFECTS[key].reshapes_base))
     for key in keys:  # build in this process: two workers must not build one FMU at once
         if not EFFECTS[key].in_base:
             try:
@@ -136,7 +150,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
             if progress:
                 progress(found[-1])
     else:
-        one = effect_estimator.replace(n_workers=max(1, cores // jobs), progress=None)
+        one = effect_estimator.replace(n_workers=cores, progress=None)
         with ProcessPoolExecutor(jobs) as pool:
             tasks = {pool.submit(_try_effect, problem, base, key, modelica_root, build_dir,
                                  one, bearing): key for key in keys}
@@ -146,7 +160,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
                 if progress:
                     progress(rows[tasks[task]])
         found = [rows[key] for key in keys]
-    found.sort(key=lambda d: -d.z)
+    found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     beaten = outcompeted({d.effect: d.z for d in found if d.confident},
                          {s.effect: s.competing for s in base.suggested_effects})
     for d in found:
@@ -156,5 +170,9 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
 
 
 def as_dict(base: Comparison, found: list[Discovery]) -> dict:
+    """Plain data for JSON: a number an effect does not have (not tried, failed) is None."""
+    def plain(d: Discovery) -> dict:
+        return {k: None if isinstance(v, float) and not math.isfinite(v) else v
+                for k, v in asdict(d).items()}
     return {"base_error": base.error, "criterion": "held-out z (dBIC on the fitted half beside it)",
-            "ranking": [asdict(d) for d in found]}
+            "ranking": [plain(d) for d in found]}

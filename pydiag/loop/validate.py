@@ -45,6 +45,11 @@ on B, the part of the residual above noise on the lines its signature claims, su
 parameter may sit at a bound of its range (an angle has none): then "the effect
 saturates: its range or the model form is wrong".
 
+The lines an effect claims are among the bins scored: the synchronous lines and the
+peaks of half A. An effect that claims none of them (a bearing whose lines are all in the
+noise, or unknown without its geometry) has no residual on its lines, so it could never
+explain half of it: it is not fitted, and its verdict says so ("not tried").
+
 ``discover`` ranks effects by z and also reports the Bayesian information criterion on
 half A, dBIC = n ln(RSS_effect / RSS_base) + k ln n (n bins of all channels, RSS the
 weighted squared residual of Eq. (12), k the parameters the effect adds). BIC assumes the
@@ -79,6 +84,8 @@ from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, change
 FALSE_ALARM_RATE = 0.01
 #: The least share of the residual above noise on its own lines a confident effect removes.
 MIN_EXPLAINED = 0.5
+#: The start of the status of an effect held-out validation did not fit.
+NOT_TRIED = "not tried"
 #: A parameter closer to a bound than this share of its range is at the bound.
 AT_BOUND = 0.01
 #: Parameters every model that extends GearDiag.GearPair has: what the effects build on.
@@ -100,6 +107,7 @@ class HeldOut:
     at_bound: list[str] = field(default_factory=list)
     n_periods: int = 0  # periods in each half
     delta_bic: float = 0.0  # on half A, where the effect was fitted (module docstring)
+    tried: bool = True  # False: none of its lines is scored, so it was not fitted (z nan)
 
     @property
     def significant(self) -> bool:
@@ -111,6 +119,9 @@ class HeldOut:
 
     @property
     def verdict(self) -> str:
+        if not self.tried:
+            return (f"{NOT_TRIED}: none of the bins the test scores (the synchronous lines, "
+                    "the peaks of the fitted half) is one of its lines: no residual to explain")
         if not self.significant:
             return (f"not confirmed: held out, it lowers the error by no more than noise "
                     f"would (z {self.z:.1f} <= {self.threshold:.1f})")
@@ -177,6 +188,17 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
     fit_half = measured_a.featurizer
     bins = fit_half.bins
     test_half = fit_half.other_half()
+    lines = kinematic_map(kin, fit_half.max_freq_hz, bearing)
+    bin_hz = 1.0 / (n_half * kin.period_s)
+    weight = effect.signature(effect_peaks(problem, effect, base.peaks), base.bin_hz, kin)
+    changed = changed_channels(problem, effect)  # on the others, none of its lines
+    freqs = next(iter(measured_a.spectra.values()))[0][bins]
+    claims = np.array([weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0 for fk in freqs],
+                      dtype=bool)
+    if not (changed and claims.any()):  # nothing to explain (module docstring)
+        return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
+                       math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
+                       tried=False)
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     base_problem = problem.derive(featurizer=fit_half)
     base_fit = dict(base.parameters)
@@ -200,28 +222,22 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
         y0 = base_problem.model_signals(plant, x0)  # channel gains fitted on half A
     with effect_problem.spec.open() as plant:
         y1 = effect_problem.model_signals(plant, x1)
-    lines = kinematic_map(kin, fit_half.max_freq_hz, bearing)
-    bin_hz = 1.0 / (n_half * kin.period_s)
-    weight = effect.signature(effect_peaks(problem, effect, base.peaks), base.bin_hz, kin)
-    changed = changed_channels(problem, effect)  # on the others, none of its lines
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
     err0, err1, raw0, raw1 = [], [], [], []
     for i, channel in enumerate(problem.channels):
         _, meas_a, noise_a = measured_a.spectra[channel]
         raw0.append(spectral_error(fit_half.spectrum(y0[i], rate)[1][bins], meas_a[bins], noise_a))
         raw1.append(spectral_error(fit_half.spectrum(y1[i], rate)[1][bins], meas_a[bins], noise_a))
-        freqs, meas, noise = test_half.spectrum(m.channels[channel], rate)
+        _, meas, noise = test_half.spectrum(m.channels[channel], rate)
         _, s0, _ = test_half.spectrum(y0[i], rate)
         _, s1, _ = test_half.spectrum(y1[i], rate)
-        r, s0, s1, f = meas[bins], s0[bins], s1[bins], freqs[bins]
+        r, s0, s1 = meas[bins], s0[bins], s1[bins]
         sw, terms, excess = held_out_statistic(r, s0, s1, noise)
         total_w += sw
         total_d += float(np.sum(terms))
-        claims = np.array([channel in changed
-                           and weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
-                           for fk in f], dtype=bool)
-        signature_d += float(np.sum(terms[claims]))
-        signature_excess += float(np.sum(excess[claims]))
+        if channel in changed:
+            signature_d += float(np.sum(terms[claims]))
+            signature_excess += float(np.sum(excess[claims]))
         err0.append(noise_corrected_error(s0, r, noise))
         err1.append(noise_corrected_error(s1, r, noise))
     z = (total_d + total_w) / (2 * math.sqrt(total_w)) if total_w > 0 else 0.0
@@ -260,7 +276,7 @@ def validate(problem: FitProblem, comparison: Comparison,
     for s in suggestions:
         effect = EFFECTS[s.effect]
         if s.score < min_score:
-            s.status = (f"not tried: its lines hold {100 * s.score:.0f} % of the unexplained "
+            s.status = (f"{NOT_TRIED}: its lines hold {100 * s.score:.0f} % of the unexplained "
                         "energy")
             continue
         if s.effect in present or in_model(problem, effect):
@@ -274,7 +290,8 @@ def validate(problem: FitProblem, comparison: Comparison,
         except (PydiagError, BuildError) as err:
             s.status = f"{NOT_VALIDATED}: {err}"
             continue
-        s.held_out, s.status, s.confident = h.to_dict(), h.verdict, h.confident
+        s.held_out = h.to_dict() if h.tried else None
+        s.status, s.confident = h.verdict, h.confident
     beaten = outcompeted({s.effect: s.held_out["z"] for s in suggestions if s.confident},
                          {s.effect: s.competing for s in suggestions})
     for s in suggestions:

@@ -140,6 +140,9 @@ def test_cli_discover_ranks_the_hidden_effect_first(gear_fmu, effect_fmus, tmp_p
     assert res.returncode == 0, res.stderr
     ranking = json.loads(out.read_text())["ranking"]
     assert [r["effect"] for r in ranking] == ["gear_eccentricity", "load_fluctuation"]
+    # no line between the shaft orders for a ripple to explain: a row, not a number
+    assert ranking[1]["status"] == "not tried" and ranking[1]["z"] is None
+    assert "not tried" in res.stdout
     assert ranking[0]["delta_bic"] < 0 and ranking[0]["error_reduction"] > 0.5
     assert ranking[0]["parameters"]["ecc_gear"] == pytest.approx(10e-6, rel=0.05)
     assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == [
@@ -161,9 +164,29 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
                             progress=lambda d: seen.append(d.effect),
                             effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=workers))
         assert sorted(seen) == ["gear_eccentricity", "load_fluctuation"]
-        runs[workers] = [(d.effect, d.z, d.parameters, d.confident) for d in found]
+        runs[workers] = [(d.effect, d.status, repr(d.z), d.parameters, d.confident)
+                         for d in found]
     assert runs[1] == runs[2]
-    assert runs[1][0][0] == "gear_eccentricity" and runs[1][0][3]
+    assert runs[1][0][0] == "gear_eccentricity" and runs[1][0][4]
+
+
+def test_an_effect_none_of_whose_lines_is_scored_is_not_fitted(gear_fmu, effect_fmus):
+    """Held out, an effect whose lines are none of the scored bins has no residual to
+    explain: it is not fitted (no FMU opened: this one does not exist) and never confident;
+    with its lines in the record, the same effect is fitted."""
+    from pydiag.loop.compare import EFFECT_REFIT
+    from pydiag.loop.validate import NOT_TRIED, held_out
+    estimator = FaultEstimator(**EFFECT_REFIT, n_workers=1)
+    bearing = EFFECTS["bearing_outer_race"]
+    problem = build_problem(str(gear_fmu), record(effect_fmus["gear_eccentricity"], periods=10))
+    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    h = held_out(problem, base, bearing, "no-such.fmu", estimator, BEARING)
+    assert not h.tried and not h.confident and h.parameters == {}
+    assert h.verdict.startswith(NOT_TRIED)
+    problem = build_problem(str(gear_fmu), record(effect_fmus["bearing_outer_race"], periods=10))
+    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    h = held_out(problem, base, bearing, effect_fmus["bearing_outer_race"], estimator, BEARING)
+    assert h.tried and h.confident, h.verdict
 
 
 @pytest.mark.slow
