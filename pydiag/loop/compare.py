@@ -323,20 +323,32 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
                ) -> tuple[FitProblem, dict[str, float]]:
     """(the effect's problem, its fitted parameters): the effect's parameters, bounds
     narrowed by ``base``'s peaks, fitted on ``featurizer``'s bins with the base parameters
-    held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``."""
-    effect_problem = problem.derive(fmu_path=effect_fmu,
-                                    parameters=effect_parameters(problem, base, effect),
-                                    fixed_values=problem.fmu_values(base.parameters),
-                                    featurizer=featurizer)
-    return effect_problem, (estimator or FaultEstimator(**EFFECT_REFIT)).fit(
-        effect_problem).parameters
+    held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``.
+
+    An effect that takes energy from the base model's own lines (``Effect.reshapes_base``)
+    found a base fit bent to make up for it, which its own parameters alone cannot undo:
+    its swarm (base held) is followed by one polish, the budget of one start's, with the
+    base parameters free as well. Its problem then fits both, and the parameters returned
+    are both."""
+    estimator = estimator or FaultEstimator(**EFFECT_REFIT)
+    own = effect_parameters(problem, base, effect)
+    held = problem.derive(fmu_path=effect_fmu, parameters=own,
+                          fixed_values=problem.fmu_values(base.parameters), featurizer=featurizer)
+    if not effect.reshapes_base:
+        return held, estimator.fit(held).parameters
+    fitted = estimator.replace(polish_evaluations=0).fit(held).parameters
+    names = {p.name for p in own}
+    free = problem.derive(fmu_path=effect_fmu, featurizer=featurizer, parameters=tuple(
+        p for p in problem.parameters if p.name not in names) + own)
+    return free, estimator.refine(free, {**base.parameters, **fitted}).parameters
 
 
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
                       estimator: FaultEstimator | None = None,
                       bearing: Bearing | None = None) -> Comparison:
     """Fit the effect's parameters on the comparison's bins, the base parameters held at
-    their fitted values, then compare the effect model on the same footing as ``base``.
+    their fitted values (freed as well for an effect that reshapes the base's lines:
+    :func:`fit_effect`), then compare the effect model on the same footing as ``base``.
 
     ``problem`` is the base fit's problem (its adapter maps the base parameters to FMU
     variables); ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``.

@@ -14,9 +14,9 @@ An effect that takes energy from the base model's own lines (``Effect.reshapes_b
 speed fluctuation, a second faulty tooth) found a base fit bent to make up for it, which
 its own parameters alone cannot undo. For those, the swarm over the effect's parameters
 (base held) is followed by one least-squares polish on A with the base parameters free as
-well (:meth:`pydiag.fit.estimator.FaultEstimator.refine`), and the base model gets the
-same polish on A, so both models' last fit is on A alone (the base's start came from the
-whole record, as above).
+well (:func:`pydiag.loop.compare.fit_effect`), and the base model gets the same polish on
+A (:meth:`pydiag.fit.estimator.FaultEstimator.refine`), so both models' last fit is on A
+alone (the base's start came from the whole record, as above).
 Measured on the independent simulator's torque ripple (bench/independent_truth.py): the
 speed fluctuation explained 29-47 % of its lines held out with the base held, 82-96 %
 freed.
@@ -202,20 +202,9 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: 
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     base_problem = problem.derive(featurizer=fit_half)
     base_fit = dict(base.parameters)
-    if effect.reshapes_base:
-        # the swarm over the effect's parameters (base held), then one polish (the budget
-        # of one start's) from its best with the base parameters free as well; the base
-        # model gets the same polish on A, so the two stay on an equal footing
-        effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half,
-                                            estimator.replace(polish_evaluations=0))
-        own = {p.name for p in effect_problem.parameters}
-        effect_problem = base_problem.derive(fmu_path=effect_fmu, parameters=tuple(
-            p for p in base_problem.parameters if p.name not in own) + effect_problem.parameters)
+    effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half, estimator)
+    if effect.reshapes_base:  # its fit freed the base: the base model gets the same polish
         base_fit = estimator.refine(base_problem, base_fit).parameters
-        fitted = estimator.refine(effect_problem, {**base.parameters, **fitted}).parameters
-    else:
-        effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half,
-                                            estimator)
     x0 = np.array([base_fit[p.name] for p in base_problem.parameters])
     x1 = np.array([fitted[p.name] for p in effect_problem.parameters])
     with base_problem.spec.open() as plant:

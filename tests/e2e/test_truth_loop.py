@@ -14,7 +14,7 @@ from pydiag.fit.problem import build_problem
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import Bearing
-from pydiag.loop.compare import compare
+from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.discover import discover, effect_fmu
 from pydiag.loop.validate import validate
 from pydiag.model.adapter import gear_default
@@ -99,3 +99,19 @@ def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_pat
     assert found[0].effect == effect and found[0].confident, found
     assert all(not d.confident for d in found[1:]), found
     assert np.isfinite(found[0].delta_bic) and found[0].delta_bic < 0
+
+
+def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth_records,
+                                                                 effect_fmu_of):
+    """The base fit of the ripple's record, without the effect, is bent (the faulty
+    tooth's d_f and f_f near 0 to make up for the lines the speed fluctuation moved);
+    compare with the effect (``compare --effect``) frees the base parameters with it and
+    explains the record."""
+    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["speed_fluctuation"])
+    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS)
+    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    effect = EFFECTS["speed_fluctuation"]
+    c = refit_with_effect(problem, base, effect, effect_fmu_of(effect), bearing=BEARING)
+    assert c.error < 0.2 * base.error, (base.error, c.error)
+    assert not [p for p in c.peaks if p.family == "unexplained"], c.peaks
+    assert c.parameters["d_f"] > base.parameters["d_f"] + 0.05, (base.parameters, c.parameters)
