@@ -48,7 +48,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.loop.compare import EFFECT_REFIT, Comparison, compare
-from pydiag.loop.validate import NOT_TRIED, held_out, in_model, outcompeted
+from pydiag.loop.validate import NOT_TRIED, held_out, in_model, outcompeted, rivals
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
@@ -67,6 +67,7 @@ class Discovery:
     confident: bool = False
     verdict: str = ""
     elapsed_s: float = 0.0  # wall time of this effect's build, fit and test
+    claimed: tuple[str, ...] = ()  # held out, the non-synchronous lines it claims
 
 
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
@@ -106,7 +107,8 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, modelica_root: 
                          verdict=h.verdict, elapsed_s=time.perf_counter() - started)
     return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
                      1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
-                     k, h.parameters, h.confident, h.verdict, time.perf_counter() - started)
+                     k, h.parameters, h.confident, h.verdict, time.perf_counter() - started,
+                     h.claimed)
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
@@ -162,7 +164,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
         found = [rows[key] for key in keys]
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     beaten = outcompeted({d.effect: d.z for d in found if d.confident},
-                         {s.effect: s.competing for s in base.suggested_effects})
+                         rivals({s.effect: s.competing for s in base.suggested_effects},
+                                {d.effect: d.claimed for d in found}))
     for d in found:
         if d.effect in beaten:
             d.confident, d.verdict = False, beaten[d.effect]

@@ -172,15 +172,15 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
 
 def test_an_effect_none_of_whose_lines_is_scored_is_not_fitted(gear_fmu, effect_fmus):
     """Held out, an effect whose lines are none of the scored bins has no residual to
-    explain: it is not fitted (no FMU opened: this one does not exist) and never confident;
-    with its lines in the record, the same effect is fitted."""
+    explain: it is not fitted (its FMU not even built) and never confident; with its lines
+    in the record, the same effect is fitted."""
     from pydiag.loop.compare import EFFECT_REFIT
     from pydiag.loop.validate import NOT_TRIED, held_out
     estimator = FaultEstimator(**EFFECT_REFIT, n_workers=1)
     bearing = EFFECTS["bearing_outer_race"]
     problem = build_problem(str(gear_fmu), record(effect_fmus["gear_eccentricity"], periods=10))
     base = compare(problem, FaultEstimator(**FAST), BEARING)
-    h = held_out(problem, base, bearing, "no-such.fmu", estimator, BEARING)
+    h = held_out(problem, base, bearing, lambda: pytest.fail("built"), estimator, BEARING)
     assert not h.tried and not h.confident and h.parameters == {}
     assert h.verdict.startswith(NOT_TRIED)
     problem = build_problem(str(gear_fmu), record(effect_fmus["bearing_outer_race"], periods=10))

@@ -268,3 +268,19 @@ def line_margin_db(with_effect: np.ndarray, without: np.ndarray, snr: float,
     sigma = np.sqrt(np.var(with_effect) / snr)
     noise_bin = sigma * np.sqrt(np.pi / n)  # mean amplitude of a white-noise bin
     return float(freqs[k]), float(20 * np.log10(max(change[k], 1e-300) / noise_bin))
+
+
+def envelope_margin_db(noisy: np.ndarray, sample_rate_hz: float, band_hz: tuple[float, float],
+                       lines_hz: list[float]) -> tuple[float, float]:
+    """(frequency, margin in dB) of the strongest of ``lines_hz`` in the envelope spectrum
+    of a noisy record (the band ``band_hz``, Hann window), over that spectrum's noise
+    floor (median power / ln 2: robust to the lines)."""
+    from pydiag.signal.spectra import amplitude_spectrum, band_envelope, noise_power
+
+    freqs, amp = amplitude_spectrum(band_envelope(noisy, sample_rate_hz, band_hz),
+                                    sample_rate_hz, "hann")
+    keep = (freqs > 1.0) & (freqs < 2000.0)
+    floor = np.sqrt(noise_power(amp[keep], robust=True))
+    peaks = [(f, amp[np.abs(freqs - f) <= 1.5 * (freqs[1] - freqs[0])].max()) for f in lines_hz]
+    f, a = max(peaks, key=lambda p: p[1])
+    return float(f), float(20 * np.log10(a / floor))

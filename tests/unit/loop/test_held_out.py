@@ -6,7 +6,7 @@ from scipy.stats import norm
 
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.validate import FALSE_ALARM_RATE, held_out_statistic, outcompeted
+from pydiag.loop.validate import FALSE_ALARM_RATE, held_out_statistic, outcompeted, rivals
 
 
 def rician(amplitude, noise_power, rng, size):
@@ -77,3 +77,30 @@ def test_one_confident_effect_per_set_of_competing_lines():
     assert set(beaten) == {"housing", "backlash"}
     assert beaten["housing"].startswith("competes with shape") and "120.0 > 80.0" in beaten["housing"]
     assert outcompeted({"tooth": 5.0}, competing) == {}
+
+
+def test_a_line_between_the_synchronous_ones_moves_where_the_half_joins_periods():
+    """A half joins every other period: a synchronous line stays on its bin; one that is
+    not (a bearing's) jumps in phase at every joint and shows where ``joined_freq_hz``
+    says, with most of its power."""
+    kin = GearKinematics(14, 21, 25.0)  # fundamental period 0.12 s
+    rate = 10_000.0
+    t = np.arange(int(round(20 * kin.period_s * rate))) / rate
+    half = FullSpectrumFeaturizer(kin, 10, 1575.0, half=0)
+    assert FullSpectrumFeaturizer(kin, 10, 1575.0).joined_freq_hz(89.62) == 89.62
+    for f in (89.62, 135.38, 357.3, 200.4, 75.0, kin.f_mesh_hz):
+        freqs, amp, _ = half.spectrum(np.cos(2 * np.pi * f * t + 0.3), rate)
+        k = int(np.argmax(amp))
+        assert abs(freqs[k] - half.joined_freq_hz(f)) <= 1 / (10 * kin.period_s), f
+        assert amp[k] ** 2 / np.sum(amp ** 2) >= 0.4
+    assert half.joined_freq_hz(75.0) == 75.0 and abs(half.joined_freq_hz(89.62) - 87.57) < 0.01
+
+
+def test_effects_that_claim_one_line_of_a_half_compete():
+    competing = {"shape": ["backlash"], "backlash": ["shape"], "outer": [], "inner": []}
+    claimed = {"outer": ("acc envelope 87.50 Hz", "acc envelope 270.83 Hz"),
+               "inner": ("acc envelope 87.50 Hz",), "shape": ()}
+    out = rivals(competing, claimed)
+    assert out["outer"] == ["inner"] and out["inner"] == ["outer"]
+    assert out["shape"] == ["backlash"] and competing["outer"] == []  # not changed in place
+    assert set(outcompeted({"outer": 65.8, "inner": 10.1}, out)) == {"inner"}

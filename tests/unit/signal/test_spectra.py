@@ -6,8 +6,8 @@ import pytest
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.signal.noise import add_white_noise
-from pydiag.signal.spectra import (amplitude_spectrum, local_maxima, noise_power, sync_spectrum,
-                                    whole_periods)
+from pydiag.signal.spectra import (amplitude_spectrum, band_envelope, local_maxima, noise_power,
+                                    sync_spectrum, whole_periods)
 
 KIN = GearKinematics(14, 21, 25.0)  # mesh 350 Hz, fundamental period 0.12 s
 FS = 10_000.0
@@ -113,3 +113,18 @@ def test_a_period_that_is_not_whole_samples_is_still_one_period_and_reads_exactl
     spec = sync_spectrum(0.5 * np.cos(2 * np.pi * 12 / period * long), fs, period)
     assert spec.n_periods == 37 and spec.amplitude[12] == pytest.approx(0.5, rel=1e-3)
     assert np.max(np.delete(spec.amplitude, 12)) < 1e-3
+
+
+def test_band_envelope_beats_at_the_strike_rate_of_a_ringing_mode():
+    """Strikes at 89.6 Hz ring a 3 kHz mode: the spectrum has no line at 89.6 Hz, the
+    envelope of the band around the mode has it; the band must fit under Nyquist."""
+    t = np.arange(int(FS * 2.0)) / FS
+    since = np.mod(t, 1 / 89.6)
+    x = np.exp(-900.0 * since) * np.sin(2 * np.pi * 3000.0 * since)
+    freqs, amp = amplitude_spectrum(x, FS, "hann")
+    env_freqs, env = amplitude_spectrum(band_envelope(x, FS, (1575.0, 4500.0)), FS, "hann")
+    line = np.argmin(np.abs(freqs - 89.6))
+    assert env[line] > 10 * amp[line]  # 20 dB
+    assert env[line] == pytest.approx(env[(env_freqs > 50) & (env_freqs < 1000)].max())
+    with pytest.raises(ValueError, match="band"):
+        band_envelope(x, FS, (1575.0, 6000.0))
