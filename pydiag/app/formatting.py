@@ -6,8 +6,8 @@ from pydiag.fit.estimator import DiagnosisResult
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.loop.compare import Comparison
 from pydiag.loop.discover import Discovery
-from pydiag.loop.validate import NOT_TRIED
 from pydiag.loop.regress import RegressionReport
+from pydiag.loop.validate import NOT_TRIED
 
 
 def format_result(result: DiagnosisResult, truth: dict | None = None) -> str:
@@ -64,10 +64,10 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
         lines.append(f"by family  : {channel}: share of the measured / of the residual energy")
         lines += [f"  {g:<17} {100 * v['measured']:5.1f} % / {100 * v['residual']:5.1f} %"
                   for g, v in groups.items()]
-    shown = [s for s in c.suggested_effects if s.score > 0]
+    shown = [s for s in c.suggested_effects if s.shown]
     lines.append("suggested  : " + ("none" if not shown else ""))
     for s in shown:
-        flag = "CONFIDENT" if s.confident else s.status
+        flag = f"CONFIDENT, {s.status}" if s.confident else s.status
         lines.append(f"  {s.effect:<26} score {s.score:.2f}: {flag}")
         if s.evidence:
             lines.append(f"  {'':<26} {s.evidence[0]}")

@@ -81,6 +81,8 @@ class FitProblem:
         fixed_values: FMU values set on every run on top of the adapter's start values
         fit_gain: scale each channel's model by its least-squares gain (module docstring)
         speed: the speed found in the record and how (None: the record was taken as it is)
+        fixed_gains: channel -> gain (model -> measurement) held instead of fitted, e.g. a
+            fit's gains carried to features that cannot tell a gain from a parameter
     """
 
     spec: PlantSpec
@@ -96,6 +98,7 @@ class FitProblem:
     fixed_values: dict[str, float] = field(default_factory=dict)
     fit_gain: bool = False
     speed: SpeedEstimate | None = None
+    fixed_gains: dict[str, float] = field(default_factory=dict)
 
     @property
     def lows(self) -> np.ndarray:
@@ -161,6 +164,8 @@ class FitProblem:
             None if self.kinematics is None else self.kinematics.period_s)
 
     def _gain(self, model: np.ndarray, channel: str) -> float:
+        if channel in self.fixed_gains:
+            return self.fixed_gains[channel]
         if not self.fit_gain:
             return 1.0
         ref = self.reference[channel]
@@ -197,16 +202,19 @@ class FitProblem:
 
     def derive(self, fmu_path: str | None = None, parameters: tuple[Parameter, ...] | None = None,
                fixed_values: dict[str, float] | None = None,
-               featurizer: Featurizer | None = None) -> "FitProblem":
+               featurizer: Featurizer | None = None,
+               fixed_gains: dict[str, float] | None = None) -> "FitProblem":
         """The same measurement, adapter and settings with another FMU (an effect's model),
-        other parameters, more fixed values (in FMU variable names) or another featurizer."""
-        return build_problem(
+        other parameters, more fixed values (in FMU variable names), another featurizer or
+        more channel gains held (:attr:`fixed_gains`)."""
+        return dataclasses.replace(build_problem(
             fmu_path or self.spec.fmu_path, self.measurement, self.adapter,
             parameters=parameters or self.parameters,
             fixed_values={**self.fixed_values, **(fixed_values or {})},
             kinematics=self.kinematics, featurizer=featurizer or self.featurizer,
             warmup_s=self.warmup_s, relative_tolerance=self.spec.relative_tolerance,
-            engine=self.spec.engine, fit_gain=self.fit_gain, speed_estimate=self.speed)
+            engine=self.spec.engine, fit_gain=self.fit_gain, speed_estimate=self.speed),
+            fixed_gains={**self.fixed_gains, **(fixed_gains or {})})
 
 
 def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: float,

@@ -23,7 +23,7 @@ from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.signal.features import Features, first_window
 from pydiag.signal.spectra import (SyncSpectrum, amplitude_spectrum, band_envelope, noise_power,
-                                   sync_spectrum)
+                                   sync_spectrum, without_synchronous)
 
 N_MESH_HARMONICS = 4
 N_SHAFT_HARMONICS = 5
@@ -116,9 +116,11 @@ class FullSpectrumFeaturizer:
     machine with independent noise. Joined whole periods keep every synchronous line on a
     bin; a non-synchronous line is spread the same way in model and measurement.
 
-    ``envelope_band_hz`` (low, high): the spectrum is the envelope's, of the signal in that
-    band (:func:`pydiag.signal.spectra.band_envelope`), taken over the whole signal before
-    the periods are cut: where a bearing's strikes show as lines.
+    ``envelope_band_hz`` (low, high): the spectrum is the envelope's, of the part of the
+    signal that does not repeat every period (:func:`pydiag.signal.spectra.without_synchronous`:
+    the gear's lines removed, which a bearing's envelope must not beat against) in that band
+    (:func:`pydiag.signal.spectra.band_envelope`), taken over the whole window before the
+    periods are cut: where a bearing's strikes show as lines.
     """
 
     def __init__(self, kinematics: GearKinematics, n_periods: int, max_freq_hz: float,
@@ -140,9 +142,11 @@ class FullSpectrumFeaturizer:
 
     def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, np.ndarray, float]:
         """(freq_hz, amplitude, noise_power) over all bins up to max_freq_hz."""
-        if self.envelope_band_hz is not None:
-            signal = band_envelope(signal, sample_rate_hz, self.envelope_band_hz)
         x = first_window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
+        if self.envelope_band_hz is not None:
+            periods = int(round(self.duration_s / self.kinematics.period_s))
+            x = band_envelope(without_synchronous(x, periods), sample_rate_hz,
+                              self.envelope_band_hz)
         if self.half is not None:
             edges = np.round(np.arange(2 * self.n_periods + 1) * self.kinematics.period_s
                              * sample_rate_hz).astype(int)

@@ -107,6 +107,12 @@ class Suggestion:
     competing: list[str] = field(default_factory=list)
     held_out: dict | None = None
 
+    @property
+    def shown(self) -> bool:
+        """Worth a line in a report: the residual points to it, or it was tried held out
+        (an effect scored on an envelope may have no score in the spectrum)."""
+        return self.score > 0 or self.held_out is not None
+
 
 @dataclass
 class ChannelSpectrum:

@@ -121,10 +121,10 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     ``estimator`` fits the base model, ``effect_estimator`` each effect's parameters
     (default: :data:`pydiag.loop.compare.EFFECT_REFIT`); the effect estimator's
     ``n_workers`` (default: all cores) is the number of cores the effects share, one
-    effect per core, each fit free to use them all (module docstring). Effects whose parameters the base model already
-    fits are left out. ``progress`` gets each effect's row as it is done. As in
-    validation, at most one effect is confident among those that claim the same peaks
-    (the largest z).
+    effect per core, each fit free to use them all (module docstring). Effects whose
+    parameters the base model already fits are left out. ``progress`` gets each effect's
+    row as it is done. As in validation, at most one effect is confident among those that
+    claim the same lines (the largest z; :func:`pydiag.loop.validate.rivals`).
     """
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:

@@ -85,7 +85,7 @@ def record(db: str | Path, comparison, measurement_path: str, model_name: str | 
     peaks = [{"channel": p.channel, "freq_hz": p.freq_hz, "family": p.family,
               "energy_fraction": p.energy_fraction} for p in comparison.peaks]
     suggested = [{"effect": s.effect, "score": s.score, "confident": s.confident}
-                 for s in comparison.suggested_effects if s.score > 0]
+                 for s in comparison.suggested_effects if s.shown]
     with _connect(db) as con:
         cur = con.execute(
             "INSERT INTO runs (time_utc, measurement, fmu, fmu_sha256, model_name, source_sha256,"

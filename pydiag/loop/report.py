@@ -170,13 +170,13 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
                   for ch, groups in c.residual_by_family.items() for g, v in groups.items()]
         parts.append("</table>")
     parts.append("<h2>Suggested effects</h2>")
-    shown = [s for s in c.suggested_effects if s.score > 0]
+    shown = [s for s in c.suggested_effects if s.shown]
     if not shown:
         parts.append("<p>None.</p>")
     else:
         rows = "".join(f"<tr><td class='{'confident' if s.confident else ''}'>"
                        f"{html.escape(s.effect)}</td><td class='num'>{s.score:.2f}</td>"
-                       f"<td>{html.escape('confident' if s.confident else s.status)}</td>"
+                       f"<td>{html.escape(('confident: ' if s.confident else '') + s.status)}</td>"
                        f"<td>{html.escape(', '.join(s.competing))}</td>"
                        f"<td>{html.escape('; '.join(s.evidence))}</td></tr>" for s in shown)
         parts.append("<table><tr><th>effect</th><th>score</th><th>held out</th>"

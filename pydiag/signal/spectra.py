@@ -39,6 +39,19 @@ def amplitude_spectrum(signal: np.ndarray, sample_rate_hz: float,
     return np.fft.rfftfreq(x.size, 1.0 / sample_rate_hz), amplitude
 
 
+def without_synchronous(signal: np.ndarray, n_periods: int) -> np.ndarray:
+    """``signal`` (``n_periods`` whole periods) without the lines of its period: the DFT
+    bins at multiples of ``n_periods`` (the period's harmonics, and the mean) set to zero.
+    What is left is what does not repeat every period (the discrete/random separation of
+    bearing diagnostics: a gear's lines all repeat each fundamental period, a bearing's
+    strikes do not; the same as subtracting the time-synchronous average when the period
+    is whole samples)."""
+    x = np.asarray(signal, dtype=float)
+    spectrum = np.fft.rfft(x)
+    spectrum[::max(int(n_periods), 1)] = 0.0
+    return np.fft.irfft(spectrum, n=x.size)
+
+
 def band_envelope(signal: np.ndarray, sample_rate_hz: float,
                   band_hz: tuple[float, float]) -> np.ndarray:
     """The envelope of ``signal`` in the band ``band_hz`` = (low, high), Hz: the magnitude

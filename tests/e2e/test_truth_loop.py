@@ -136,3 +136,36 @@ def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth
     assert c.error < 0.2 * base.error, (base.error, c.error)
     assert not [p for p in c.peaks if p.family == "unexplained"], c.peaks
     assert c.parameters["d_f"] > base.parameters["d_f"] + 0.05, (base.parameters, c.parameters)
+
+
+def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_records,
+                                                              tmp_path):
+    """The command line, whose base fit is GearPair's paper parameters with a channel gain
+    (bent here: the gain is 0.09): the outer race is confirmed on the envelope, with that
+    gain held, and says so in the text, the JSON and the report; its strike, at the
+    measurement's level, is the simulator's."""
+    import json
+
+    from conftest import run_cli
+
+    from pydiag.io.measurements import write_measurement
+    meas = tmp_path / "m.csv"
+    write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
+                                   clean=truth_records["bearing_outer_race"]))
+    out, page = tmp_path / "c.json", tmp_path / "r.html"
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--measurement", str(meas),
+                  "--bearing", "9,7.94,39.04", "--json", str(out), "--report", str(page),
+                  "--history", str(tmp_path / "h.sqlite"), "--particles", "10",
+                  "--iterations", "8", "--polish", "100", "--quiet",
+                  "--build-dir", str(tmp_path / "fmus"))
+    assert res.returncode == 0, res.stderr
+    line = next(l for l in res.stdout.splitlines() if "bearing_outer_race" in l)
+    assert "CONFIDENT, confirmed held out" in line and "envelope" in line, line
+    data = json.loads(out.read_text())
+    found = {s["effect"]: s for s in data["suggested_effects"]}
+    assert found["bearing_outer_race"]["confident"]
+    held = found["bearing_outer_race"]["held_out"]
+    assert held["envelope_band_hz"] == pytest.approx(ENVELOPE_BAND, rel=1e-4)  # order-tracked
+    strike = held["parameters"]["A_b"] * data["gains"]["acc"]  # m/s2 at the sensor
+    assert 40 < strike < 90, strike  # the simulator's: 60 m/s2 through another resonance
+    assert "confident: confirmed held out" in page.read_text()

@@ -7,7 +7,7 @@ from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.signal.noise import add_white_noise
 from pydiag.signal.spectra import (amplitude_spectrum, band_envelope, local_maxima, noise_power,
-                                    sync_spectrum, whole_periods)
+                                    sync_spectrum, whole_periods, without_synchronous)
 
 KIN = GearKinematics(14, 21, 25.0)  # mesh 350 Hz, fundamental period 0.12 s
 FS = 10_000.0
@@ -128,3 +128,18 @@ def test_band_envelope_beats_at_the_strike_rate_of_a_ringing_mode():
     assert env[line] == pytest.approx(env[(env_freqs > 50) & (env_freqs < 1000)].max())
     with pytest.raises(ValueError, match="band"):
         band_envelope(x, FS, (1575.0, 6000.0))
+
+
+def test_without_synchronous_keeps_what_does_not_repeat_every_period():
+    """A gear's lines (every harmonic of the period) go; a bearing's line between them
+    stays, at its amplitude."""
+    periods, n_per = 8, 1200
+    t = np.arange(periods * n_per) / FS  # 8 periods of 0.12 s
+    gear = 3.0 * np.cos(2 * np.pi * t / 0.12 * 42) + np.cos(2 * np.pi * t / 0.12 * 5) + 0.7
+    bearing = 0.5 * np.cos(2 * np.pi * 89.62 * t)
+    left = without_synchronous(gear + bearing, periods)
+    assert np.max(np.abs(without_synchronous(gear, periods))) < 1e-9
+    freqs, amp = amplitude_spectrum(left, FS)
+    line = np.argmin(np.abs(freqs - 89.62))
+    assert np.max(amp[line - 2:line + 3]) == pytest.approx(
+        np.max(amplitude_spectrum(bearing, FS)[1][line - 2:line + 3]), rel=0.05)
