@@ -86,22 +86,24 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
     return out
 
 
-def _try_effect(problem: FitProblem, base: Comparison, key: str, modelica_root: Path,
-                build_dir: Path, estimator: FaultEstimator,
-                bearing: Bearing | None) -> Discovery:
-    """One effect held out, as a row (an effect that cannot be built or fitted is a row too).
+def _failed(key: str, err: Exception, started: float) -> Discovery:
+    """The row of an effect that could not be built or fitted."""
+    return Discovery(key, f"{type(err).__name__}: {err}", float("-inf"), float("inf"),
+                     float("nan"), float("nan"), len(EFFECTS[key].parameters), {},
+                     elapsed_s=time.perf_counter() - started)
+
+
+def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
+                estimator: FaultEstimator, bearing: Bearing | None) -> Discovery:
+    """One effect held out, as a row (an effect that cannot be fitted is a row too).
     Takes the effect's key, not the effect: it runs in a worker process."""
     started = time.perf_counter()
     effect = EFFECTS[key]
     k = len(effect.parameters)
     try:
-        fmu = (problem.spec.fmu_path if effect.in_base
-               else str(effect_fmu(key, modelica_root, build_dir)))
         h = held_out(problem, base, effect, fmu, estimator, bearing)
-    except (PydiagError, BuildError) as err:
-        return Discovery(key, f"{type(err).__name__}: {err}", float("-inf"), float("inf"),
-                         float("nan"), float("nan"), k, {},
-                         elapsed_s=time.perf_counter() - started)
+    except PydiagError as err:
+        return _failed(key, err, started)
     if not h.tried:
         return Discovery(key, NOT_TRIED, math.nan, math.nan, math.nan, math.nan, k, {},
                          verdict=h.verdict, elapsed_s=time.perf_counter() - started)
@@ -135,33 +137,37 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     # synchronous is simulated over the whole record, the others over one period, and one
     # that reshapes the base is polished with the base parameters free as well
     keys.sort(key=lambda key: (EFFECTS[key].synchronous, not EFFECTS[key].reshapes_base))
-    for key in keys:  # build in this process: two workers must not build one FMU at once
-        if not EFFECTS[key].in_base:
-            try:
-                effect_fmu(key, modelica_root, build_dir)
-            except (PydiagError, BuildError):
-                pass  # the effect's own task reports it as its row
+    fmus: dict[str, str] = {}
+    found: list[Discovery] = []
+    for key in keys:  # built in this process: two workers must not build one FMU at once
+        started = time.perf_counter()
+        try:
+            fmus[key] = (problem.spec.fmu_path if EFFECTS[key].in_base
+                         else str(effect_fmu(key, modelica_root, build_dir)))
+        except (PydiagError, BuildError) as err:  # its row, not built again
+            found.append(_failed(key, err, started))
+            if progress:
+                progress(found[-1])
+    keys = [key for key in keys if key in fmus]
     effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
     cores = effect_estimator.n_workers or os.cpu_count() or 1
     jobs = min(cores, len(keys))
-    found: list[Discovery] = []
     if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
         for key in keys:
-            found.append(_try_effect(problem, base, key, modelica_root, build_dir,
-                                     effect_estimator, bearing))
+            found.append(_try_effect(problem, base, key, fmus[key], effect_estimator, bearing))
             if progress:
                 progress(found[-1])
     else:
         one = effect_estimator.replace(n_workers=cores, progress=None)
         with ProcessPoolExecutor(jobs) as pool:
-            tasks = {pool.submit(_try_effect, problem, base, key, modelica_root, build_dir,
-                                 one, bearing): key for key in keys}
+            tasks = {pool.submit(_try_effect, problem, base, key, fmus[key], one, bearing): key
+                     for key in keys}
             rows = {}
             for task in as_completed(tasks):
                 rows[tasks[task]] = task.result()
                 if progress:
                     progress(rows[tasks[task]])
-        found = [rows[key] for key in keys]
+        found += [rows[key] for key in keys]
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     beaten = outcompeted({d.effect: d.z for d in found if d.confident},
                          rivals({s.effect: s.competing for s in base.suggested_effects},

@@ -170,6 +170,32 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
     assert runs[1][0][0] == "gear_eccentricity" and runs[1][0][4]
 
 
+def test_discover_makes_a_row_of_an_effect_that_cannot_be_built_trying_once(
+        gear_fmu, effect_fmus, tmp_path, monkeypatch):
+    """An effect whose Modelica model does not build is a row saying why, and its build is
+    tried once (a build takes seconds); the other effects are ranked as usual."""
+    import pydiag.loop.discover as d
+    from fmu_build import ModelicaBuildError
+    from pydiag.loop.compare import EFFECT_REFIT
+    tried = []
+
+    def build(source, model, out):
+        tried.append(model)
+        if model.endswith("Backlash"):
+            raise ModelicaBuildError("equation is nonlinear in its only unknown z", "Backlash.mo:6")
+        return build_fmu(source, model, out)
+    monkeypatch.setattr(d, "build_fmu", build)
+    problem = build_problem(str(gear_fmu), record(effect_fmus["gear_eccentricity"], periods=10))
+    _, found = d.discover(problem, FaultEstimator(**FAST), BEARING,
+                          effects=["gear_eccentricity", "backlash"], build_dir=tmp_path,
+                          effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=1))
+    assert sorted(tried) == ["GearDiag.Effects.Backlash", "GearDiag.Effects.GearEccentricity"]
+    rows = {row.effect: row for row in found}
+    assert rows["backlash"].status == ("ModelicaBuildError: Backlash.mo:6: equation is "
+                                       "nonlinear in its only unknown z")
+    assert found[0].effect == "gear_eccentricity" and found[0].confident
+
+
 def test_an_effect_none_of_whose_lines_is_scored_is_not_fitted(gear_fmu, effect_fmus):
     """Held out, an effect whose lines are none of the scored bins has no residual to
     explain: it is not fitted (its FMU not even built) and never confident; with its lines
