@@ -5,10 +5,9 @@ The records: the independent simulator (tests/truth/gear_sim.py), 33 fundamental
 synchronous with the shafts: discover does not fit the effects none of whose lines are
 among the scored ones), a torque ripple, and a ripple with both races of the pinion
 bearing (lines that are not synchronous: the effects that make such lines are fitted,
-each simulation over the whole record). The base
-model: GearPair as ``pydiag discover`` fits it (the paper's parameters, default swarm),
-each effect fitted held out with the refit budget ``compare.EFFECT_REFIT`` (the CLI's
-default). Effect FMUs are built before the clock starts (discover caches them in
+each simulation over the whole record). The base model: GearPair as ``pydiag discover``
+fits it (the paper's parameters, default swarm), each effect fitted held out with the
+refit budget ``compare.EFFECT_REFIT`` (the CLI's default). Effect FMUs are built before the clock starts (discover caches them in
 build/effects). discover fits the effects side by side, one per core: each effect's row
 is its own wall time while others ran beside it, so the rows add up to more than the
 total. The base compare is timed again alone after each run. ``--repeat`` runs, medians

@@ -4,9 +4,11 @@ healthy-tooth level a0 and faulty-tooth softening d_f fitted; the simulator's st
 a contact-ratio law in series with the shafts, its faulty tooth a weaker tooth over a
 parabolic contact, its speed not constant."""
 
+import json
+
 import numpy as np
 import pytest
-from conftest import ROOT
+from conftest import ROOT, run_cli
 from truth.gear_sim import TruthGear, envelope_margin_db, line_margin_db, record, simulate
 
 from pydiag.fit.estimator import FaultEstimator
@@ -14,6 +16,7 @@ from pydiag.fit.problem import build_problem
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import Bearing
+from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.discover import discover, effect_fmu
 from pydiag.loop.validate import ENVELOPE_TOP, validate
@@ -144,11 +147,6 @@ def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_r
     (bent here: the gain is 0.09): the outer race is confirmed on the envelope, with that
     gain held, and says so in the text, the JSON and the report; its strike, at the
     measurement's level, is the simulator's."""
-    import json
-
-    from conftest import run_cli
-
-    from pydiag.io.measurements import write_measurement
     meas = tmp_path / "m.csv"
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
                                    clean=truth_records["bearing_outer_race"]))
