@@ -68,6 +68,7 @@ class Discovery:
     verdict: str = ""
     elapsed_s: float = 0.0  # wall time of this effect's build, fit and test
     claimed: tuple[str, ...] = ()  # held out, the non-synchronous lines it claims
+    significant: bool = False  # held out, it lowers the error by more than noise would
 
 
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
@@ -110,7 +111,7 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
     return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
                      1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
                      k, h.parameters, h.confident, h.verdict, time.perf_counter() - started,
-                     h.claimed)
+                     h.claimed, h.significant)
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
@@ -171,7 +172,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     beaten = outcompeted({d.effect: d.z for d in found if d.confident},
                          rivals({s.effect: s.competing for s in base.suggested_effects},
-                                {d.effect: d.claimed for d in found}))
+                                {d.effect: d.claimed for d in found}),
+                         {d.effect: d.z for d in found if d.significant})
     for d in found:
         if d.effect in beaten:
             d.confident, d.verdict = False, beaten[d.effect]

@@ -104,3 +104,16 @@ def test_effects_that_claim_one_line_of_a_half_compete():
     assert out["outer"] == ["inner"] and out["inner"] == ["outer"]
     assert out["shape"] == ["backlash"] and competing["outer"] == []  # not changed in place
     assert set(outcompeted({"outer": 65.8, "inner": 10.1}, out)) == {"inner"}
+
+
+def test_competing_effects_the_record_does_not_tell_apart_are_neither_confident():
+    """A confident effect whose competitor beat noise with about its z (within the test's
+    threshold) is not confident: the record does not tell them apart. A competitor far
+    below, or one claiming other lines, changes nothing."""
+    competing = {"second_tooth": ["softening"], "softening": ["second_tooth"], "runout": []}
+    significant = {"second_tooth": 37.7, "softening": 36.5, "runout": 594.0}
+    beaten = outcompeted({"second_tooth": 37.7, "runout": 594.0}, competing, significant)
+    assert set(beaten) == {"second_tooth"}
+    assert "does not tell them apart" in beaten["second_tooth"] and "36.5" in beaten["second_tooth"]
+    assert outcompeted({"second_tooth": 37.7}, competing, {**significant, "softening": 20.0}) == {}
+    assert outcompeted({"second_tooth": 37.7}, competing) == {}  # no others known
