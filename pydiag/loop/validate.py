@@ -140,8 +140,9 @@ class HeldOut:
     delta_bic: float = 0.0  # on half A, where the effect was fitted (module docstring)
     tried: bool = True  # False: none of its lines is scored, so it was not fitted (z nan)
     envelope_band_hz: tuple[float, float] | None = None  # scored on this band's envelope
-    # the non-synchronous lines of half A it claims ("acc envelope 87.50 Hz"): an effect
-    # claiming one of another's competes with it (:func:`rivals`)
+    # the non-synchronous lines of half A it claims, at the frequencies the half shows them
+    # ("acc envelope 87.50 Hz" for BPFO 89.62 Hz: ``joined_freq_hz``); an effect claiming
+    # one of another's competes with it (:func:`rivals`)
     claimed: tuple[str, ...] = ()
 
     @property
@@ -271,7 +272,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     x0 = np.array([base_fit[p.name] for p in base_problem.parameters])
     x1 = np.array([fitted[p.name] for p in effect_problem.parameters])
     with base_problem.spec.open() as plant:
-        y0 = base_problem.model_signals(plant, x0)  # channel gains fitted on half A
+        y0 = base_problem.model_signals(plant, x0)  # channel gains fitted on A (or held)
     with effect_problem.spec.open() as plant:
         y1 = effect_problem.model_signals(plant, x1)
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
