@@ -127,7 +127,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     effect per core, each fit free to use them all (module docstring). Effects whose
     parameters the base model already fits are left out. ``progress`` gets each effect's
     row as it is done. As in validation, at most one effect is confident among those that
-    claim the same lines (the largest z; :func:`pydiag.loop.validate.rivals`).
+    claim the same lines (:func:`pydiag.loop.validate.rivals`), and none that a competitor
+    comes close to in z (:func:`pydiag.loop.validate.outcompeted`).
     """
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:

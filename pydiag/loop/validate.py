@@ -321,12 +321,14 @@ def validate(problem: FitProblem, comparison: Comparison,
              bearing: Bearing | None = None, min_score: float = MIN_SCORE,
              false_alarm_rate: float = FALSE_ALARM_RATE, present: tuple[str, ...] = (),
              progress: Callable[[str], None] | None = None) -> Comparison:
-    """The comparison with every suggestion of score >= ``min_score`` tried held out.
+    """The comparison with every suggestion of score >= ``min_score`` tried held out, and
+    every effect scored on an envelope (``Effect.envelope``: its score is the spectrum's).
 
-    ``effect_fmu``: the FMU of an effect (the base FMU itself for an ``in_base`` one); it
-    raises a :class:`PydiagError` (or a build error) when there is none. At most one effect
-    is confident among those that claim the same peaks: the one with the largest held-out
-    z; the others are told which effect explains their lines better. ``present``: effect
+    ``effect_fmu``: the FMU of an effect (the base FMU itself for an ``in_base`` one),
+    called only for an effect that is fitted; it raises a :class:`PydiagError` (or a build
+    error) when there is none. At most one effect is confident among those that claim the
+    same lines, and none that a competitor comes close to (:func:`outcompeted`); the
+    others are told which effect beat them. ``present``: effect
     keys the model already has (compare of an effect's model). An FMU that is not a
     GearDiag.GearPair model gets every suggestion "not validated": the effects extend it."""
     model = read_model_description(problem.spec.fmu_path)[0]
