@@ -17,17 +17,15 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
+from truth import BASE_PARAMETERS  # noqa: E402
 from truth.gear_sim import TruthGear, line_margin_db, record, simulate  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
-from pydiag.gear.conventions import HEALTHY_TOOTH  # noqa: E402
-from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.kinematic_map import Bearing  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
-from pydiag.model.adapter import gear_default  # noqa: E402
 
 CASES = {"none": {}, "gear_eccentricity": dict(gear_runout_m=10e-6),
          "gear_tooth_fault": dict(gear_tooth_loss=0.4),
@@ -50,9 +48,6 @@ def main() -> None:
     args = ap.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]
     g = TruthGear()
-    parameters = (gear_default(["acc", "disp"]).fault_parameters + (HEALTHY_TOOTH,)
-                  + EFFECTS["mesh_stiffness_shape"].parameters
-                  + EFFECTS["pinion_tooth_softening"].parameters)
     build = Path(tempfile.mkdtemp(prefix="truth_fmus_"))
     fmu_of = lambda e: str(effect_fmu(e.key, ROOT / "modelica", build))  # noqa: E731
     clean_none = simulate(g, PERIODS * g.period_s, RATE_HZ)
@@ -69,7 +64,7 @@ def main() -> None:
             t0 = time.perf_counter()
             problem = build_problem(str(ROOT / "build/GearPair.fmu"),
                                     record(g, PERIODS, seed, RATE_HZ, clean=clean),
-                                    parameters=parameters)
+                                    parameters=BASE_PARAMETERS)
             c = validate(problem, compare(problem, FaultEstimator(**FAST), BEARING), fmu_of,
                          bearing=BEARING)
             dt = time.perf_counter() - t0

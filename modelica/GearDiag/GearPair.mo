@@ -25,12 +25,16 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   parameter Real phi2(unit="rad") = 0 "Phase of the second mesh harmonic of the stiffness";
   parameter Real k4(min=0, max=0.3) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
   parameter Real phi4(unit="rad") = 0 "Phase of the fourth mesh harmonic of the stiffness";
-  // A cracked or chipped tooth is also softer over its whole contact (single and double
-  // contact alike), which the paper's amplitude a_f cannot say: the mesh stiffness drops by
-  // d_f of K while the faulty tooth is in contact, w0 a smooth bump over eps_c mesh cycles
-  // (GearDiag.Functions.toothWindow). 0 is the paper's tooth.
-  parameter Real d_f(min=0, max=0.9) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is in contact";
-  parameter Real eps_c(min=1, max=2.5) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
+  // A cracked or chipped tooth is also softer over its whole contact, which the paper's
+  // amplitude a_f cannot say: the mesh stiffness drops by d_f of K while the faulty tooth
+  // carries the load alone, and by d_f/q_c while it shares it with a neighbour pair (q_c
+  // is 2 for two equal pairs on rigid shafts; shafts and bearings in series make it
+  // larger); w0 is that two-level loss over eps_c mesh cycles, its steps eased over r_c
+  // cycles (GearDiag.Functions.toothWindow). 0 is the paper's tooth.
+  parameter Real d_f(min=0, max=0.9) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is alone in contact";
+  parameter Real eps_c(min=1, max=2) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
+  parameter Real q_c(min=1) = 2 "Loss while the faulty tooth is alone in contact over its loss in double contact";
+  parameter Real r_c(min=0.01, max=0.5) = 0.1 "Mesh cycles over which the load passes between tooth pairs";
 
   // ---- kinematics ----
   parameter Integer Np = 14 "Number of pinion teeth";
@@ -51,7 +55,7 @@ model GearPair "Translational SDOF gear mesh: periodic stiffness, one faulty pin
   parameter Real f_mesh(unit="Hz") = Np*f_pinion "Mesh frequency";
   parameter Real f_fe(unit="Hz") = f_mesh/N_ap "Geometric TE (assembly-phase) frequency";
   parameter Real x_static(unit="m") = T/r_p/(K*(1 + a_f*GearDiag.Functions.formWave(0, f_f)
-    - d_f*GearDiag.Functions.toothWindow(0, Np, 0, eps_c)))
+    - d_f*GearDiag.Functions.toothWindow(0, Np, 0, eps_c, q_c, r_c)))
     "Static deflection at t = 0 (faulty tooth in mesh, zero TE): the start point";
 
   // ---- effect hooks (neutral here) ----
@@ -85,7 +89,7 @@ equation
   sigma = GearDiag.Functions.formWave(2*pi*f_mesh*t_angle, f_f);
   stiffness = K*(1 + a*sigma + k2*cos(4*pi*f_mesh*t_angle + phi2)
     + k4*cos(8*pi*f_mesh*t_angle + phi4)
-    - d_f*GearDiag.Functions.toothWindow(f_mesh*t_angle, Np, 0, eps_c) + k_mod);
+    - d_f*GearDiag.Functions.toothWindow(f_mesh*t_angle, Np, 0, eps_c, q_c, r_c) + k_mod);
   e_ate = f_ate*xi_max*sin(2*pi*f_pinion*t_angle);
   e_dte = f_dte*gamma_max*sin(2*pi*f_fe*t_angle);
   mesh_force = contact*stiffness*(x - e_ate - e_dte - e_extra) + c*v;

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from pydiag.core.errors import UsageError
 
 
@@ -18,6 +20,9 @@ class Parameter:
         variable: the FMU variable it sets (default: ``name``)
         scale: FMU value = ``scale`` x estimate (unit conversions such as um -> m)
         periodic: an angle, ``[low, high]`` one turn: never "at a bound"
+        step: a discrete quantity (a tooth's index, step 1): an estimate is a multiple of
+            ``step`` (:func:`snap`), and a swarm starts a particle at every multiple in
+            ``[low, high]`` (:meth:`starts`)
     """
 
     name: str
@@ -26,6 +31,7 @@ class Parameter:
     variable: str | None = None
     scale: float = 1.0
     periodic: bool = False
+    step: float | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):
@@ -34,6 +40,15 @@ class Parameter:
         if not (math.isfinite(self.scale) and self.scale != 0):
             raise UsageError(f"scale of '{self.name}' must be finite and non-zero, "
                              f"got {self.scale}")
+
+    def starts(self) -> list[float]:
+        """The multiples of :attr:`step` in ``[low, high]`` (``high`` excluded when periodic:
+        it is ``low``); empty without a step."""
+        if self.step is None:
+            return []
+        first, last = math.ceil(self.low / self.step), math.floor(self.high / self.step)
+        values = [k * self.step for k in range(first, last + 1)]
+        return [v for v in values if not (self.periodic and v >= self.high)]
 
     @property
     def fmu_variable(self) -> str:
@@ -53,3 +68,24 @@ def fmu_values(parameters: tuple[Parameter, ...] | list[Parameter],
         p = by_name.get(name)
         out[p.fmu_variable if p else name] = p.fmu_value(value) if p else float(value)
     return out
+
+
+def snap(parameters: tuple[Parameter, ...] | list[Parameter], xs: np.ndarray) -> np.ndarray:
+    """Positions (rows of estimates in ``parameters``' order) with each stepped parameter
+    moved to its nearest multiple of the step in range (a periodic one wrapped into
+    ``[low, high)``); a copy."""
+    xs = np.array(xs, dtype=float)
+    for j, p in enumerate(parameters):
+        if p.step is None:
+            continue
+        column = xs[..., j]
+        if p.periodic:
+            column = p.low + np.mod(column - p.low, p.high - p.low)
+        column = np.round(column / p.step) * p.step
+        if p.periodic:
+            column = np.where(column >= p.high, column - (p.high - p.low), column)
+        else:
+            column = np.clip(column, math.ceil(p.low / p.step) * p.step,
+                             math.floor(p.high / p.step) * p.step)
+        xs[..., j] = column
+    return xs

@@ -36,6 +36,7 @@ import numpy as np
 import scipy.optimize
 
 from pydiag.core.errors import EstimationError, TooManyFailures, UsageError
+from pydiag.core.parameters import snap
 from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.fit.pso import global_best_pso
 from pydiag.fmu.isolation import IsolatedPool
@@ -74,7 +75,8 @@ class FaultEstimator:
     stores the settings, :meth:`fit` validates and returns a plain result).
 
     Args:
-        n_particles, iterations: swarm size and iterations
+        n_particles, iterations: swarm size (more when a parameter has a step: one particle
+            for each of its multiples) and iterations
         seed: seed of the swarm; the same seed gives the same answer
         swarm_ftol, swarm_ftol_iter: stop the swarm early when its best cost moved by less
             than ``swarm_ftol x (1 + best)`` in each of its last ``swarm_ftol_iter``
@@ -144,15 +146,14 @@ class FaultEstimator:
         self._validate()
         lows, highs = problem.lows, problem.highs
         seen: dict[bytes, np.ndarray | None] = {}  # the swarm's residuals, for the polish
-        with self._evaluations(problem, self.n_particles * self.iterations
+        init = self._initial_positions(problem)
+        with self._evaluations(problem, len(init) * self.iterations
                                + self.polish_evaluations * self.polish_starts) as run:
             def costs(xs: np.ndarray) -> np.ndarray:  # the swarm's
                 out = run.residuals(xs)
                 seen.update((x.tobytes(), r) for x, r in zip(np.clip(xs, lows, highs), out))
                 return np.array([np.inf if r is None else np.linalg.norm(r) for r in out])
 
-            init = lows + np.random.default_rng(self.seed).random((self.n_particles, lows.size)) \
-                * (highs - lows)
             swarm = global_best_pso(costs, init, lows, highs, self.iterations, self.seed,
                                     ftol=self.swarm_ftol, ftol_iter=self.swarm_ftol_iter)
             starts, start_costs = self._distinct_starts(swarm.pbest_pos, swarm.pbest_cost,
@@ -166,6 +167,20 @@ class FaultEstimator:
                         if c < best_cost:
                             best_x, best_cost = x, c
         return self._result(problem, run, best_x, best_cost, swarm.best_cost_history)
+
+    def _initial_positions(self, problem: FitProblem) -> np.ndarray:
+        """The swarm's start: uniform in the box, except that a parameter with a step (a
+        tooth's index) takes its multiples in turn (:meth:`pydiag.core.parameters.Parameter.starts`), the swarm
+        as large as there are multiples if that is more than ``n_particles``: each tooth
+        is tried from the first iteration."""
+        lows, highs = problem.lows, problem.highs
+        grids = [p.starts() for p in problem.parameters]
+        n = max([self.n_particles] + [len(g) for g in grids])
+        init = lows + np.random.default_rng(self.seed).random((n, lows.size)) * (highs - lows)
+        for j, grid in enumerate(grids):
+            if grid:
+                init[:, j] = [grid[i % len(grid)] for i in range(n)]
+        return init
 
     def refine(self, problem: FitProblem, start: dict[str, float]) -> DiagnosisResult:
         """The polish alone (``polish_evaluations`` simulations), from ``start``: a value of
@@ -195,7 +210,8 @@ class FaultEstimator:
         if not mp.current_process().daemon:
             workers = self.n_workers or min(os.cpu_count() or 1, self.n_particles)
             pool = IsolatedPool(objective, workers, timeout_s, self.max_consecutive_failures)
-        run = _Run(problem.lows, problem.highs, objective, pool, total, self.progress, started)
+        run = _Run(problem.lows, problem.highs, objective, pool, total, self.progress, started,
+                   lambda xs: snap(problem.parameters, xs))
         try:
             yield run
         except TooManyFailures as err:
@@ -212,6 +228,7 @@ class FaultEstimator:
             why = f"; the first failed with: {failures.first}" if failures and failures.first else ""
             raise EstimationError(f"every simulation of the plant failed ({run.count} "
                                   f"evaluations){why}")
+        best_x = snap(problem.parameters, np.clip(best_x, problem.lows, problem.highs))
         estimate = {p.name: float(v) for p, v in zip(problem.parameters, best_x)}
         contrast = None
         if any(name in estimate for name in CLASSIFIED_PARAMETERS):
@@ -288,15 +305,16 @@ class _Run:
     """The simulations of one fit: clipped to the box, on the pool (or in-process),
     counted, progress reported."""
 
-    def __init__(self, lows, highs, objective, pool, total, progress, started: float) -> None:
-        self.lows, self.highs = lows, highs
+    def __init__(self, lows, highs, objective, pool, total, progress, started: float,
+                 snap: Callable[[np.ndarray], np.ndarray]) -> None:
+        self.lows, self.highs, self.snap = lows, highs, snap
         self.objective, self.pool = objective, pool
         self.total, self.progress = total, progress
         self.count, self.best = 0, float("inf")
         self.started = started
 
     def residuals(self, xs: np.ndarray) -> list[np.ndarray | None]:
-        xs = np.clip(np.atleast_2d(xs), self.lows, self.highs)
+        xs = self.snap(np.clip(np.atleast_2d(xs), self.lows, self.highs))
         out = (self.pool.map(xs) if self.pool
                else [self.objective.residuals_or_none(x) for x in xs])
         self.count += len(xs)

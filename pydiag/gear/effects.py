@@ -260,8 +260,11 @@ EFFECTS = {e.key: e for e in (
             Parameter("k4", 0.0, 0.1), Parameter("phi4", -math.pi, math.pi, periodic=True)),
            _stiffness_shape, in_base=True),
     Effect("pinion_tooth_softening", "GearDiag.GearPair",
-           "the faulty pinion tooth is also softer over its contact (a crack, a chip)",
-           (Parameter("d_f", 0.0, 0.6),), _second_pinion_tooth, in_base=True),
+           "the faulty pinion tooth is also softer over its contact, most while alone in it "
+           "(a crack, a chip)",
+           (Parameter("d_f", 0.0, 0.6), Parameter("eps_c", 1.1, 1.9),
+            Parameter("q_c", 1.0, 5.0), Parameter("r_c", 0.02, 0.5)),
+           _second_pinion_tooth, in_base=True),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
            (Parameter("ecc_gear", 0.0, 50e-6),), _gear_eccentricity),
     # a softer tooth over its contact; which tooth is unknown (one turn of the index, the
@@ -269,11 +272,11 @@ EFFECTS = {e.key: e for e in (
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
            (Parameter("d_g", 0.0, 0.6), Parameter("tooth_g", 0.0, 21.0, periodic=True)),
            _gear_tooth_fault, _tooth_hint("tooth_g", "n_gear")),
-    # a second tooth is not tooth 0: an index fitted next to it (at a bound) says the
-    # first tooth's form is wrong (pinion_tooth_softening), not that there is a second
+    # a second tooth is not tooth 0; its index is a whole tooth (step 1: each tooth is
+    # tried from the swarm's start; a smooth index stopped between teeth, off the right one)
     Effect("second_pinion_tooth_fault", "GearDiag.Effects.SecondPinionToothFault",
            "a second faulty pinion tooth",
-           (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5)),
+           (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5, step=1.0)),
            _second_pinion_tooth, _tooth_hint("tooth2", "n_pinion", other_than_zero=True),
            reshapes_base=True),
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",

@@ -18,10 +18,10 @@ show them.
 An effect that takes energy from the base model's own lines (``Effect.reshapes_base``: a
 speed fluctuation, a second faulty tooth) found a base fit bent to make up for it, which
 its own parameters alone cannot undo. For those, the swarm over the effect's parameters
-(base held) is followed by one least-squares polish on A with the base parameters free as
-well (:func:`pydiag.loop.compare.fit_effect`), and the base model gets the same polish on
-A (:meth:`pydiag.fit.estimator.FaultEstimator.refine`), so both models' last fit is on A
-alone (the base's start came from the whole record, as above).
+(base held, its two best positions polished) is followed by one least-squares polish on
+A with the base parameters free as well (:func:`pydiag.loop.compare.fit_effect`), and the
+base model gets the same polish on A (:meth:`pydiag.fit.estimator.FaultEstimator.refine`),
+so both models' last fit is on A alone (the base's start came from the whole record, as above).
 Measured on the independent simulator's torque ripple (bench/independent_truth.py): the
 speed fluctuation explained 29-47 % of its lines held out with the base held, 82-96 %
 freed.

@@ -9,18 +9,17 @@ import json
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli
+from truth import BASE_PARAMETERS
 from truth.gear_sim import TruthGear, envelope_margin_db, line_margin_db, record, simulate
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
-from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.discover import discover, effect_fmu
 from pydiag.loop.validate import ENVELOPE_TOP, validate
-from pydiag.model.adapter import gear_default
 
 PERIODS = 20
 RATE_HZ = 10_000.0
@@ -40,10 +39,6 @@ HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
 STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
 ENVELOPE_BAND = (1575.0, ENVELOPE_TOP * RATE_HZ)
-BASE_PARAMETERS = (gear_default(["acc", "disp"]).fault_parameters + (HEALTHY_TOOTH,)
-                   + EFFECTS["mesh_stiffness_shape"].parameters
-                   + EFFECTS["pinion_tooth_softening"].parameters)
-
 
 @pytest.fixture(scope="module")
 def truth_records():

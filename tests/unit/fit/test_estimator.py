@@ -6,8 +6,10 @@ import pytest
 from conftest import NAMES, noisy_measurement
 
 from pydiag.core.errors import UsageError
+from pydiag.core.parameters import Parameter
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import ProblemObjective, build_problem
+from pydiag.fmu.isolation import IsolatedPool
 from pydiag.gear.paper_cases import case
 
 
@@ -54,6 +56,30 @@ def test_refine_polishes_from_its_start_and_stays_in_its_basin(gear_fmu):
     assert r.evaluations <= 1 + 60 + len(NAMES) + 1  # its budget (one last Jacobian over)
     with pytest.raises(UsageError, match="start value of f_dte"):
         est.refine(problem, {k: v for k, v in off.items() if k != "f_dte"})
+
+
+def test_a_stepped_parameter_is_fitted_on_its_multiples(gear_fmu, monkeypatch):
+    """A parameter with a step (a tooth's index) is simulated only at its multiples and
+    estimated as one; the swarm grows to one particle per multiple, so each is tried from
+    the first iteration (here f_ate in steps of 0.1: 11 particles for 3 asked)."""
+    problem = build_problem(gear_fmu, noisy_measurement(gear_fmu, 8, 0, periods=2),
+                            parameters=(Parameter("f_ate", 0.0, 1.0, step=0.1),),
+                            fixed_values={"a_f": 0.3, "f_f": 0.6, "f_dte": 0.2})
+    batches = []
+    pool_map = IsolatedPool.map
+
+    def spy(self, xs):
+        batches.append(np.array(xs)[:, 0])
+        return pool_map(self, xs)
+
+    monkeypatch.setattr(IsolatedPool, "map", spy)
+    r = FaultEstimator(n_particles=3, iterations=2, polish_evaluations=20, polish_starts=1,
+                       n_workers=2).fit(problem)
+    assert sorted(batches[0]) == pytest.approx([k / 10 for k in range(11)])
+    tried = np.concatenate(batches)
+    assert np.allclose(tried * 10, np.round(tried * 10), atol=1e-9)
+    assert r.parameters["f_ate"] == pytest.approx(0.2)  # case 8's
+    assert r.evaluations == tried.size >= 11 * 2
 
 
 def test_replace_gives_a_new_estimator_with_other_settings():
