@@ -170,9 +170,10 @@ class FaultEstimator:
 
     def _initial_positions(self, problem: FitProblem) -> np.ndarray:
         """The swarm's start: uniform in the box, except that a parameter with a step (a
-        tooth's index) takes its multiples in turn (:meth:`pydiag.core.parameters.Parameter.starts`), the swarm
-        as large as there are multiples if that is more than ``n_particles``: each tooth
-        is tried from the first iteration."""
+        tooth's index) takes its multiples in turn
+        (:meth:`pydiag.core.parameters.Parameter.starts`), the swarm as large as there are
+        multiples if that is more than ``n_particles``: each tooth is tried from the first
+        iteration."""
         lows, highs = problem.lows, problem.highs
         grids = [p.starts() for p in problem.parameters]
         n = max([self.n_particles] + [len(g) for g in grids])
@@ -210,8 +211,7 @@ class FaultEstimator:
         if not mp.current_process().daemon:
             workers = self.n_workers or min(os.cpu_count() or 1, self.n_particles)
             pool = IsolatedPool(objective, workers, timeout_s, self.max_consecutive_failures)
-        run = _Run(problem.lows, problem.highs, objective, pool, total, self.progress, started,
-                   lambda xs: snap(problem.parameters, xs))
+        run = _Run(problem, objective, pool, total, self.progress, started)
         try:
             yield run
         except TooManyFailures as err:
@@ -228,7 +228,7 @@ class FaultEstimator:
             why = f"; the first failed with: {failures.first}" if failures and failures.first else ""
             raise EstimationError(f"every simulation of the plant failed ({run.count} "
                                   f"evaluations){why}")
-        best_x = snap(problem.parameters, np.clip(best_x, problem.lows, problem.highs))
+        best_x = in_box(problem, best_x)
         estimate = {p.name: float(v) for p, v in zip(problem.parameters, best_x)}
         contrast = None
         if any(name in estimate for name in CLASSIFIED_PARAMETERS):
@@ -301,20 +301,26 @@ class FaultEstimator:
         return x0, cost0
 
 
-class _Run:
-    """The simulations of one fit: clipped to the box, on the pool (or in-process),
-    counted, progress reported."""
+def in_box(problem: FitProblem, xs: np.ndarray) -> np.ndarray:
+    """Positions clipped to ``problem``'s box, each stepped parameter on a multiple of its
+    step (:func:`pydiag.core.parameters.snap`): what is simulated and what is estimated."""
+    return snap(problem.parameters, np.clip(xs, problem.lows, problem.highs))
 
-    def __init__(self, lows, highs, objective, pool, total, progress, started: float,
-                 snap: Callable[[np.ndarray], np.ndarray]) -> None:
-        self.lows, self.highs, self.snap = lows, highs, snap
+
+class _Run:
+    """The simulations of one fit: put in the box (:func:`in_box`), on the pool (or
+    in-process), counted, progress reported."""
+
+    def __init__(self, problem: FitProblem, objective, pool, total, progress,
+                 started: float) -> None:
+        self.problem = problem
         self.objective, self.pool = objective, pool
         self.total, self.progress = total, progress
         self.count, self.best = 0, float("inf")
         self.started = started
 
     def residuals(self, xs: np.ndarray) -> list[np.ndarray | None]:
-        xs = self.snap(np.clip(np.atleast_2d(xs), self.lows, self.highs))
+        xs = in_box(self.problem, np.atleast_2d(xs))
         out = (self.pool.map(xs) if self.pool
                else [self.objective.residuals_or_none(x) for x in xs])
         self.count += len(xs)
