@@ -121,9 +121,6 @@ def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_pat
     assert np.isfinite(found[0].delta_bic) and found[0].delta_bic < 0
 
 
-@pytest.mark.xfail(strict=True, reason="regression of 3d11de9: with the base's tooth form "
-                   "fitted (13 parameters) one free polish of 60 simulations leaves the ripple "
-                   "record at 0.435 (was 0.078); open in issue 12")
 def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth_records,
                                                                  effect_fmu_of):
     """The base fit of the ripple's record, without the effect, is bent (the faulty
