@@ -1,12 +1,16 @@
 """The held-out test's statistic: its false-alarm rate under noise alone, its power when
 the effect is real; the half featurizer's two halves."""
 
+import math
+
 import numpy as np
+import pytest
 from scipy.stats import norm
 
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.validate import FALSE_ALARM_RATE, held_out_statistic, outcompeted, rivals
+from pydiag.loop.validate import (FALSE_ALARM_RATE, HeldOut, held_out_statistic, outcompeted,
+                                  rivals)
 
 
 def rician(amplitude, noise_power, rng, size):
@@ -117,3 +121,22 @@ def test_competing_effects_the_record_does_not_tell_apart_are_neither_confident(
     assert "does not tell them apart" in beaten["second_tooth"] and "36.5" in beaten["second_tooth"]
     assert outcompeted({"second_tooth": 37.7}, competing, {**significant, "softening": 20.0}) == {}
     assert outcompeted({"second_tooth": 37.7}, competing) == {}  # no others known
+
+
+def test_competitors_are_set_side_by_side_on_the_lines_both_claim():
+    """The sentence of an effect the record does not tell apart from a competitor gives
+    what each removes of the residual on the lines both claim, from their terms there."""
+    def fit(key, z, terms):
+        return HeldOut(key, z, 2.3, 0.6, 1.0, 0.5, {}, line_terms=terms)
+    housing = fit("housing", 208.9, {"acc 1266.67 Hz": (6.0, 10.0), "acc 1300.00 Hz": (1.0, 0.0)})
+    tooth = fit("tooth", 221.5, {"acc 1266.67 Hz": (3.0, 10.0), "acc 100.00 Hz": (9.0, 9.0)})
+    assert tooth.explained_on(["acc 1266.67 Hz", "acc 1300.00 Hz"]) == pytest.approx(0.3)
+    assert math.isnan(tooth.explained_on(["acc 5.00 Hz"]))
+    assert "line_terms" not in housing.to_dict()
+    competing = {"housing": ["tooth"], "tooth": ["housing"]}
+    beaten = outcompeted({"housing": 208.9}, competing, {"housing": 208.9, "tooth": 221.5},
+                         fits={"housing": housing, "tooth": tooth})
+    assert "on the one line both claim it removes 60 % of the residual, tooth 30 %" in \
+        beaten["housing"], beaten
+    assert "both claim" not in outcompeted({"housing": 208.9}, competing,
+                                           {"housing": 208.9, "tooth": 221.5})["housing"]
