@@ -285,8 +285,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
              for ch, p, line, f, m, s in candidates]
     suggestions, claims = [], {}
     for effect in EFFECTS.values():
-        weight = effect.signature(effect_peaks(problem, effect, peaks), bin_hz, kin)
-        changed = changed_channels(problem, effect)
+        weight = effect.weight
+        changed = evidence_channels(problem, effect)
         support = [(weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
                    for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))
                    if pk.channel in changed]
@@ -318,6 +318,14 @@ def changed_channels(problem: FitProblem, effect: Effect) -> set[str]:
             if effect.changes(output)}
 
 
+def evidence_channels(problem: FitProblem, effect: Effect) -> set[str]:
+    """The channels whose residual is evidence for ``effect``: those it changes, or every
+    channel for an effect that reshapes the base (``Effect.reshapes_base``), whose absence
+    bent the base parameters every channel shares (a housing mode on acc: the base fit
+    made acc's lines right and the displacement's wrong)."""
+    return set(problem.channels) if effect.reshapes_base else changed_channels(problem, effect)
+
+
 def effect_peaks(problem: FitProblem, effect: Effect, peaks: list[Peak]) -> list[Peak]:
     """The ``peaks`` on channels whose model output ``effect`` changes (the others are no
     evidence for it, nor a place to look for its parameters)."""
@@ -347,7 +355,9 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     basin of a ripple's frequency on one record of the independent simulator: 7.68 Hz for
     7.3), and the best is polished once more, with the base parameters free as well
     (the budget of one start's, or more to give it ``free_polish_iterations`` least-squares
-    iterations). Its problem then fits both, and the parameters returned are both."""
+    iterations), and, for an effect with a ``free_start``, once more from there (at least
+    :data:`FREE_POLISH_ITERATIONS` iterations), the better kept. Its problem then fits
+    both, and the parameters returned are both."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     own = effect_parameters(problem, base, effect)
     held = problem.derive(fmu_path=effect_fmu, parameters=own,
@@ -363,7 +373,13 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     if free_polish_iterations * (n_free + 1) > estimator.polish_evaluations:
         estimator = estimator.replace(
             polish_evaluations=free_polish_iterations * (n_free + 1))
-    return free, estimator.refine(free, {**base.parameters, **fitted}).parameters
+    best = estimator.refine(free, {**base.parameters, **fitted})
+    if effect.free_start is not None:  # a start its held fit cannot find (Effect.free_start)
+        far = estimator.replace(polish_evaluations=max(
+            estimator.polish_evaluations, FREE_POLISH_ITERATIONS * (n_free + 1))).refine(
+            free, {**base.parameters, **fitted, **effect.free_start(featurizer.max_freq_hz)})
+        best = far if far.error < best.error else best
+    return free, best.parameters
 
 
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,

@@ -106,8 +106,8 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
-from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, changed_channels,
-                                 effect_peaks, fit_effect, measured_spectra)
+from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, evidence_channels,
+                                 fit_effect, measured_spectra)
 from pydiag.signal.spectra import local_maxima
 
 #: Chance that an effect which only fits noise passes the held-out test.
@@ -258,8 +258,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     lines = [dataclasses.replace(line, freq_hz=fit_half.joined_freq_hz(line.freq_hz))
              for line in kinematic_map(kin, fit_half.max_freq_hz, bearing)]
     bin_hz = 1.0 / (n_half * kin.period_s)
-    weight = effect.signature(effect_peaks(problem, effect, base.peaks), base.bin_hz, kin)
-    changed = changed_channels(problem, effect)  # on the others, none of its lines
+    weight = effect.weight
+    changed = evidence_channels(problem, effect)  # on the others, none of its evidence
     all_freqs = next(iter(measured_a.spectra.values()))[0]
     def claim(mask: np.ndarray) -> np.ndarray:  # whether its signature claims each bin
         return np.array([weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0

@@ -1,4 +1,5 @@
-"""The housing mode's signature: the band where the gear pair's unexplained lines bunch."""
+"""The housing mode's signature (every line of the gear pair) and its frequency's bounds (the
+band where the gear pair's unexplained lines bunch)."""
 
 import dataclasses
 
@@ -39,23 +40,33 @@ def test_the_band_is_where_the_gear_pairs_lines_bunch_not_the_strongest_line():
     assert (f_housing.low, f_housing.high) == (low, high)
 
 
-def test_the_housing_claims_only_the_gear_pairs_lines_inside_its_band():
-    peaks = comb(1300.0, 9, 0.6) + [Peak(2000.0, "gear", 0.4)]
-    weight = EFFECTS["housing_sensor"].signature(peaks, 0.1, KIN)
+def test_the_housing_claims_every_line_the_gear_pair_makes():
+    """A housing mode reweights every line on its way to the sensor: its signature is all
+    of the gear pair's lines, wherever the residual bunches; the band only bounds its
+    frequency."""
+    weight = EFFECTS["housing_sensor"].weight
     inside = KinematicLine(1290.0, "pinion", 43, "43x pinion")
     assert weight(inside, inside.freq_hz, KIN.f_mesh_hz) == 1.0
-    assert weight(KinematicLine(800.0, "pinion", 27, ""), 800.0, KIN.f_mesh_hz) == 0.0
-    # a gear order in the band: the base gear pair does not make it, no mode reshapes it
+    assert weight(KinematicLine(800.0, "pinion", 27, ""), 800.0, KIN.f_mesh_hz) == 1.0
+    assert weight(KinematicLine(KIN.f_mesh_hz, "mesh", 1, ""), KIN.f_mesh_hz,
+                  KIN.f_mesh_hz) == 1.0
+    # a gear order: the base gear pair does not make it, no mode reshapes it into being
     assert weight(KinematicLine(1300.0, "gear", 109, ""), 1300.0, KIN.f_mesh_hz) == 0.0
     assert weight(None, 1300.0, KIN.f_mesh_hz) == 0.0
 
 
-def test_no_peaks_of_the_gear_pair_no_band_no_claim():
+def test_no_peaks_of_the_gear_pair_no_band_no_bounds():
     peaks = [Peak(2000.0, "gear", 1.0), Peak(123.4, "unexplained", 0.5)]
     assert resonance_band(peaks) is None
-    weight = EFFECTS["housing_sensor"].signature(peaks, 0.1, KIN)
-    assert weight(KinematicLine(1000.0, "mesh", 1, ""), 1000.0, KIN.f_mesh_hz) == 0.0
     assert EFFECTS["housing_sensor"].bounds(peaks, 0.1, KIN) == EFFECTS["housing_sensor"].parameters
+
+
+def test_the_housing_is_polished_from_above_the_band_too():
+    start = EFFECTS["housing_sensor"].free_start(max_band_freq_hz(KIN))
+    assert start["f_housing"] > max_band_freq_hz(KIN)
+    f_housing, zeta = EFFECTS["housing_sensor"].parameters
+    assert f_housing.low < start["f_housing"] < f_housing.high
+    assert zeta.low < start["zeta_housing"] < zeta.high
 
 
 def test_a_bunch_at_the_top_of_the_analysed_range_leaves_the_mode_free_above_it():
@@ -69,11 +80,12 @@ def test_a_bunch_at_the_top_of_the_analysed_range_leaves_the_mode_free_above_it(
 
 def test_the_housing_looks_for_its_band_on_the_channels_it_changes_only():
     """A housing mode rings the acceleration, not the mesh's displacement: a bunch of disp
-    lines is no band of it, and those peaks are none of its evidence."""
+    lines is no band of it. Yet they are its evidence: its absence bent the base parameters
+    both channels share (compare.evidence_channels)."""
     from types import SimpleNamespace
 
     from pydiag.loop.compare import Peak as ComparePeak
-    from pydiag.loop.compare import effect_peaks
+    from pydiag.loop.compare import effect_peaks, evidence_channels
 
     def on(channel, peaks):
         return [ComparePeak(channel, p.freq_hz, 0.0, 0.0, 0.0, p.family, 1, "", p.energy_fraction)
@@ -89,3 +101,5 @@ def test_the_housing_looks_for_its_band_on_the_channels_it_changes_only():
     assert effect_peaks(problem, EFFECTS["gear_eccentricity"], peaks) == peaks
     assert not housing.changes("disp") and housing.changes("acc")
     assert EFFECTS["gear_tooth_fault"].changes("disp")
+    assert evidence_channels(problem, housing) == {"acc", "disp"}
+    assert evidence_channels(problem, EFFECTS["bearing_outer_race"]) == {"acc"}
