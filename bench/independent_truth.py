@@ -52,7 +52,8 @@ def main() -> None:
     fmu_of = lambda e: str(effect_fmu(e.key, ROOT / "modelica", build))  # noqa: E731
     clean_none = simulate(g, PERIODS * g.period_s, RATE_HZ)
     print(f"independent simulator, {PERIODS} periods ({PERIODS * g.period_s:.2f} s) at "
-          f"{RATE_HZ:g} Hz, SNR 10, acc + disp; base: GearPair with a0, the stiffness shape and d_f")
+          f"{RATE_HZ:g} Hz, SNR 10, acc + disp; base: GearPair with a0, the stiffness shape, "
+          "the faulty tooth's softening and form")
     print(f"{'hidden':<26} {'seed':>4} {'margin':>7} {'error':>6} {'s':>5}  confident  | "
           "the others tried held out")
     for case in args.effects.split(","):

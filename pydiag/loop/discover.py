@@ -22,10 +22,11 @@ one simulation at a time), so running them one after another with all cores each
 about a fifth of the machine idle (bench/discover_speed.py, RESULTS section 11). Each
 effect's fit may use every core (its swarm's particles, its polish's Jacobian columns):
 when the others are done, the last one's polish runs on all of them. The effects that
-are not synchronous with the shafts (``Effect.synchronous``) start first, those that
-also refit the base parameters (``Effect.reshapes_base``) before them: their records are
-simulated whole, the others' over one period. The ranking does not depend on how many
-run at once, nor on the order.
+are not synchronous with the shafts (``Effect.synchronous``: their records are simulated
+whole, the others' over one period) start first, those that also refit the base
+parameters (``Effect.reshapes_base``) before them, and a synchronous one that refits the
+base from two starts (``Effect.free_start``) among them. The ranking does not depend on
+how many run at once, nor on the order.
 """
 
 from __future__ import annotations
@@ -136,9 +137,11 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     base = compare(problem, estimator, bearing)
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
     # the longest first, so the short ones fill the cores at the end: an effect that is not
-    # synchronous is simulated over the whole record, the others over one period, and one
-    # that reshapes the base is polished with the base parameters free as well
-    keys.sort(key=lambda key: (EFFECTS[key].synchronous, not EFFECTS[key].reshapes_base))
+    # synchronous is simulated over the whole record, the others over one period (twice
+    # the weight), one that reshapes the base is polished with the base parameters free
+    # as well, and one with a free start polished so twice
+    keys.sort(key=lambda key: -(2 * (not EFFECTS[key].synchronous) + EFFECTS[key].reshapes_base
+                                + (EFFECTS[key].free_start is not None)))
     fmus: dict[str, str] = {}
     found: list[Discovery] = []
     for key in keys:  # built in this process: two workers must not build one FMU at once
