@@ -107,7 +107,7 @@ from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
 from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, evidence_channels,
-                                 fit_effect, measured_spectra)
+                                 fit_effect, free_polish, measured_spectra)
 from pydiag.signal.spectra import local_maxima
 
 #: Chance that an effect which only fits noise passes the held-out test.
@@ -282,7 +282,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
         effect_fmu = effect_fmu()
     effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half, estimator)
     if effect.reshapes_base:  # its fit freed the base: the base model gets the same polish
-        base_fit = estimator.refine(base_problem, base_fit).parameters
+        base_fit = free_polish(estimator, len(base_problem.parameters)).refine(
+            base_problem, base_fit).parameters
     x0 = np.array([base_fit[p.name] for p in base_problem.parameters])
     x1 = np.array([fitted[p.name] for p in effect_problem.parameters])
     with base_problem.spec.open() as plant:
