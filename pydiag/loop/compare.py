@@ -340,8 +340,8 @@ def evidence_channels(problem: FitProblem, effect: Effect) -> set[str]:
 
 
 def effect_peaks(problem: FitProblem, effect: Effect, peaks: list[Peak]) -> list[Peak]:
-    """The ``peaks`` on channels whose model output ``effect`` changes (the others are no
-    evidence for it, nor a place to look for its parameters)."""
+    """The ``peaks`` on channels whose model output ``effect`` changes: where to look for
+    its parameters (whose residual is evidence for it: :func:`evidence_channels`)."""
     changed = changed_channels(problem, effect)
     return [pk for pk in peaks if pk.channel in changed]
 

@@ -147,8 +147,8 @@ class HeldOut:
     # ("acc envelope 87.50 Hz" for BPFO 89.62 Hz: ``joined_freq_hz``); an effect claiming
     # one of another's competes with it (:func:`rivals`)
     claimed: tuple[str, ...] = ()
-    # on B, each bin of its lines, named as ``claimed`` names them: (its term of D, the base's excess
-    # there), so competitors can be set side by side on the lines both claim
+    # on B, each bin of its lines, named as ``claimed`` names them: (its term of D, the
+    # base's excess there), so competitors can be set side by side on the lines both claim
     line_terms: dict[str, tuple[float, float]] = field(default_factory=dict, repr=False)
 
     @property
