@@ -191,7 +191,15 @@ class FitProblem:
 
     def residuals(self, plant: FmuPlant, x: np.ndarray) -> np.ndarray:
         """Eq. (12) residuals of every channel at ``x``, concatenated; PlantError on failure."""
-        y = self._simulate(plant, x, self.featurizer.duration_s)
+        return self.residuals_of(self.simulate(plant, x))
+
+    def simulate(self, plant: FmuPlant, x: np.ndarray) -> np.ndarray:
+        """Channel signals of the model at ``x`` over the featurizer's duration (channel
+        units, before the gains :meth:`residuals_of` fits); PlantError on failure."""
+        return self._simulate(plant, x, self.featurizer.duration_s)
+
+    def residuals_of(self, y: np.ndarray) -> np.ndarray:
+        """Eq. (12) residuals of every channel of the signals ``y`` (:meth:`simulate`'s)."""
         out = []
         for i, c in enumerate(self.channels):
             model = self.featurizer(y[i], self.spec.sample_rate_hz).amplitude

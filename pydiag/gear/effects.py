@@ -60,6 +60,9 @@ class Effect:
     # tilt of the lines, which the base held makes up for, so its fit with the base held
     # lands anywhere; the better of the two polishes is kept (pydiag.loop.compare.fit_effect)
     free_start: Callable[[float], dict[str, float]] | None = None
+    # the model's outputs are affine in its one parameter (a strike amplitude added to
+    # what the sensor sees of the mesh): fitted from two simulations (pydiag.fit.affine)
+    affine: bool = False
     # its lines show in the envelope of the acceleration above the gear's analysed bands,
     # not in its spectrum: a bearing's strikes ring a structural mode kHz above the gear's
     # lines, and the rolling elements' slip smears their harmonics there into a hump. Held-
@@ -276,7 +279,7 @@ EFFECTS = {e.key: e for e in (
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), _family(("bpfo",)), synchronous=False,
-           outputs=("acc",), envelope=True),
+           outputs=("acc",), envelope=True, affine=True),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),

@@ -44,6 +44,7 @@ import numpy as np
 
 from pydiag.core.errors import EstimationError
 from pydiag.core.parameters import Parameter
+from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
@@ -359,7 +360,8 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
                ) -> tuple[FitProblem, dict[str, float]]:
     """(the effect's problem, its fitted parameters): the effect's parameters, bounds
     narrowed by ``base``'s peaks, fitted on ``featurizer``'s bins with the base parameters
-    held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``.
+    held at ``base``'s values; ``estimator`` defaults to ``FaultEstimator(**EFFECT_REFIT)``
+    (an ``Effect.affine`` one needs none: :func:`pydiag.fit.affine.fit_affine`).
 
     An effect that takes energy from the base model's own lines (``Effect.reshapes_base``)
     found a base fit bent to make up for it, which its own parameters alone cannot undo:
@@ -373,6 +375,8 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     own = effect_parameters(problem, base, effect)
     held = problem.derive(fmu_path=effect_fmu, parameters=own,
                           fixed_values=problem.fmu_values(base.parameters), featurizer=featurizer)
+    if effect.affine and not effect.reshapes_base:
+        return held, fit_affine(held)[0]
     if not effect.reshapes_base:
         return held, estimator.fit(held).parameters
     fitted = estimator.replace(polish_starts=RESHAPE_STARTS, polish_evaluations=max(

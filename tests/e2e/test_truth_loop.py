@@ -12,12 +12,14 @@ from conftest import ROOT, run_cli
 from truth import BASE_PARAMETERS
 from truth.gear_sim import TruthGear, envelope_margin_db, line_margin_db, record, simulate
 
+from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.gear.effects import EFFECTS
+from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing
 from pydiag.io.measurements import write_measurement
-from pydiag.loop.compare import compare, refit_with_effect
+from pydiag.loop.compare import EFFECT_REFIT, compare, measured_spectra, refit_with_effect
 from pydiag.loop.discover import discover, effect_fmu
 from pydiag.loop.validate import ENVELOPE_TOP, validate
 
@@ -140,6 +142,29 @@ def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth
     assert c.error < 0.2 * base.error, (base.error, c.error)
     assert not [p for p in c.peaks if p.family == "unexplained"], c.peaks
     assert c.parameters["d_f"] > base.parameters["d_f"] + 0.05, (base.parameters, c.parameters)
+
+
+def test_an_affine_strike_amplitude_is_fitted_from_two_simulations(gear_fmu, truth_records,
+                                                                   effect_fmu_of):
+    """The outer race's strike amplitude enters acc linearly: its fit from two simulations
+    (fit_affine) finds what the swarm and polish find, at an error no larger."""
+    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["bearing_outer_race"])
+    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS)
+    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    effect = EFFECTS["bearing_outer_race"]
+    assert effect.affine
+    envelope = FullSpectrumFeaturizer(problem.kinematics, base.n_periods,
+                                      problem.featurizer.max_freq_hz,
+                                      envelope_band_hz=ENVELOPE_BAND)  # as held out scores it
+    held = problem.derive(fmu_path=effect_fmu_of(effect), parameters=effect.parameters,
+                          fixed_values=problem.fmu_values(base.parameters),
+                          featurizer=measured_spectra(problem, 0.01, featurizer=envelope).featurizer,
+                          fixed_gains=base.gains)
+    fitted, error = fit_affine(held)
+    swarm = FaultEstimator(**EFFECT_REFIT).fit(held)
+    assert fitted["A_b"] == pytest.approx(swarm.parameters["A_b"], rel=0.01), (fitted, swarm)
+    assert error <= swarm.error * (1 + 1e-6)
+    assert effect.parameters[0].low < fitted["A_b"] < effect.parameters[0].high
 
 
 def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_records,
