@@ -375,10 +375,8 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     own = effect_parameters(problem, base, effect)
     held = problem.derive(fmu_path=effect_fmu, parameters=own,
                           fixed_values=problem.fmu_values(base.parameters), featurizer=featurizer)
-    if effect.affine and not effect.reshapes_base:
-        return held, fit_affine(held)[0]
     if not effect.reshapes_base:
-        return held, estimator.fit(held).parameters
+        return held, (fit_affine(held)[0] if effect.affine else estimator.fit(held).parameters)
     fitted = estimator.replace(polish_starts=RESHAPE_STARTS, polish_evaluations=max(
         1, estimator.polish_evaluations // (2 * RESHAPE_STARTS))).fit(held).parameters
     names = {p.name for p in own}

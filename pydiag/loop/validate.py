@@ -269,8 +269,9 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     # the non-synchronous bins it claims: where effects that compare could not name from
     # the whole record's peaks (a half's own, an envelope's) compete for the same lines
     between = (np.flatnonzero(bins) + 1) % n_half != 0
-    claimed = tuple(f"{c}{' envelope' if band else ''} {fk:.2f} Hz" for c in sorted(changed)
-                    for fk in freqs[claims & between])
+    def line_name(channel: str, freq_hz: float) -> str:  # "acc envelope 87.50 Hz"
+        return f"{channel}{' envelope' if band else ''} {freq_hz:.2f} Hz"
+    claimed = tuple(line_name(c, fk) for c in sorted(changed) for fk in freqs[claims & between])
     if not (changed and claims.any()):  # nothing to explain (module docstring)
         return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
                        math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
@@ -314,8 +315,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
         if channel in changed:
             signature_d += float(np.sum(terms[mine[scored]]))
             signature_excess += float(np.sum(excess[mine[scored]]))
-            where = f"{channel}{' envelope' if band else ''}"
-            line_terms.update({f"{where} {fk:.2f} Hz": (float(d), float(x)) for fk, d, x in
+            line_terms.update({line_name(channel, fk): (float(d), float(x)) for fk, d, x in
                                zip(all_freqs[scored][mine[scored]], terms[mine[scored]],
                                    excess[mine[scored]])})
         err0.append(noise_corrected_error(s0[bins], meas[bins], noise))
