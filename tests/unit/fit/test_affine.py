@@ -1,4 +1,5 @@
-"""fit_affine: one parameter the outputs are affine in, fitted from two simulations."""
+"""fit_affine: parameters the outputs are affine in, fitted from one simulation more than
+there are of them."""
 
 import contextlib
 from types import SimpleNamespace
@@ -6,7 +7,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pydiag.core.errors import UsageError
 from pydiag.core.parameters import Parameter
 from pydiag.fit.affine import fit_affine
 
@@ -42,8 +42,37 @@ def test_a_value_beyond_the_range_stops_at_its_end():
     assert fitted["a"] == 10.0
 
 
-def test_one_parameter_only():
-    p, _ = problem(1.0)
-    p.parameters = p.parameters * 2
-    with pytest.raises(UsageError, match="one parameter"):
-        fit_affine(p)
+def lines(truth: list[float], high: float = 10.0):
+    """y(a) = base + sum_j a_j * shape_j (lines at 5, 9 and 13 cycles), measured at
+    ``truth``; counts its simulations."""
+    t = np.linspace(0.0, 1.0, 400, endpoint=False)
+    base = np.sin(2 * np.pi * 3 * t)
+    shapes = np.array([np.cos(2 * np.pi * k * t) for k in (5, 9, 13)])
+    calls = []
+
+    def simulate(plant, x):
+        calls.append(tuple(float(v) for v in x))
+        return (base + x @ shapes)[None, :]
+
+    def residuals_of(y):
+        return np.abs(np.fft.rfft(y[0])) - np.abs(np.fft.rfft(base + np.array(truth) @ shapes))
+
+    spec = SimpleNamespace(open=lambda: contextlib.nullcontext(None))
+    params = tuple(Parameter(f"a{j}", 0.0, high) for j in range(3))
+    return SimpleNamespace(parameters=params, spec=spec, simulate=simulate,
+                           residuals_of=residuals_of), calls
+
+
+def test_several_values_are_found_from_one_simulation_more_than_parameters():
+    p, calls = lines([2.5, 0.0, 7.25])
+    fitted, error = fit_affine(p)
+    assert [fitted[f"a{j}"] for j in range(3)] == pytest.approx([2.5, 0.0, 7.25], abs=1e-2)
+    assert error < 1e-2
+    assert sorted(calls) == [(0.0, 0.0, 0.0), (0.0, 0.0, 10.0), (0.0, 10.0, 0.0),
+                             (10.0, 0.0, 0.0)]
+
+
+def test_several_values_beyond_the_range_stop_at_its_end():
+    p, _ = lines([12.0, 3.0, 0.5])
+    fitted, _ = fit_affine(p)
+    assert [fitted[f"a{j}"] for j in range(3)] == pytest.approx([10.0, 3.0, 0.5], abs=1e-2)
