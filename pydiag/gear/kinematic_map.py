@@ -12,13 +12,14 @@ Families (each line carries its family and order):
 
 A frequency is matched to the nearest line within ``tolerance_hz``; families earlier in
 ``PRIORITY`` win ties: a mesh harmonic is also a pinion harmonic and is named ``mesh``; a
-line within ``n_sidebands`` shaft orders of a mesh harmonic is named as its sideband.
+line within ``n_sidebands`` shaft orders of a mesh harmonic is named as its sideband. Each
+line lists the other families with a line at the very same frequency (``also``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from pydiag.gear.kinematics import GearKinematics
 
@@ -51,6 +52,9 @@ class KinematicLine:
     family: str
     order: int
     label: str
+    # the other families with a line at this very frequency (a pinion order that is also a
+    # gear order: 2x pinion is 3x gear on 14/21 teeth), which this line's family outranks
+    also: tuple[str, ...] = ()
 
 
 def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | None = None,
@@ -91,7 +95,18 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | No
                         add(k * f + sign * f_shaft, "bpfi_sb", sign * k,
                             f"{k}x BPFI {'+' if sign > 0 else '-'} shaft")
     rank = {f: i for i, f in enumerate(PRIORITY)}
-    return sorted(lines, key=lambda l: (l.freq_hz, rank[l.family]))
+    lines.sort(key=lambda l: (l.freq_hz, rank[l.family]))
+    out, i = [], 0
+    while i < len(lines):  # lines at one frequency: each told of the others' families
+        j = i + 1
+        while j < len(lines) and lines[j].freq_hz - lines[i].freq_hz <= 1e-9 * lines[i].freq_hz:
+            j += 1
+        same = lines[i:j]
+        out += [replace(l, also=tuple(dict.fromkeys(o.family for o in same
+                                                      if o.family != l.family)))
+                for l in same]
+        i = j
+    return out
 
 
 def match(freq_hz: float, lines: list[KinematicLine], tolerance_hz: float) -> KinematicLine | None:

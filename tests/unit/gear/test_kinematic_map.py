@@ -23,5 +23,9 @@ def test_kinematic_map_names_the_lines():
     assert bpfo == pytest.approx(4.5 * 25 * (1 - 7.94 / 39.04))
     assert match(bpfo, lines, 0.5).family == "bpfo"
     assert match(7.3, lines, 0.5) is None
+    # 2x pinion is 3x gear (50 Hz): named for the pinion, the gear's line told it is there
+    assert match(50.0, lines, 0.5).label == "2x pinion" and "gear" in match(50.0, lines, 0.5).also
+    assert "gear" not in match(75.0, lines, 0.5).also  # 3x pinion is 4.5x gear: no gear line
+    assert "pinion" in match(350.0, lines, 0.5).also  # the mesh is a pinion and a gear order
     freqs = BEARING.frequencies(25.0)
     assert freqs["ftf"] < 25 < freqs["bpfo"] < freqs["bpfi"]
