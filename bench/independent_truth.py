@@ -35,7 +35,10 @@ CASES = {"none": {}, "gear_eccentricity": dict(gear_runout_m=10e-6),
          # a torque ripple on the input shaft: through the shafts' inertia and the
          # dynamometer it reaches the mesh mostly as a fluctuation of the speed
          "speed_fluctuation": dict(torque_ripple=0.005),
-         "housing_sensor": dict(housing_hz=2500.0)}
+         "housing_sensor": dict(housing_hz=2500.0),
+         # a misaligned coupling: 1x-3x of the pinion angle at the sensor (GearDiag: ten
+         # orders of time, no phases)
+         "pinion_shaft_orders": dict(coupling_acc=3.0)}
 PERIODS, RATE_HZ = 20, 10_000.0
 BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)

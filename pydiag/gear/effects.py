@@ -21,7 +21,7 @@ from typing import Callable
 
 from pydiag.core.parameters import Parameter
 from pydiag.gear.features import max_band_freq_hz
-from pydiag.gear.kinematic_map import KinematicLine
+from pydiag.gear.kinematic_map import KinematicLine, kinematic_map, match
 
 
 @dataclass(frozen=True)
@@ -31,7 +31,7 @@ class Effect:
     description: str
     parameters: tuple[Parameter, ...]  # what the effect adds, named as its FMU variables
     weight: Callable[[KinematicLine | None, float, float], float]  # (line, freq, f_mesh) -> 0..1
-    # (peaks, bin_hz, kinematics) -> {name: (low, high)}
+    # (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted on this pair}
     hint: Callable[[list, float, object], dict] | None = None
     # the parameters are the base model's own (GearDiag.GearPair), neutral by default: the
     # effect frees them in the base FMU instead of building a model of its own
@@ -60,8 +60,9 @@ class Effect:
     # tilt of the lines, which the base held makes up for, so its fit with the base held
     # lands anywhere; the better of the two polishes is kept (pydiag.loop.compare.fit_effect)
     free_start: Callable[[float], dict[str, float]] | None = None
-    # the model's outputs are affine in its one parameter (a strike amplitude added to
-    # what the sensor sees of the mesh): fitted from two simulations (pydiag.fit.affine)
+    # the model's outputs are affine in its parameters (a strike amplitude, a shaft's
+    # orders, added to what the sensor sees of the mesh): fitted from one simulation more
+    # than it has parameters (pydiag.fit.affine)
     affine: bool = False
     # its lines show in the envelope of the acceleration above the gear's analysed bands,
     # not in its spectrum: a bearing's strikes ring a structural mode kHz above the gear's
@@ -75,10 +76,12 @@ class Effect:
 
     def bounds(self, peaks: list, bin_hz: float, kinematics=None) -> tuple[Parameter, ...]:
         """The effect's parameters, bounds narrowed by what the residual peaks (and the gear
-        pair's ``kinematics``: :class:`pydiag.gear.kinematics.Kinematics`) say, if it can."""
+        pair's ``kinematics``: :class:`pydiag.gear.kinematics.Kinematics`) say, if it can;
+        those its hint leaves out (None) are not fitted: they keep the FMU's neutral value."""
         narrowed = self.hint(peaks, bin_hz, kinematics) if self.hint else {}
         return tuple(dataclasses.replace(p, low=narrowed[p.name][0], high=narrowed[p.name][1])
-                     if p.name in narrowed else p for p in self.parameters)
+                     if p.name in narrowed else p for p in self.parameters
+                     if p.name not in narrowed or narrowed[p.name] is not None)
 
     def neutral_values(self) -> dict[str, float]:
         """FMU values that switch the effect off (its lower bounds)."""
@@ -117,6 +120,34 @@ def _backlash(line, freq, f_mesh):
     if line.family == "mesh":
         return 1.0 if line.order >= 2 else 0.5
     return 0.0
+
+
+#: The shaft orders a shaft's own vibration is modelled at (GearDiag.Components.ShaftOrders):
+#: an unbalance at 1x, a misalignment at 1x-2x, a coupling or a looseness up to about 10x.
+SHAFT_ORDERS = 10
+#: The largest line of a shaft order the shaft effects fit, m/s2 at the model's sensor, like
+#: a bearing strike (MAX_STRIKE_M_S2): a fitted gain of 0.0145 makes it 7 g.
+MAX_SHAFT_ORDER_M_S2 = 5000.0
+
+
+def _pinion_shaft(line, freq, f_mesh):
+    # the pinion shaft's own lines: its first orders, far below the mesh's sidebands, but
+    # for those the gear's shaft turns at too (2x pinion is 3x gear on 14/21 teeth): a gear
+    # fault's lines there are no evidence for the pinion's shaft
+    ok = (line is not None and line.family == "pinion" and line.order <= SHAFT_ORDERS
+          and "gear" not in line.also)
+    return 1.0 if ok else 0.0
+
+
+def _pinion_shaft_hint(peaks, bin_hz, kin):
+    """The orders whose line it does not claim (:func:`_pinion_shaft`: one the gear's shaft
+    has a line at too, or a mesh sideband on a pinion of few teeth) are not fitted."""
+    if kin is None:
+        return {}
+    fp = kin.f_pinion_hz
+    lines = kinematic_map(kin, (SHAFT_ORDERS + 0.5) * fp)
+    return {f"A_s{k}": None for k in range(1, SHAFT_ORDERS + 1)
+            if _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin.f_mesh_hz) == 0}
 
 
 def _family(name):
@@ -300,6 +331,14 @@ EFFECTS = {e.key: e for e in (
     # (the free start); damping from a sharp structural mode to a heavily damped one.
     # Lower bounds: a mode below every line passes the force as a mass (accelerance 1/m),
     # the channel gain takes the rest
+    # a shaft's unbalance, misalignment or looseness, seen at the sensor through its
+    # bearings: one amplitude an order (the outputs are affine in all of them)
+    Effect("pinion_shaft_orders", "GearDiag.Effects.PinionShaftOrders",
+           "the pinion shaft's own vibration at its first orders (unbalance, misalignment, "
+           "looseness)",
+           tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
+                 for k in range(1, SHAFT_ORDERS + 1)),
+           _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True),
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
            "accelerometer on the housing, behind one housing mode",
            (Parameter("f_housing", 20.0, MAX_HOUSING_HZ), Parameter("zeta_housing", 0.005, 0.5)),

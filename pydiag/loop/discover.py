@@ -101,7 +101,7 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
     Takes the effect's key, not the effect: it runs in a worker process."""
     started = time.perf_counter()
     effect = EFFECTS[key]
-    k = len(effect.parameters)
+    k = len(effect.parameters)  # at most: its hint may leave some out
     try:
         h = held_out(problem, base, effect, fmu, estimator, bearing)
     except PydiagError as err:
@@ -111,7 +111,7 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
                          verdict=h.verdict, elapsed_s=time.perf_counter() - started)
     return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
                      1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
-                     k, h.parameters, h.confident, h.verdict, time.perf_counter() - started,
+                     len(h.parameters), h.parameters, h.confident, h.verdict, time.perf_counter() - started,
                      h.claimed, h.significant)
 
 

@@ -40,7 +40,10 @@ HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           "bearing_outer_race": dict(outer_race_acc=60.0),
           "bearing_inner_race": dict(inner_race_acc=60.0),
           # the accelerometer sees the mesh force through a 2.5 kHz mode, above the band
-          "housing_sensor": dict(housing_hz=2500.0)}
+          "housing_sensor": dict(housing_hz=2500.0),
+          # a misaligned coupling: 1x-3x of the pinion angle at the sensor (GearDiag: ten
+          # orders of time, no phases)
+          "pinion_shaft_orders": dict(coupling_acc=3.0)}
 #: The strike frequency of each bearing effect on the simulator, Hz.
 STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
@@ -120,7 +123,7 @@ def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_pat
                                     "second_pinion_tooth_fault", "load_fluctuation",
                                     "speed_fluctuation", "mesh_stiffness_shape",
                                     "bearing_outer_race", "bearing_inner_race",
-                                    "housing_sensor"],
+                                    "housing_sensor", "pinion_shaft_orders"],
                            modelica_root=ROOT / "modelica", build_dir=tmp_path)
     assert "mesh_stiffness_shape" not in [d.effect for d in found]  # already in the model
     assert found[0].effect == effect and found[0].confident, found

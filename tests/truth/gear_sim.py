@@ -15,7 +15,8 @@ Where it differs from GearDiag.GearPair (same kinematics and physical defaults):
 - each effect of the catalogue is made its own way (see :class:`Effects`): bearing defects
   are pulse trains with random slip through a structural resonance into the accelerometer
   (not a force on the mesh), a torque ripple drives the shafts (and so the speed), the
-  housing is a resonance filtered onto the mesh force, backlash is a hard contact loss.
+  housing is a resonance filtered onto the mesh force, backlash is a hard contact loss, a
+  misaligned coupling adds the pinion angle's first three orders at the sensor.
 
 Integrated with SciPy's LSODA (``odeint``); outputs ``acc`` (the acceleration of the mesh
 deflection, plus what the effects add at the sensor) and ``disp`` (the mesh deflection),
@@ -50,6 +51,9 @@ class Effects:
     ripple_hz: float = 7.3
     housing_hz: float = 0.0  # > 0: the accelerometer sits on a housing mode at this frequency
     housing_zeta: float = 0.05
+    # a misaligned coupling on the pinion shaft: its 1x, 2x and 3x (as 1 : 0.6 : 0.35, in
+    # the pinion's own angle, phases of their own) at the sensor, beside the mesh, m/s2
+    coupling_acc: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -225,6 +229,10 @@ def simulate(g: TruthGear, duration_s: float, sample_rate_hz: float,
     if e.housing_hz > 0:  # the sensor sees the housing's response to the mesh force
         force = np.array([f for _, f in out])
         acc = _resonance(force / g.mass_kg, sample_rate_hz, e.housing_hz, e.housing_zeta, True)
+    if e.coupling_acc > 0:
+        theta = y[:, 0]
+        acc = acc + e.coupling_acc * (np.cos(theta + 0.3) + 0.6 * np.cos(2 * theta + 1.9)
+                                      + 0.35 * np.cos(3 * theta - 0.8))
     rng = np.random.default_rng(effect_seed)
     if e.outer_race_acc > 0:
         pulses, _ = _pulse_train(g.bpfo_hz, t, g.slip, rng, 0.1e-3)
