@@ -129,14 +129,38 @@ def test_competitors_are_set_side_by_side_on_the_lines_both_claim():
     def fit(key, z, terms):
         return HeldOut(key, z, 2.3, 0.6, 1.0, 0.5, {}, line_terms=terms)
     housing = fit("housing", 208.9, {"acc 1266.67 Hz": (6.0, 10.0), "acc 1300.00 Hz": (1.0, 0.0)})
-    tooth = fit("tooth", 221.5, {"acc 1266.67 Hz": (3.0, 10.0), "acc 100.00 Hz": (9.0, 9.0)})
-    assert tooth.explained_on(["acc 1266.67 Hz", "acc 1300.00 Hz"]) == pytest.approx(0.3)
+    tooth = fit("tooth", 221.5, {"acc 1266.67 Hz": (4.0, 10.0), "acc 100.00 Hz": (9.0, 9.0)})
+    assert tooth.explained_on(["acc 1266.67 Hz", "acc 1300.00 Hz"]) == pytest.approx(0.4)
     assert math.isnan(tooth.explained_on(["acc 5.00 Hz"]))
     assert "line_terms" not in housing.to_dict()
     competing = {"housing": ["tooth"], "tooth": ["housing"]}
     beaten = outcompeted({"housing": 208.9}, competing, {"housing": 208.9, "tooth": 221.5},
                          fits={"housing": housing, "tooth": tooth})
-    assert "on the one line both claim it removes 60 % of the residual, tooth 30 %" in \
+    assert "on the one line both claim it removes 60 % of the residual, tooth 40 %" in \
         beaten["housing"], beaten
     assert "both claim" not in outcompeted({"housing": 208.9}, competing,
                                            {"housing": 208.9, "tooth": 221.5})["housing"]
+
+
+def test_a_competitor_the_shared_lines_tell_apart_does_not_beat_an_effect():
+    """An effect that removes most of the residual on the lines it shares with a competitor
+    which removes next to nothing there is told apart from it, whatever that competitor's
+    z (earned on its other lines); one that removes half as much or more is not, and one
+    that is confident with a larger z still wins."""
+    def fit(key, z, terms):
+        return HeldOut(key, z, 2.3, 0.6, 1.0, 0.5, {}, line_terms=terms)
+    low = {"acc 89.53 Hz": 10.0, "acc 179.05 Hz": 5.0}
+    shaft = fit("shaft", 176.1, {k: (0.97 * x, x) for k, x in low.items()})
+    tooth = fit("tooth", 221.5, {**{k: (0.0, x) for k, x in low.items()},
+                                 "acc 925.11 Hz": (40.0, 50.0)})
+    competing = {"shaft": ["tooth"], "tooth": ["shaft"]}
+    significant = {"shaft": 176.1, "tooth": 221.5}
+    assert outcompeted({"shaft": 176.1}, competing, significant,
+                       fits={"shaft": shaft, "tooth": tooth}) == {}
+    assert set(outcompeted({"shaft": 176.1}, competing, significant)) == {"shaft"}  # unknown
+    half = fit("tooth", 221.5, {k: (0.5 * x, x) for k, x in low.items()})
+    assert set(outcompeted({"shaft": 176.1}, competing, significant,
+                           fits={"shaft": shaft, "tooth": half})) == {"shaft"}
+    # confident and ahead by z, a competitor wins all the same: one confident effect
+    assert set(outcompeted({"shaft": 176.1, "tooth": 221.5}, competing,
+                           fits={"shaft": shaft, "tooth": tooth})) == {"shaft"}
