@@ -7,7 +7,9 @@ it), the speed found and the record order-tracked; compare (every line of the wh
 record), then every suggestion tried held out (:func:`pydiag.loop.validate.validate`).
 The confident one with the largest held-out z is accepted: its parameters join the base
 model's (bounds as the residual narrowed them), its FMU becomes the base model's (an
-``in_base`` effect keeps the FMU), and the loop compares again. It stops when nothing is
+``in_base`` effect keeps the FMU), they are fitted on the whole record from the fit
+before (``refit_with_effect``, as ``pydiag compare --effect`` does), and the loop
+validates that comparison's suggestions. It stops when nothing is
 confident, or when a second effect would need an FMU of its own on top of the first (a
 combined Modelica model, which this script does not write).
 
@@ -37,7 +39,8 @@ from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.compare import RESIDUAL_GROUPS, compare, effect_parameters  # noqa: E402
+from pydiag.loop.compare import (RESIDUAL_GROUPS, compare, effect_parameters,  # noqa: E402
+                                 refit_with_effect)
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
 
@@ -50,14 +53,14 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
     """The markdown rows of one record's sequence; prints as it goes."""
     m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
     name = path.name.split(".")[0]
-    common = dict(operating_point=OPERATING_POINT, speed=SpeedSettings("auto"), fit_gain=True)
-    fmu, parameters, accepted, rows = BASE_FMU, None, [], []
+    accepted, rows = [], []
     fmu_of = lambda e: str(effect_fmu(e.key, ROOT / "modelica", build))  # noqa: E731
+    problem = build_problem(BASE_FMU, m, operating_point=OPERATING_POINT,
+                            speed=SpeedSettings("auto"), fit_gain=True)
+    fitted = None  # step 0: the base fit; then the accepted effect's model, refitted
     for step in range(steps):
         t0 = time.perf_counter()
-        problem = build_problem(fmu, m, parameters=parameters, **common)
-        parameters = problem.parameters
-        c = validate(problem, compare(problem, FaultEstimator(seed=0)), fmu_of,
+        c = validate(problem, fitted or compare(problem, FaultEstimator(seed=0)), fmu_of,
                      present=tuple(accepted))
         wall = time.perf_counter() - t0
         model = "GearPair" + "".join(f" + {a}" for a in accepted)
@@ -68,8 +71,7 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
             f"{g} {100 * shares[g]['measured']:.0f}/{100 * shares[g]['residual']:.0f} %"
             for g in RESIDUAL_GROUPS), flush=True)
         for s in c.suggested_effects:
-            if s.held_out or s.confident:
-                print(f"  {s.effect}: {s.status}", flush=True)
+            print(f"  {s.effect}: {s.status}", flush=True)
         tried = [s for s in c.suggested_effects if s.held_out]
         confident = sorted((s for s in c.suggested_effects if s.confident),
                            key=lambda s: -s.held_out["z"])
@@ -82,17 +84,23 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
             break
         s = confident[0]
         effect = EFFECTS[s.effect]
-        fitted = ", ".join(f"{k} {v:.4g}" for k, v in s.held_out["parameters"].items())
+        values = ", ".join(f"{k} {v:.3g}" for k, v in s.held_out["parameters"].items())
         rows.append(f"| {name} | {step} | {model} | {c.error:.3f} | {base_held} | "
-                    f"**{s.effect}** ({fitted}, z {s.held_out['z']:.0f}) | "
+                    f"**{s.effect}** ({values}, z {s.held_out['z']:.0f}) | "
                     f"{s.held_out['error_effect']:.3f} | {verdicts} | {wall:.0f} |")
-        if not effect.in_base and fmu != BASE_FMU:
+        if not effect.in_base and str(problem.spec.fmu_path) != BASE_FMU:
             print(f"  {s.effect} needs a model combined with {accepted[-1]}: stop", flush=True)
             break
         accepted.append(s.effect)
-        parameters = parameters + effect_parameters(problem, c, effect)
-        if not effect.in_base:
-            fmu = fmu_of(effect)
+        # the model with the effect, as `pydiag compare --effect` makes it: the effect's
+        # parameters fitted on the whole record from the base fit, then compared
+        t0 = time.perf_counter()
+        fmu = problem.spec.fmu_path if effect.in_base else fmu_of(effect)
+        fitted = refit_with_effect(problem, c, effect, fmu)
+        problem = problem.derive(fmu_path=fmu, parameters=problem.parameters
+                                 + effect_parameters(problem, c, effect))
+        print(f"  refitted with {s.effect}: error {fitted.error:.3f}, "
+              f"{time.perf_counter() - t0:.0f} s", flush=True)
     return rows
 
 
