@@ -325,12 +325,6 @@ EFFECTS = {e.key: e for e in (
            "the shafts' speed fluctuates (phase modulation of every line)",
            (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
            _load_fluctuation, _ripple_hint("f_speed"), synchronous=False, reshapes_base=True),
-    # the mode reweights every line the gear pair makes on its way to the sensor (its
-    # signature: all of them); its frequency is fitted in the band where the residual of
-    # those lines bunches (the hint), or above the band, where it shows only as a tilt
-    # (the free start); damping from a sharp structural mode to a heavily damped one.
-    # Lower bounds: a mode below every line passes the force as a mass (accelerance 1/m),
-    # the channel gain takes the rest
     # a shaft's unbalance, misalignment or looseness, seen at the sensor through its
     # bearings: one amplitude an order (the outputs are affine in all of them)
     Effect("pinion_shaft_orders", "GearDiag.Effects.PinionShaftOrders",
@@ -339,6 +333,12 @@ EFFECTS = {e.key: e for e in (
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
            _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True),
+    # the mode reweights every line the gear pair makes on its way to the sensor (its
+    # signature: all of them); its frequency is fitted in the band where the residual of
+    # those lines bunches (the hint), or above the band, where it shows only as a tilt
+    # (the free start); damping from a sharp structural mode to a heavily damped one.
+    # Lower bounds: a mode below every line passes the force as a mass (accelerance 1/m),
+    # the channel gain takes the rest
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
            "accelerometer on the housing, behind one housing mode",
            (Parameter("f_housing", 20.0, MAX_HOUSING_HZ), Parameter("zeta_housing", 0.005, 0.5)),

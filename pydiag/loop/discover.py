@@ -111,8 +111,8 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
                          verdict=h.verdict, elapsed_s=time.perf_counter() - started)
     return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
                      1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
-                     len(h.parameters), h.parameters, h.confident, h.verdict, time.perf_counter() - started,
-                     h.claimed, h.significant)
+                     len(h.parameters), h.parameters, h.confident, h.verdict,
+                     time.perf_counter() - started, h.claimed, h.significant)
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,

@@ -469,29 +469,35 @@ def outcompeted(confident_z: dict[str, float], competing: dict[str, list[str]],
     return beaten
 
 
+def _shared_lines(key: str, other: str, fits: dict[str, HeldOut] | None
+                  ) -> tuple[int, float, float] | None:
+    """(how many lines ``key`` and ``other`` both claim, the share of the residual there
+    each removes), or None when not known or neither has residual there."""
+    if not fits or key not in fits or other not in fits:
+        return None
+    shared = set(fits[key].line_terms) & set(fits[other].line_terms)
+    mine, theirs = fits[key].explained_on(shared), fits[other].explained_on(shared)
+    if not shared or math.isnan(mine) or math.isnan(theirs):
+        return None
+    return len(shared), mine, theirs
+
+
 def _told_apart(key: str, other: str, fits: dict[str, HeldOut] | None) -> bool:
     """Whether the lines ``key`` and ``other`` both claim tell them apart: ``key`` removes
     at least MIN_EXPLAINED of the residual there (what a confident effect removes of its
     own lines) and ``other`` less than :data:`TOLD_APART` of what ``key`` removes (a shaft's
     own lines, which a faulty tooth's fit leaves as they were). False when not known."""
-    if not fits or key not in fits or other not in fits:
-        return False
-    shared = set(fits[key].line_terms) & set(fits[other].line_terms)
-    mine, theirs = fits[key].explained_on(shared), fits[other].explained_on(shared)
-    if not shared or math.isnan(mine) or math.isnan(theirs):
-        return False
-    return mine >= MIN_EXPLAINED and theirs < TOLD_APART * mine
+    both = _shared_lines(key, other, fits)
+    return both is not None and both[1] >= MIN_EXPLAINED and both[2] < TOLD_APART * both[1]
 
 
 def _on_shared_lines(key: str, other: str, fits: dict[str, HeldOut] | None) -> str:
     """"; on the 9 lines both claim it removes 69 % of the residual, housing 55 %", or ""."""
-    if not fits or key not in fits or other not in fits:
+    both = _shared_lines(key, other, fits)
+    if both is None:
         return ""
-    shared = set(fits[key].line_terms) & set(fits[other].line_terms)
-    mine, theirs = fits[key].explained_on(shared), fits[other].explained_on(shared)
-    if not shared or math.isnan(mine) or math.isnan(theirs):
-        return ""
-    lines = f"the {len(shared)} lines" if len(shared) > 1 else "the one line"
+    n, mine, theirs = both
+    lines = f"the {n} lines" if n > 1 else "the one line"
     return (f"; on {lines} both claim it removes {100 * max(mine, 0):.0f} % "
             f"of the residual, {other} {100 * max(theirs, 0):.0f} %")
 
