@@ -14,10 +14,11 @@ BUILT_FMU = ROOT / "build" / "GearPair.fmu"
 
 @pytest.fixture(scope="session", autouse=True)
 def _private_data_home(tmp_path_factory):
-    """The per-user data folder (compare's default history) is a scratch one in tests,
-    for this process and every CLI it starts."""
+    """The per-user data and cache folders (compare's default history, the effect FMUs
+    it builds) are scratch ones in tests, for this process and every CLI it starts."""
     import os
     os.environ["XDG_DATA_HOME"] = str(tmp_path_factory.mktemp("data_home"))
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache_home"))
 
 
 @pytest.fixture(scope="session")

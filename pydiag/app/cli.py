@@ -255,7 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-validate", action="store_true", help="do not try the suggested "
                    "effects held out (then none is confident)")
     p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
-    p.add_argument("--build-dir", default="build/effects", help="where effect FMUs are built")
+    p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
+                   "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_compare)
@@ -267,7 +268,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--effects", type=effect_list, help="comma-separated effect keys (default: "
                    "the whole catalogue)")
     p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
-    p.add_argument("--build-dir", default="build/effects", help="where effect FMUs are built")
+    p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
+                   "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")
     p.add_argument("--json", help="write the ranking as JSON here")
     _force(p)
     _optimiser_args(p)

@@ -46,7 +46,8 @@ def cmd_compare(args) -> int:
         close()
     if not args.no_validate:
         root = Path(args.modelica) if args.modelica else MODELICA_ROOT
-        c = validate(problem, c, lambda e: str(effect_fmu(e.key, root, Path(args.build_dir))),
+        build = Path(args.build_dir) if args.build_dir else None
+        c = validate(problem, c, lambda e: str(effect_fmu(e.key, root, build)),
                      _effect_estimator(args), args.bearing,
                      present=(args.effect,) if args.effect else (),
                      progress=None if args.quiet else
@@ -77,7 +78,8 @@ def cmd_discover(args) -> int:
     base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
                            args.bearing, args.effects,
                            Path(args.modelica) if args.modelica else MODELICA_ROOT,
-                           Path(args.build_dir), progress, _effect_estimator(args))
+                           Path(args.build_dir) if args.build_dir else None, progress,
+                           _effect_estimator(args))
     print(format_discovery(base, found))
     if args.json:
         write_text(args.json, json.dumps(as_dict(base, found), indent=2) + "\n", args.force)

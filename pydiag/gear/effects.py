@@ -21,7 +21,7 @@ from typing import Callable
 
 from pydiag.core.parameters import Parameter
 from pydiag.gear.features import max_band_freq_hz
-from pydiag.gear.kinematic_map import KinematicLine, kinematic_map, match
+from pydiag.gear.kinematic_map import BEARING_FAMILIES, KinematicLine, kinematic_map, match
 
 
 @dataclass(frozen=True)
@@ -132,10 +132,11 @@ MAX_SHAFT_ORDER_M_S2 = 5000.0
 
 def _pinion_shaft(line, freq, f_mesh):
     # the pinion shaft's own lines: its first orders, far below the mesh's sidebands, but
-    # for those the gear's shaft turns at too (2x pinion is 3x gear on 14/21 teeth): a gear
-    # fault's lines there are no evidence for the pinion's shaft
+    # for those the gear's shaft turns at too (2x pinion is 3x gear on 14/21 teeth) or a
+    # bearing's line falls on (in a spectrum of joined halves, within half a bin: 2x BPFO
+    # on 7x pinion on the catalogue's 6205): their lines there are no evidence for it
     ok = (line is not None and line.family == "pinion" and line.order <= SHAFT_ORDERS
-          and "gear" not in line.also)
+          and not set(line.also) & {"gear", *BEARING_FAMILIES})
     return 1.0 if ok else 0.0
 
 

@@ -94,18 +94,31 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | No
                     for sign in (-1, 1):
                         add(k * f + sign * f_shaft, "bpfi_sb", sign * k,
                             f"{k}x BPFI {'+' if sign > 0 else '-'} shaft")
+    return coinciding(lines)
+
+
+#: The families of a rolling bearing's lines.
+BEARING_FAMILIES = ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf")
+
+
+def coinciding(lines: list[KinematicLine], tolerance_hz: float = 0.0) -> list[KinematicLine]:
+    """``lines`` sorted by frequency (and priority), each told the other families with a
+    line within ``tolerance_hz`` of it (``also``; 0: at the very same frequency, to
+    rounding). A spectrum of joined halves moves a line that is not synchronous
+    (``FullSpectrumFeaturizer.joined_freq_hz``): within half a bin of a shaft order it
+    is on that order's bin."""
     rank = {f: i for i, f in enumerate(PRIORITY)}
-    lines.sort(key=lambda l: (l.freq_hz, rank[l.family]))
-    out, i = [], 0
-    while i < len(lines):  # lines at one frequency: each told of the others' families
-        j = i + 1
-        while j < len(lines) and lines[j].freq_hz - lines[i].freq_hz <= 1e-9 * lines[i].freq_hz:
-            j += 1
-        same = lines[i:j]
-        out += [replace(l, also=tuple(dict.fromkeys(o.family for o in same
-                                                      if o.family != l.family)))
-                for l in same]
-        i = j
+    lines = sorted(lines, key=lambda l: (l.freq_hz, rank[l.family]))
+    out, low = [], 0
+    for i, line in enumerate(lines):
+        tol = max(tolerance_hz, 1e-9 * line.freq_hz)
+        while lines[low].freq_hz < line.freq_hz - tol:
+            low += 1
+        high = i
+        while high + 1 < len(lines) and lines[high + 1].freq_hz <= line.freq_hz + tol:
+            high += 1
+        out.append(replace(line, also=tuple(dict.fromkeys(
+            o.family for o in lines[low:high + 1] if o.family != line.family))))
     return out
 
 

@@ -31,6 +31,7 @@ how many run at once, nor on the order.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import multiprocessing as mp
 import os
@@ -72,13 +73,24 @@ class Discovery:
     significant: bool = False  # held out, it lowers the error by more than noise would
 
 
-def effect_fmu(key: str, modelica_root: Path, build_dir: Path) -> Path:
-    """The effect's FMU, built unless an up-to-date one exists. An ``in_base`` effect has
-    none: its FMU is the base model's."""
+def default_build_dir(modelica_root: Path) -> Path:
+    """Where effect FMUs are built unless told: a per-user cache,
+    ``$XDG_CACHE_HOME/pydiag/effects/<library>`` (by default under ``~/.cache``), one
+    folder for each Modelica library (a hash of its path); never the current folder."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    library = hashlib.sha256(str(Path(modelica_root).resolve()).encode()).hexdigest()[:12]
+    return Path(base) / "pydiag" / "effects" / library
+
+
+def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> Path:
+    """The effect's FMU, built unless an up-to-date one exists (in ``build_dir``, default
+    :func:`default_build_dir`). An ``in_base`` effect has none: its FMU is the base
+    model's."""
     effect = EFFECTS[key]
     if effect.in_base:
         raise ValueError(f"{key} frees parameters of the base model: it has no FMU of its own")
-    out = Path(build_dir) / f"{effect.model.rsplit('.', 1)[1]}.fmu"
+    out = Path(build_dir or default_build_dir(modelica_root)) / \
+        f"{effect.model.rsplit('.', 1)[1]}.fmu"
     sources = list(Path(modelica_root).rglob("*.mo"))
     if not sources:
         raise UsageError(f"no Modelica library at {modelica_root}; give --modelica")
@@ -117,7 +129,7 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
              bearing: Bearing | None = None, effects: list[str] | None = None,
-             modelica_root: Path = MODELICA_ROOT, build_dir: Path = Path("build/effects"),
+             modelica_root: Path = MODELICA_ROOT, build_dir: Path | None = None,
              progress: Callable[[Discovery], None] | None = None,
              effect_estimator: FaultEstimator | None = None) -> tuple[Comparison, list[Discovery]]:
     """Compare the base model (``problem``), then try every effect held out and rank them.

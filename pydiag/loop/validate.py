@@ -112,7 +112,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
+from pydiag.gear.kinematic_map import Bearing, coinciding, kinematic_map, match
 from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, evidence_channels,
                                  fit_effect, free_polish, measured_spectra)
 from pydiag.signal.spectra import local_maxima
@@ -265,9 +265,10 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     bins = fit_half.bins
     test_half = fit_half.other_half()
     # the lines where the halves' spectra show them (a non-synchronous one moves)
-    lines = [dataclasses.replace(line, freq_hz=fit_half.joined_freq_hz(line.freq_hz))
-             for line in kinematic_map(kin, fit_half.max_freq_hz, bearing)]
     bin_hz = 1.0 / (n_half * kin.period_s)
+    lines = coinciding([dataclasses.replace(line, freq_hz=fit_half.joined_freq_hz(line.freq_hz))
+                        for line in kinematic_map(kin, fit_half.max_freq_hz, bearing)],
+                       0.5 * bin_hz)
     weight = effect.weight
     changed = evidence_channels(problem, effect)  # on the others, none of its evidence
     all_freqs = next(iter(measured_a.spectra.values()))[0]

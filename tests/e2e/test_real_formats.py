@@ -87,3 +87,5 @@ def test_compare_history_defaults_to_the_user_data_folder_not_the_current_one(ge
     _diagnose(gear_fmu, path, [], tmp_path, "compare")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["compare.json", "rig.mat"]
     assert (Path(os.environ["XDG_DATA_HOME"]) / "pydiag" / "history.sqlite").is_file()
+    # the effect FMUs its validation built are in the per-user cache
+    assert list((Path(os.environ["XDG_CACHE_HOME"]) / "pydiag" / "effects").glob("*/*.fmu"))

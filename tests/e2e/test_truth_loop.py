@@ -114,9 +114,13 @@ def test_hidden_effect_is_the_one_confident_suggestion(gear_fmu, truth_records, 
         assert confident[0].held_out["error_effect"] < confident[0].held_out["error_base"]
 
 
+@pytest.mark.parametrize("seed", [5, pytest.param(6, marks=pytest.mark.slow),
+                                  pytest.param(7, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
-def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_path, effect):
-    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records[effect])
+def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_path, effect,
+                                                seed):
+    """Seed 5 in `make test`; seeds 6 and 7 in `make test-slow` (8 x 2 discovers)."""
+    m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=truth_records[effect])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS)
     base, found = discover(problem, FaultEstimator(**FAST), BEARING,
                            effects=["gear_eccentricity", "gear_tooth_fault",

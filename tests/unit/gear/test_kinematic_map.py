@@ -2,7 +2,7 @@
 
 import pytest
 
-from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
+from pydiag.gear.kinematic_map import Bearing, KinematicLine, coinciding, kinematic_map, match
 from pydiag.gear.kinematics import GearKinematics
 
 BASE = dict(a_f=0.3, f_f=0.6, f_ate=0.1, f_dte=0.1)
@@ -29,3 +29,15 @@ def test_kinematic_map_names_the_lines():
     assert "pinion" in match(350.0, lines, 0.5).also  # the mesh is a pinion and a gear order
     freqs = BEARING.frequencies(25.0)
     assert freqs["ftf"] < 25 < freqs["bpfo"] < freqs["bpfi"]
+
+
+def test_lines_within_the_tolerance_are_told_of_each_other():
+    """In a spectrum of joined halves (10 periods of 0.12 s: 0.83 Hz bins) 2x BPFO of a
+    6205 on a 25 Hz shaft shows at 175.15 Hz: on the bin of 7x pinion."""
+    pinion, bpfo = KinematicLine(175.0, "pinion", 7, "7x pinion"), \
+        KinematicLine(175.15, "bpfo", 2, "2x BPFO")
+    far = KinematicLine(176.0, "gear", 10, "10x gear")
+    told = coinciding([far, bpfo, pinion], 0.5 / 1.2)
+    assert [l.label for l in told] == ["7x pinion", "2x BPFO", "10x gear"]  # sorted
+    assert told[0].also == ("bpfo",) and told[1].also == ("pinion",) and told[2].also == ()
+    assert coinciding([pinion, bpfo])[0].also == ()  # exactly the same frequency only
