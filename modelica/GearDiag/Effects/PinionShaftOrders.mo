@@ -16,5 +16,6 @@ model PinionShaftOrders "The pinion shaft's own vibration at its first ten order
   parameter Real A_s10(unit="m/s2", min=0) = 0 "Pinion shaft order 10 at the sensor";
   GearDiag.Components.ShaftOrders shaft(f_shaft = f_pinion, t_angle = t_angle,
     A_1 = A_s1, A_2 = A_s2, A_3 = A_s3, A_4 = A_s4, A_5 = A_s5,
-    A_6 = A_s6, A_7 = A_s7, A_8 = A_s8, A_9 = A_s9, A_10 = A_s10) "The pinion shaft, seen at the sensor";
+    A_6 = A_s6, A_7 = A_s7, A_8 = A_s8, A_9 = A_s9, A_10 = A_s10)
+    "The pinion shaft, seen at the sensor";
 end PinionShaftOrders;
