@@ -218,9 +218,12 @@ def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarra
 
 
 def in_model(problem: FitProblem, effect: Effect) -> bool:
-    """The base problem already fits every parameter of ``effect``."""
+    """The base problem already fits every parameter of ``effect`` that the effect fits on
+    this gear pair (its hint leaves out some: the pinion shaft's orders a gear line falls
+    on are never fitted, so a model that has the shaft's lines lacks them)."""
     fitted = {p.fmu_variable for p in problem.parameters}
-    return all(p.fmu_variable in fitted for p in effect.parameters)
+    own = effect.bounds([], 0.0, problem.kinematics)  # no peaks: only what the pair says
+    return all(p.fmu_variable in fitted for p in own)
 
 
 def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:

@@ -9,8 +9,8 @@ from scipy.stats import norm
 
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.validate import (FALSE_ALARM_RATE, HeldOut, held_out_statistic, outcompeted,
-                                  rivals)
+from pydiag.loop.validate import (FALSE_ALARM_RATE, HeldOut, held_out_statistic, in_model,
+                                  outcompeted, rivals)
 
 
 def rician(amplitude, noise_power, rng, size):
@@ -164,3 +164,20 @@ def test_a_competitor_the_shared_lines_tell_apart_does_not_beat_an_effect():
     # confident and ahead by z, a competitor wins all the same: one confident effect
     assert set(outcompeted({"shaft": 176.1, "tooth": 221.5}, competing,
                            fits={"shaft": shaft, "tooth": tooth})) == {"shaft"}
+
+
+def test_an_effect_is_in_the_model_when_every_parameter_it_fits_on_this_pair_is():
+    """The pinion shaft's even orders are gear orders on 14/21 teeth and never fitted: a
+    model fitting its odd ones has it; one fitting some of them does not."""
+    from types import SimpleNamespace
+
+    from pydiag.core.parameters import Parameter
+    from pydiag.gear.effects import EFFECTS
+    shaft = EFFECTS["pinion_shaft_orders"]
+    def problem(names):
+        return SimpleNamespace(parameters=tuple(Parameter(n, 0.0, 1.0) for n in names),
+                               kinematics=GearKinematics(14, 21, 25.0))
+    assert in_model(problem(["a0", "A_s1", "A_s3", "A_s5", "A_s7"]), shaft)
+    assert not in_model(problem(["a0", "A_s1", "A_s3"]), shaft)
+    assert not in_model(problem(["a0"]), EFFECTS["housing_sensor"])
+    assert in_model(problem(["a0", "f_housing", "zeta_housing"]), EFFECTS["housing_sensor"])
