@@ -6,7 +6,8 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 EFFECTS := GearEccentricity GearToothFault SecondPinionToothFault Backlash BearingOuterRace \
-           BearingInnerRace LoadFluctuation HousingSensor SpeedFluctuation PinionShaftOrders
+           BearingInnerRace LoadFluctuation HousingSensor SpeedFluctuation PinionShaftOrders \
+           OtherShaftOrders
 FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)

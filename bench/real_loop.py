@@ -39,8 +39,8 @@ from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.compare import (RESIDUAL_GROUPS, compare, effect_parameters,  # noqa: E402
-                                 refit_with_effect)
+from pydiag.loop.compare import (RESIDUAL_GROUPS, compare, refit_with_effect,  # noqa: E402
+                                 with_effect)
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
 
@@ -97,8 +97,7 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
         t0 = time.perf_counter()
         fmu = problem.spec.fmu_path if effect.in_base else fmu_of(effect)
         fitted = refit_with_effect(problem, c, effect, fmu)
-        problem = problem.derive(fmu_path=fmu, parameters=problem.parameters
-                                 + effect_parameters(problem, c, effect))
+        problem = with_effect(problem, c, effect, fmu)
         print(f"  refitted with {s.effect}: error {fitted.error:.3f}, "
               f"{time.perf_counter() - t0:.0f} s", flush=True)
     return rows

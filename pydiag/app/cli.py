@@ -78,6 +78,21 @@ def bearing(text: str) -> Bearing:
     return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, math.radians(angle))
 
 
+def speed_ratio(text: str) -> float:
+    """A speed ratio: a number, a fraction, or a product of them (``14/21*19/47``)."""
+    try:
+        value = 1.0
+        for factor in text.split("*"):
+            num, sep, den = factor.partition("/")
+            value *= float(num) / float(den) if sep else float(num)
+    except (ValueError, ZeroDivisionError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"takes a positive speed ratio (e.g. 1.706, 29/17 or "
+                                         f"14/21*19/47), got '{text}'")
+    return value
+
+
 def teeth(text: str) -> tuple[int, int]:
     parts = text.split(",")
     try:
@@ -149,6 +164,13 @@ def _operating_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tacho", metavar="NAME", help="tacho channel (pulses), not a sensor")
     p.add_argument("--pulses-per-rev", type=_number(int, 1), default=1,
                    help="tacho pulses per pinion revolution (default 1)")
+
+
+def _other_shaft_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--other-shaft", type=speed_ratio, metavar="RATIO",
+                   help="speed of another shaft over the pinion's (a motor shaft whose Z1 "
+                   "teeth drive Z2 on the pinion's: Z2/Z1; a second stage on the gear's "
+                   "shaft, Z3 driving Z4: NP/NG*Z3/Z4): its orders are kinematic lines")
 
 
 def _record_args(p: argparse.ArgumentParser) -> None:
@@ -243,6 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
     _measurement_args(p)
     p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM"
                    "[,ANGLE_DEG] for BPFO/BPFI/BSF/FTF")
+    _other_shaft_arg(p)
     p.add_argument("--false-alarm-rate", type=rate, default=0.01,
                    help="chance of any false peak on a perfect model, in (0, 1) (default 0.01)")
     p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
@@ -265,6 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fmu", required=True, help="the base model FMU")
     _measurement_args(p)
     p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG]")
+    _other_shaft_arg(p)
     p.add_argument("--effects", type=effect_list, help="comma-separated effect keys (default: "
                    "the whole catalogue)")
     p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")

@@ -109,6 +109,8 @@ def problem_settings(args) -> dict:
         op["f_pinion_hz"] = args.rpm / 60.0
     if args.teeth is not None:
         op["n_pinion"], op["n_gear"] = args.teeth
+    if getattr(args, "other_shaft", None) is not None:  # compare and discover
+        op["other_shaft_ratio"] = args.other_shaft
     gain = {"auto": None, "fit": True, "fixed": False}[args.gain]
     return {**settings, "operating_point": op or None, "fit_gain": gain,
             "speed": SpeedSettings(args.speed, tacho=args.tacho,

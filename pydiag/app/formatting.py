@@ -62,7 +62,7 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
                      f"{100 * p.energy_fraction:5.1f} % of the peaks' energy  {p.label}")
     for channel, groups in c.residual_by_family.items():
         lines.append(f"by family  : {channel}: share of the measured / of the residual energy")
-        lines += [f"  {g:<17} {100 * v['measured']:5.1f} % / {100 * v['residual']:5.1f} %"
+        lines += [f"  {g:<18} {100 * v['measured']:5.1f} % / {100 * v['residual']:5.1f} %"
                   for g, v in groups.items()]
     shown = [s for s in c.suggested_effects if s.shown]
     lines.append("suggested  : " + ("none" if not shown else ""))

@@ -16,7 +16,7 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS
 from pydiag.io.outputs import write_text
 from pydiag.loop import history
-from pydiag.loop.compare import EFFECT_REFIT, compare, refit_with_effect
+from pydiag.loop.compare import EFFECT_REFIT, compare, refit_with_effect, with_effect
 from pydiag.loop.discover import MODELICA_ROOT, as_dict, discover, effect_fmu
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
@@ -40,8 +40,9 @@ def cmd_compare(args) -> int:
         c = compare(problem, FaultEstimator(**estimator_settings(args), progress=update),
                     args.bearing, args.false_alarm_rate)
         if effect is not None:
-            c = refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args),
-                                  args.bearing)
+            base, c = c, refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args),
+                                           args.bearing)
+            problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
     finally:
         close()
     if not args.no_validate:

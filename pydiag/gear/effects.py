@@ -21,7 +21,8 @@ from typing import Callable
 
 from pydiag.core.parameters import Parameter
 from pydiag.gear.features import max_band_freq_hz
-from pydiag.gear.kinematic_map import BEARING_FAMILIES, KinematicLine, kinematic_map, match
+from pydiag.gear.kinematic_map import (BEARING_FAMILIES, SHAFT_ORDERS, KinematicLine, coinciding,
+                                      kinematic_map, match)
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,12 @@ class Effect:
     # lines, and the rolling elements' slip smears their harmonics there into a hump. Held-
     # out validation fits and scores it on the envelope's spectrum (pydiag.loop.validate)
     envelope: bool = False
+    # (kinematics) -> FMU values its model takes from the machine rather than fits (the
+    # other shaft's speed ratio); None: it takes none
+    kinematic_values: Callable[[object], dict[str, float]] | None = None
+    # (kinematics) -> what they must say and do not for it to have lines at all ("" when
+    # nothing is missing); None: it needs nothing beyond the gear pair
+    missing: Callable[[object], str] | None = None
 
     def changes(self, output: str) -> bool:
         """Whether the effect changes the model output ``output`` (an FMU variable)."""
@@ -122,9 +129,6 @@ def _backlash(line, freq, f_mesh):
     return 0.0
 
 
-#: The shaft orders a shaft's own vibration is modelled at (GearDiag.Components.ShaftOrders):
-#: an unbalance at 1x, a misalignment at 1x-2x, a coupling or a looseness up to about 10x.
-SHAFT_ORDERS = 10
 #: The largest line of a shaft order the shaft effects fit, m/s2 at the model's sensor, like
 #: a bearing strike (MAX_STRIKE_M_S2): a fitted gain of 0.0145 makes it 7 g.
 MAX_SHAFT_ORDER_M_S2 = 5000.0
@@ -149,6 +153,37 @@ def _pinion_shaft_hint(peaks, bin_hz, kin):
     lines = kinematic_map(kin, (SHAFT_ORDERS + 0.5) * fp)
     return {f"A_s{k}": None for k in range(1, SHAFT_ORDERS + 1)
             if _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin.f_mesh_hz) == 0}
+
+
+def _other_shaft(line, freq, f_mesh):
+    # another shaft's first orders, but for those a line of the gear pair (or a bearing)
+    # falls on: which shaft makes such a line the record does not say
+    ok = (line is not None and line.family == "other_shaft" and line.order <= SHAFT_ORDERS
+          and not set(line.also) - {"hunting"})
+    return 1.0 if ok else 0.0
+
+
+def _other_shaft_hint(peaks, bin_hz, kin):
+    """Only the orders it claims are fitted (:func:`_other_shaft`): none when the other
+    shaft's speed is not known; its lines within half a bin of a line of the gear pair,
+    or above the analysed band, are not."""
+    names = [f"A_o{k}" for k in range(1, SHAFT_ORDERS + 1)]
+    f_other = None if kin is None else kin.f_other_shaft_hz
+    if f_other is None:
+        return dict.fromkeys(names)
+    top = min((SHAFT_ORDERS + 0.5) * f_other, max_band_freq_hz(kin))
+    own = {l.order: l for l in coinciding(kinematic_map(kin, top), 0.5 * bin_hz)
+           if l.family == "other_shaft"}
+    return {name: None for k, name in enumerate(names, 1)
+            if k not in own or _other_shaft(own[k], own[k].freq_hz, kin.f_mesh_hz) == 0}
+
+
+def _other_shaft_values(kin) -> dict[str, float]:
+    return {} if kin is None or kin.other_shaft_ratio is None else {"r_other": kin.other_shaft_ratio}
+
+
+def _other_shaft_missing(kin) -> str:
+    return "the other shaft's speed ratio" if kin is None or kin.other_shaft_ratio is None else ""
 
 
 def _family(name):
@@ -334,6 +369,14 @@ EFFECTS = {e.key: e for e in (
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
            _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True),
+    # the same, of a shaft beyond the pair at a speed ratio the kinematics give: not
+    # synchronous with the pair's period in general (a motor shaft at 29/17 of the pinion's)
+    Effect("other_shaft_orders", "GearDiag.Effects.OtherShaftOrders",
+           "another shaft's own vibration at its first orders (a second stage, a motor shaft)",
+           tuple(Parameter(f"A_o{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
+                 for k in range(1, SHAFT_ORDERS + 1)),
+           _other_shaft, _other_shaft_hint, synchronous=False, outputs=("acc",), affine=True,
+           kinematic_values=_other_shaft_values, missing=_other_shaft_missing),
     # the mode reweights every line the gear pair makes on its way to the sensor (its
     # signature: all of them); its frequency is fitted in the band where the residual of
     # those lines bunches (the hint), or above the band, where it shows only as a tilt

@@ -9,6 +9,8 @@ Families (each line carries its family and order):
   that belong to no family above
 - ``bpfo``, ``bpfi``, ``bsf``, ``ftf``: bearing defect frequencies and harmonics (when a
   bearing geometry is given), ``bpfi_sb``: BPFI +- shaft speed sidebands
+- ``other_shaft``: k*f_other, the orders of another shaft of the machine (when its speed
+  ratio is given: ``GearKinematics.other_shaft_ratio``), up to :data:`SHAFT_ORDERS`
 
 A frequency is matched to the nearest line within ``tolerance_hz``; families earlier in
 ``PRIORITY`` win ties: a mesh harmonic is also a pinion harmonic and is named ``mesh``; a
@@ -24,7 +26,12 @@ from dataclasses import dataclass, replace
 from pydiag.gear.kinematics import GearKinematics
 
 PRIORITY = ("mesh", "mesh_sb_pinion", "mesh_sb_gear", "pinion", "gear", "assembly",
-            "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "hunting")
+            "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "other_shaft", "hunting")
+#: The shaft orders a shaft's own vibration is modelled at (GearDiag.Components.ShaftOrders):
+#: an unbalance at 1x, a misalignment at 1x-2x, a coupling or a looseness up to about 10x.
+#: The map names another shaft's orders up to this (higher ones its own mesh would make,
+#: whose teeth the map does not know).
+SHAFT_ORDERS = 10
 
 
 @dataclass(frozen=True)
@@ -85,6 +92,10 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | No
     fh = kin.f_hunting_hz
     for k in range(1, int(max_freq_hz / fh) + 1):
         add(k * fh, "hunting", k, f"{k}x hunting tooth")
+    f_other = kin.f_other_shaft_hz
+    if f_other is not None:
+        for k in range(1, min(SHAFT_ORDERS, int(max_freq_hz / f_other)) + 1):
+            add(k * f_other, "other_shaft", k, f"{k}x other shaft")
     if bearing is not None:
         f_shaft = fp if bearing.shaft == "pinion" else fg
         for family, f in bearing.frequencies(f_shaft).items():

@@ -10,17 +10,23 @@ from pydiag.core.errors import UsageError
 
 @dataclass(frozen=True)
 class GearKinematics:
-    """Teeth counts and pinion speed; every frequency follows from these three numbers.
+    """Teeth counts and pinion speed; every frequency of the pair follows from these three
+    numbers. A machine with another shaft (a second stage's, a motor's behind a belt) adds
+    its speed ratio: that shaft's orders are kinematic lines too.
 
     Attributes:
         n_pinion: pinion teeth (Np)
         n_gear: gear teeth (Ng)
         f_pinion_hz: pinion shaft speed
+        other_shaft_ratio: the other shaft's speed over the pinion's, or None: no other
+            shaft known. A motor shaft whose z1 teeth drive z2 on the pinion's shaft: z2/z1;
+            a second stage whose z3 teeth on the gear's shaft drive z4: Np/Ng * z3/z4
     """
 
     n_pinion: int
     n_gear: int
     f_pinion_hz: float
+    other_shaft_ratio: float | None = None
 
     def __post_init__(self) -> None:
         if self.n_pinion < 1 or self.n_gear < 1:
@@ -28,6 +34,9 @@ class GearKinematics:
                              f"Ng={self.n_gear}")
         if not self.f_pinion_hz > 0:
             raise UsageError(f"pinion speed must be positive, got {self.f_pinion_hz} Hz")
+        ratio = self.other_shaft_ratio
+        if ratio is not None and not (math.isfinite(ratio) and ratio > 0):
+            raise UsageError(f"the other shaft's speed ratio must be positive, got {ratio}")
 
     @property
     def f_mesh_hz(self) -> float:
@@ -36,6 +45,11 @@ class GearKinematics:
     @property
     def f_gear_hz(self) -> float:
         return self.f_mesh_hz / self.n_gear
+
+    @property
+    def f_other_shaft_hz(self) -> float | None:
+        """The other shaft's speed, or None when there is none known."""
+        return None if self.other_shaft_ratio is None else self.other_shaft_ratio * self.f_pinion_hz
 
     @property
     def n_assembly_phases(self) -> int:

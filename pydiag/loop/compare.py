@@ -55,11 +55,12 @@ from pydiag.signal.spectra import local_maxima, whole_periods
 
 #: Groups of the residual by family, and the kinematic families each gathers.
 RESIDUAL_GROUPS = ("mesh_harmonics", "pinion_orders", "gear_orders", "assembly_hunting",
-                   "bearing", "non_kinematic", "broadband")
+                   "bearing", "other_shaft_orders", "non_kinematic", "broadband")
 FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
                 "pinion": "pinion_orders", "mesh_sb_gear": "gear_orders", "gear": "gear_orders",
                 "assembly": "assembly_hunting", "hunting": "assembly_hunting", "bpfo": "bearing",
-                "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing"}
+                "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing",
+                "other_shaft": "other_shaft_orders"}
 #: Mains frequencies a non-kinematic line is checked against, Hz.
 MAINS_HZ = (50.0, 60.0)
 #: The status of a suggestion held-out validation has not looked at.
@@ -197,9 +198,11 @@ def residual_shares(groups: np.ndarray, measured: np.ndarray,
 
 
 def describe_non_kinematic(freq_hz: float, kin, bin_hz: float) -> str:
-    """What a line no gear-pair frequency explains could be."""
+    """What a line no kinematic frequency explains could be."""
     text = (f"not kinematic: {freq_hz / kin.f_pinion_hz:.3g}x pinion, "
             f"{freq_hz / kin.f_gear_hz:.3g}x gear")
+    if kin.f_other_shaft_hz is not None:
+        text += f", {freq_hz / kin.f_other_shaft_hz:.3g}x other shaft"
     for mains in MAINS_HZ:
         n = round(freq_hz / mains)
         if n >= 1 and abs(freq_hz - n * mains) <= bin_hz:
@@ -316,7 +319,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     suggestions.sort(key=lambda s: -s.score)
     # the plots' cursors: mesh harmonics, low shaft orders and their mesh sidebands, bearings
     orders = {"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3, "bpfo": 5,
-              "bpfi": 5, "bsf": 5, "ftf": 5}
+              "bpfi": 5, "bsf": 5, "ftf": 5, "other_shaft": 3}
     markers = [{"freq_hz": l.freq_hz, "family": l.family, "label": l.label} for l in lines
                if l.family == "mesh" or 0 < abs(l.order) <= orders.get(l.family, 0)]
     return Comparison(problem.spec.fmu_path, float(np.sqrt(np.sum(np.square(errors)))),
@@ -355,6 +358,25 @@ def effect_parameters(problem: FitProblem, base: Comparison, effect: Effect
                          problem.kinematics)
 
 
+def kinematic_values(problem: FitProblem, effect: Effect) -> dict[str, float]:
+    """FMU values ``effect``'s model takes from the machine's kinematics (the other
+    shaft's speed ratio), not fitted."""
+    return effect.kinematic_values(problem.kinematics) if effect.kinematic_values else {}
+
+
+def with_effect(problem: FitProblem, base: Comparison, effect: Effect,
+                effect_fmu: str) -> FitProblem:
+    """The problem of the model that has ``effect``: the base problem's parameters and
+    the effect's (bounds narrowed by ``base``'s peaks, as its refit searched them), on the
+    effect's FMU, with the values its model takes from the kinematics. What a comparison
+    after :func:`refit_with_effect` is validated on, so that the base every other effect
+    is held against has the effect's lines."""
+    names = {p.name for p in problem.parameters}
+    own = tuple(p for p in effect_parameters(problem, base, effect) if p.name not in names)
+    return problem.derive(fmu_path=effect_fmu, parameters=problem.parameters + own,
+                          fixed_values=kinematic_values(problem, effect))
+
+
 def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
                featurizer: FullSpectrumFeaturizer, estimator: FaultEstimator | None = None
                ) -> tuple[FitProblem, dict[str, float]]:
@@ -373,15 +395,17 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     the better kept. Its problem then fits both, and the parameters returned are both."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     own = effect_parameters(problem, base, effect)
-    held = problem.derive(fmu_path=effect_fmu, parameters=own,
-                          fixed_values=problem.fmu_values(base.parameters), featurizer=featurizer)
+    machine = kinematic_values(problem, effect)
+    held = problem.derive(fmu_path=effect_fmu, parameters=own, featurizer=featurizer,
+                          fixed_values={**problem.fmu_values(base.parameters), **machine})
     if not effect.reshapes_base:
         return held, (fit_affine(held)[0] if effect.affine else estimator.fit(held).parameters)
     fitted = estimator.replace(polish_starts=RESHAPE_STARTS, polish_evaluations=max(
         1, estimator.polish_evaluations // (2 * RESHAPE_STARTS))).fit(held).parameters
     names = {p.name for p in own}
-    free = problem.derive(fmu_path=effect_fmu, featurizer=featurizer, parameters=tuple(
-        p for p in problem.parameters if p.name not in names) + own)
+    free = problem.derive(fmu_path=effect_fmu, featurizer=featurizer, fixed_values=machine,
+                          parameters=tuple(p for p in problem.parameters
+                                           if p.name not in names) + own)
     polish = free_polish(estimator, len(free.parameters))
     best = polish.refine(free, {**base.parameters, **fitted})
     if effect.free_start is not None:  # a start its held fit cannot find (Effect.free_start)

@@ -153,6 +153,8 @@ class HeldOut:
     delta_bic: float = 0.0  # on half A, where the effect was fitted (module docstring)
     tried: bool = True  # False: none of its lines is scored, so it was not fitted (z nan)
     envelope_band_hz: tuple[float, float] | None = None  # scored on this band's envelope
+    # not tried as the kinematics do not say where its lines are: what they must say
+    unknown: str = ""
     # the non-synchronous lines of half A it claims, at the frequencies the half shows them
     # ("acc envelope 87.50 Hz" for BPFO 89.62 Hz: ``joined_freq_hz``); an effect claiming
     # one of another's competes with it (:func:`rivals`)
@@ -178,6 +180,8 @@ class HeldOut:
 
     @property
     def _verdict(self) -> str:
+        if not self.tried and self.unknown:
+            return f"{NOT_TRIED}: its lines are not known without {self.unknown}"
         if not self.tried:
             return (f"{NOT_TRIED}: none of the bins the test scores (the synchronous lines, "
                     "the peaks of the fitted half) is one of its lines: no residual to explain")
@@ -223,7 +227,7 @@ def in_model(problem: FitProblem, effect: Effect) -> bool:
     on are never fitted, so a model that has the shaft's lines lacks them)."""
     fitted = {p.fmu_variable for p in problem.parameters}
     own = effect.bounds([], 0.0, problem.kinematics)  # no peaks: only what the pair says
-    return all(p.fmu_variable in fitted for p in own)
+    return bool(own) and all(p.fmu_variable in fitted for p in own)
 
 
 def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
@@ -287,9 +291,10 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
         return f"{channel}{' envelope' if band else ''} {freq_hz:.2f} Hz"
     claimed = tuple(line_name(c, fk) for c in sorted(changed) for fk in freqs[claims & between])
     if not (changed and claims.any()):  # nothing to explain (module docstring)
+        unknown = effect.missing(kin) if effect.missing else ""
         return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
                        math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
-                       tried=False, envelope_band_hz=band)
+                       tried=False, envelope_band_hz=band, unknown=unknown)
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     base_problem = problem.derive(featurizer=fit_half)
     base_fit = dict(base.parameters)

@@ -16,7 +16,8 @@ Where it differs from GearDiag.GearPair (same kinematics and physical defaults):
   are pulse trains with random slip through a structural resonance into the accelerometer
   (not a force on the mesh), a torque ripple drives the shafts (and so the speed), the
   housing is a resonance filtered onto the mesh force, backlash is a hard contact loss, a
-  misaligned coupling adds the pinion angle's first three orders at the sensor.
+  misaligned coupling adds the pinion angle's first three orders at the sensor, a misaligned
+  motor shaft behind a first stage (29/17 of the pinion's speed) its own.
 
 Integrated with SciPy's LSODA (``odeint``); outputs ``acc`` (the acceleration of the mesh
 deflection, plus what the effects add at the sensor) and ``disp`` (the mesh deflection),
@@ -54,6 +55,11 @@ class Effects:
     # a misaligned coupling on the pinion shaft: its 1x, 2x and 3x (as 1 : 0.6 : 0.35, in
     # the pinion's own angle, phases of their own) at the sensor, beside the mesh, m/s2
     coupling_acc: float = 0.0
+    # a misaligned motor shaft behind a first stage (its 17 teeth drive 29 on the pinion's
+    # shaft): its 1x, 2x and 3x (as 0.5 : 1 : 0.25, a misalignment's 2x the strongest,
+    # phases of their own) in its own angle, at the sensor, m/s2
+    other_shaft_acc: float = 0.0
+    other_shaft_ratio: float = 29.0 / 17.0
 
 
 @dataclass(frozen=True)
@@ -233,6 +239,10 @@ def simulate(g: TruthGear, duration_s: float, sample_rate_hz: float,
         theta = y[:, 0]
         acc = acc + e.coupling_acc * (np.cos(theta + 0.3) + 0.6 * np.cos(2 * theta + 1.9)
                                       + 0.35 * np.cos(3 * theta - 0.8))
+    if e.other_shaft_acc > 0:
+        theta = e.other_shaft_ratio * y[:, 0]  # the rigid chain: the motor's angle
+        acc = acc + e.other_shaft_acc * (0.5 * np.cos(theta + 1.1) + np.cos(2 * theta - 0.4)
+                                         + 0.25 * np.cos(3 * theta + 2.2))
     rng = np.random.default_rng(effect_seed)
     if e.outer_race_acc > 0:
         pulses, _ = _pulse_train(g.bpfo_hz, t, g.slip, rng, 0.1e-3)

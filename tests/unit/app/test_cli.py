@@ -51,6 +51,9 @@ def test_anything_else_is_an_internal_error_never_the_users(monkeypatch, capsys,
     (["compare", "--bearing", "9.5,7.94,39.04"], "positive integer"),
     (["compare", "--effect", "gremlins"], "invalid choice: 'gremlins'"),
     (["discover", "--effects", "backlash,gremlins"], "unknown effect(s) gremlins"),
+    (["compare", "--other-shaft", "29/0"], "positive speed ratio"),
+    (["discover", "--other-shaft", "-1.7"], "positive speed ratio"),
+    (["compare", "--other-shaft", "fast"], "got 'fast'"),
     (["regress", "--rtol", "nan"], "--rtol: 'nan' is not a finite number"),
     (["simulate", "--snr", "0"], "--snr: 0 must be > 0"),
     (["simulate", "--set", "f_pinion"], "--set: takes NAME=VALUE"),
@@ -74,3 +77,9 @@ def test_more_workers_than_cores_is_refused_unless_asked(capsys, monkeypatch, tm
     assert code == 2 and "--workers: 1000 is more than the 2 cores" in err, err
     code, err = run([*base, "--workers", "3", "--oversubscribe"], capsys)
     assert code == 2 and "--workers" not in err and "m.csv" in err, err  # got past the check
+
+
+@pytest.mark.parametrize("text,ratio", [("1.706", 1.706), ("29/17", 29 / 17),
+                                        ("14/21*19/47", 14 / 21 * 19 / 47), ("2*0.5", 1.0)])
+def test_a_speed_ratio_is_a_number_a_fraction_or_a_product_of_them(text, ratio):
+    assert cli.speed_ratio(text) == pytest.approx(ratio, rel=1e-12)
