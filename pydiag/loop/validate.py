@@ -113,8 +113,8 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import Bearing, coinciding, kinematic_map, match
-from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, evidence_channels,
-                                 fit_effect, free_polish, measured_spectra)
+from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, effect_parameters,
+                                 evidence_channels, fit_effect, free_polish, measured_spectra)
 from pydiag.signal.spectra import local_maxima
 
 #: Chance that an effect which only fits noise passes the held-out test.
@@ -153,8 +153,8 @@ class HeldOut:
     delta_bic: float = 0.0  # on half A, where the effect was fitted (module docstring)
     tried: bool = True  # False: none of its lines is scored, so it was not fitted (z nan)
     envelope_band_hz: tuple[float, float] | None = None  # scored on this band's envelope
-    # not tried as the kinematics do not say where its lines are: what they must say
-    unknown: str = ""
+    # why it was not tried, when not for want of residual on its lines (``tried``)
+    why_not: str = ""
     # the non-synchronous lines of half A it claims, at the frequencies the half shows them
     # ("acc envelope 87.50 Hz" for BPFO 89.62 Hz: ``joined_freq_hz``); an effect claiming
     # one of another's competes with it (:func:`rivals`)
@@ -180,8 +180,8 @@ class HeldOut:
 
     @property
     def _verdict(self) -> str:
-        if not self.tried and self.unknown:
-            return f"{NOT_TRIED}: its lines are not known without {self.unknown}"
+        if not self.tried and self.why_not:
+            return f"{NOT_TRIED}: {self.why_not}"
         if not self.tried:
             return (f"{NOT_TRIED}: none of the bins the test scores (the synchronous lines, "
                     "the peaks of the fitted half) is one of its lines: no residual to explain")
@@ -222,12 +222,14 @@ def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarra
 
 
 def in_model(problem: FitProblem, effect: Effect) -> bool:
-    """The base problem already fits every parameter of ``effect`` that the effect fits on
-    this gear pair (its hint leaves out some: the pinion shaft's orders a gear line falls
-    on are never fitted, so a model that has the shaft's lines lacks them)."""
+    """The base problem fits some of ``effect``'s parameters, and every one the effect
+    fits on this gear pair whatever the record (its hint leaves out some: the pinion
+    shaft's orders a gear line falls on are never fitted, so a model that has the shaft's
+    lines lacks them; another shaft's orders are fitted only where the record has a line)."""
     fitted = {p.fmu_variable for p in problem.parameters}
     own = effect.bounds([], 0.0, problem.kinematics)  # no peaks: only what the pair says
-    return bool(own) and all(p.fmu_variable in fitted for p in own)
+    return (any(p.fmu_variable in fitted for p in effect.parameters)
+            and all(p.fmu_variable in fitted for p in own))
 
 
 def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
@@ -290,11 +292,14 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     def line_name(channel: str, freq_hz: float) -> str:  # "acc envelope 87.50 Hz"
         return f"{channel}{' envelope' if band else ''} {freq_hz:.2f} Hz"
     claimed = tuple(line_name(c, fk) for c in sorted(changed) for fk in freqs[claims & between])
-    if not (changed and claims.any()):  # nothing to explain (module docstring)
-        unknown = effect.missing(kin) if effect.missing else ""
+    missing = effect.missing(kin) if effect.missing else ""
+    why_not = (f"its lines are not known without {missing}" if missing
+               else "" if effect_parameters(problem, base, effect)
+               else "no line of it stands above the noise where it can be told from the pair's")
+    if why_not or not (changed and claims.any()):  # nothing to explain (module docstring)
         return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
                        math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
-                       tried=False, envelope_band_hz=band, unknown=unknown)
+                       tried=False, envelope_band_hz=band, why_not=why_not)
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     base_problem = problem.derive(featurizer=fit_half)
     base_fit = dict(base.parameters)
