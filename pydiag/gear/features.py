@@ -148,9 +148,13 @@ class FullSpectrumFeaturizer:
             x = band_envelope(without_synchronous(x, periods), sample_rate_hz,
                               self.envelope_band_hz)
         if self.half is not None:
+            # every period cut to the same length, the shortest (a period of no whole
+            # number of samples is one sample longer every so often): both halves then
+            # have the same bins
             edges = np.round(np.arange(2 * self.n_periods + 1) * self.kinematics.period_s
                              * sample_rate_hz).astype(int)
-            x = np.concatenate([x[edges[k]:edges[k + 1]]
+            length = int(np.min(np.diff(edges)))
+            x = np.concatenate([x[edges[k]:edges[k] + length]
                                 for k in range(self.half, 2 * self.n_periods, 2)])
         freqs, amp = amplitude_spectrum(x, sample_rate_hz)
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)

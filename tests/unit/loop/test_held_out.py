@@ -72,6 +72,20 @@ def test_halves_hold_the_same_lines_and_independent_noise():
     assert not np.allclose(whole, spectra[0][1])  # half 0 is not the first half
 
 
+def test_halves_of_periods_of_no_whole_number_of_samples_have_the_same_bins():
+    """A period of 660.8 samples (227 Hz pinion, 14/21 teeth, at 50 kHz): the halves' periods
+    are not all of one length, and the test compares them bin by bin."""
+    kin = GearKinematics(14, 21, 227.0)
+    rate = 50_000.0
+    n = int(np.ceil(6 * kin.period_s * rate))  # 3 periods each: 1982 and 1983 samples
+    x = np.sin(2 * np.pi * kin.f_mesh_hz * np.arange(n) / rate)
+    halves = [FullSpectrumFeaturizer(kin, 3, 10_000.0, half=h) for h in (0, 1)]
+    (f0, a0, _), (f1, a1, _) = (h.spectrum(x, rate) for h in halves)
+    assert f0.shape == f1.shape and np.array_equal(f0, f1)
+    k = int(np.argmax(a0))
+    assert abs(f0[k] - kin.f_mesh_hz) < 0.5 * (f0[1] - f0[0]) and a0[k] > 0.95 and a1[k] > 0.95
+
+
 def test_one_confident_effect_per_set_of_competing_lines():
     competing = {"shape": ["backlash", "housing"], "backlash": ["shape", "housing"],
                  "housing": ["shape", "backlash"], "runout": ["tooth"], "tooth": ["runout"]}
@@ -181,3 +195,8 @@ def test_an_effect_is_in_the_model_when_every_parameter_it_fits_on_this_pair_is(
     assert not in_model(problem(["a0", "A_s1", "A_s3"]), shaft)
     assert not in_model(problem(["a0"]), EFFECTS["housing_sensor"])
     assert in_model(problem(["a0", "f_housing", "zeta_housing"]), EFFECTS["housing_sensor"])
+    # another shaft's orders are fitted where the record has lines: a model with some of
+    # them has it, one with none does not (nor, without its ratio, has anything to fit)
+    other = EFFECTS["other_shaft_orders"]
+    assert in_model(problem(["a0", "A_o2"]), other)
+    assert not in_model(problem(["a0"]), other)
