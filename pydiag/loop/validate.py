@@ -232,6 +232,12 @@ def in_model(problem: FitProblem, effect: Effect) -> bool:
             and all(p.fmu_variable in fitted for p in own))
 
 
+def unknown_lines(effect: Effect, kinematics) -> str:
+    """Why the kinematics do not say where ``effect``'s lines are, or "" when they do."""
+    missing = effect.missing(kinematics) if effect.missing else ""
+    return f"its lines are not known without {missing}" if missing else ""
+
+
 def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
     out = []
     for p in effect.parameters:
@@ -292,10 +298,9 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     def line_name(channel: str, freq_hz: float) -> str:  # "acc envelope 87.50 Hz"
         return f"{channel}{' envelope' if band else ''} {freq_hz:.2f} Hz"
     claimed = tuple(line_name(c, fk) for c in sorted(changed) for fk in freqs[claims & between])
-    missing = effect.missing(kin) if effect.missing else ""
-    why_not = (f"its lines are not known without {missing}" if missing
-               else "" if effect_parameters(problem, base, effect)
-               else "no line of it stands above the noise where it can be told from the pair's")
+    why_not = unknown_lines(effect, kin)
+    if not (why_not or effect_parameters(problem, base, effect)):
+        why_not = "no line of it stands above the noise where it can be told from the pair's"
     if why_not or not (changed and claims.any()):  # nothing to explain (module docstring)
         return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
                        math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
@@ -395,6 +400,10 @@ def validate(problem: FitProblem, comparison: Comparison,
             continue
         if s.effect in present or in_model(problem, effect):
             s.status = "already in the model"
+            continue
+        unknown = unknown_lines(effect, problem.kinematics)
+        if unknown:
+            s.status = f"{NOT_TRIED}: {unknown}"
             continue
         beside = [k for k in present if not (effect.in_base or EFFECTS[k].in_base)]
         if beside:  # its model extends GearPair, not the model that has them

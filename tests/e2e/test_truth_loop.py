@@ -21,7 +21,7 @@ from pydiag.gear.kinematic_map import Bearing
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import EFFECT_REFIT, compare, measured_spectra, refit_with_effect
 from pydiag.loop.discover import discover, effect_fmu
-from pydiag.loop.validate import ENVELOPE_TOP, validate
+from pydiag.loop.validate import ENVELOPE_TOP, held_out, validate
 
 PERIODS = 20
 RATE_HZ = 10_000.0
@@ -166,6 +166,12 @@ def test_without_the_other_shafts_ratio_its_lines_are_not_kinematic_and_nothing_
                                 "shaft's speed ratio"), other.status
         assert c.residual_by_family["acc"]["non_kinematic"]["residual"] > 0.05, \
             c.residual_by_family["acc"]
+    # discover's way in (held out, whatever compare said): not fitted, its FMU not built
+    problem = build_problem(str(gear_fmu), record(TruthGear(), PERIODS, 7, RATE_HZ,
+                                                  clean=truth_records["other_shaft_orders"]),
+                            parameters=BASE_PARAMETERS)
+    h = held_out(problem, c, EFFECTS["other_shaft_orders"], lambda: pytest.fail("built"))
+    assert not h.tried and h.verdict == other.status, h.verdict
 
 
 def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth_records,
