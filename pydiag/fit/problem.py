@@ -381,8 +381,8 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     kin = _nominal_kinematics(measurement, fmu_kin, kinematics)
     if operating_point:
         if kin is None:
-            raise EstimationError("--rpm, --teeth, --other-shaft need a gear model: this FMU has no Np, Ng, "
-                                  "f_pinion and the adapter no [kinematics]")
+            raise EstimationError("--rpm, --teeth, --other-shaft need a gear model: this FMU has "
+                                  "no Np, Ng, f_pinion and the adapter no [kinematics]")
         op = {k: (int(v) if k in ("n_pinion", "n_gear") else float(v))
               for k, v in operating_point.items()}
         kin = dataclasses.replace(kin, **op)

@@ -183,7 +183,8 @@ def _other_shaft_hint(peaks, bin_hz, kin):
 
 
 def _other_shaft_values(kin) -> dict[str, float]:
-    return {} if kin is None or kin.other_shaft_ratio is None else {"r_other": kin.other_shaft_ratio}
+    ratio = None if kin is None else kin.other_shaft_ratio
+    return {} if ratio is None else {"r_other": ratio}
 
 
 def _other_shaft_missing(kin) -> str:

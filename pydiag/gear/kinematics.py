@@ -11,8 +11,8 @@ from pydiag.core.errors import UsageError
 @dataclass(frozen=True)
 class GearKinematics:
     """Teeth counts and pinion speed; every frequency of the pair follows from these three
-    numbers. A machine with another shaft (a second stage's, a motor's behind a belt) adds
-    its speed ratio: that shaft's orders are kinematic lines too.
+    numbers. A machine with another shaft (a second stage's, a motor's behind a first
+    stage) adds its speed ratio: that shaft's orders are kinematic lines too.
 
     Attributes:
         n_pinion: pinion teeth (Np)
@@ -49,7 +49,8 @@ class GearKinematics:
     @property
     def f_other_shaft_hz(self) -> float | None:
         """The other shaft's speed, or None when there is none known."""
-        return None if self.other_shaft_ratio is None else self.other_shaft_ratio * self.f_pinion_hz
+        ratio = self.other_shaft_ratio
+        return None if ratio is None else ratio * self.f_pinion_hz
 
     @property
     def n_assembly_phases(self) -> int:
