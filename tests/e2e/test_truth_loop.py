@@ -129,7 +129,7 @@ def test_hidden_effect_is_the_one_confident_suggestion(gear_fmu, truth_records, 
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_path, effect,
                                                 seed):
-    """Seed 5 in `make test`; seeds 6 and 7 in `make test-slow` (8 x 2 discovers)."""
+    """Seed 5 in `make test`; seeds 6 and 7 in `make test-slow` (9 x 2 discovers)."""
     m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=truth_records[effect])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point=OPERATING_POINT)
