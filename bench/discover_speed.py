@@ -32,6 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
+# the machine beyond the gear pair, known on every record: the motor shaft's speed ratio
+from truth import OPERATING_POINT  # noqa: E402
 from truth.gear_sim import TruthGear, record  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
@@ -53,8 +55,6 @@ RECORDS = {"runout": dict(gear_runout_m=10e-6), "ripple": dict(torque_ripple=0.0
            # floor hid its lines: not tried)
            "ripple_races_motor": dict(torque_ripple=0.005, outer_race_acc=600.0,
                                       inner_race_acc=600.0, other_shaft_acc=30.0)}
-#: The machine beyond the gear pair, known on every record: the motor shaft's speed ratio.
-OPERATING_POINT = {"other_shaft_ratio": TruthGear().effects.other_shaft_ratio}
 #: The simulator's pinion bearing, whose lines compare names (a 6205).
 BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 

@@ -17,7 +17,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
-from truth import BASE_PARAMETERS  # noqa: E402
+# the motor shaft's speed ratio, given on every case but the one that says it is not
+from truth import BASE_PARAMETERS, OPERATING_POINT  # noqa: E402
 from truth.gear_sim import TruthGear, line_margin_db, record, simulate  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
@@ -43,9 +44,6 @@ CASES = {"none": {}, "gear_eccentricity": dict(gear_runout_m=10e-6),
          # that ratio given its lines are kinematic; without it they are not
          "other_shaft_orders": dict(other_shaft_acc=3.0),
          "other_shaft_orders, ratio not given": dict(other_shaft_acc=3.0)}
-#: The machine's kinematics beyond the gear pair, as the engineer knows them: the motor
-#: shaft's speed ratio (given on every case but the one that says it is not).
-OPERATING_POINT = {"other_shaft_ratio": TruthGear().effects.other_shaft_ratio}
 PERIODS, RATE_HZ = 20, 10_000.0
 BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)

@@ -71,10 +71,10 @@ class Effect:
     # out validation fits and scores it on the envelope's spectrum (pydiag.loop.validate)
     envelope: bool = False
     # (kinematics) -> FMU values its model takes from the machine rather than fits (the
-    # other shaft's speed ratio); None: it takes none
-    kinematic_values: Callable[[object], dict[str, float]] | None = None
+    # other shaft's speed ratio); None: it takes none (:meth:`values_from`)
+    machine_values: Callable[[object], dict[str, float]] | None = None
     # (kinematics) -> what they must say and do not for it to have lines at all ("" when
-    # nothing is missing); None: it needs nothing beyond the gear pair
+    # nothing is missing); None: it needs nothing beyond the gear pair (:meth:`unknown_lines`)
     missing: Callable[[object], str] | None = None
 
     def changes(self, output: str) -> bool:
@@ -89,6 +89,15 @@ class Effect:
         return tuple(dataclasses.replace(p, low=narrowed[p.name][0], high=narrowed[p.name][1])
                      if p.name in narrowed else p for p in self.parameters
                      if p.name not in narrowed or narrowed[p.name] is not None)
+
+    def values_from(self, kinematics) -> dict[str, float]:
+        """FMU values its model takes from the machine's ``kinematics``, not fitted."""
+        return self.machine_values(kinematics) if self.machine_values else {}
+
+    def unknown_lines(self, kinematics) -> str:
+        """Why ``kinematics`` do not say where its lines are, or "" when they do."""
+        missing = self.missing(kinematics) if self.missing else ""
+        return f"its lines are not known without {missing}" if missing else ""
 
     def neutral_values(self) -> dict[str, float]:
         """FMU values that switch the effect off (its lower bounds)."""
@@ -381,7 +390,7 @@ EFFECTS = {e.key: e for e in (
            tuple(Parameter(f"A_o{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
            _other_shaft, _other_shaft_hint, synchronous=False, outputs=("acc",), affine=True,
-           kinematic_values=_other_shaft_values, missing=_other_shaft_missing),
+           machine_values=_other_shaft_values, missing=_other_shaft_missing),
     # the mode reweights every line the gear pair makes on its way to the sensor (its
     # signature: all of them); its frequency is fitted in the band where the residual of
     # those lines bunches (the hint), or above the band, where it shows only as a tilt

@@ -358,12 +358,6 @@ def effect_parameters(problem: FitProblem, base: Comparison, effect: Effect
                          problem.kinematics)
 
 
-def kinematic_values(problem: FitProblem, effect: Effect) -> dict[str, float]:
-    """FMU values ``effect``'s model takes from the machine's kinematics (the other
-    shaft's speed ratio), not fitted."""
-    return effect.kinematic_values(problem.kinematics) if effect.kinematic_values else {}
-
-
 def with_effect(problem: FitProblem, base: Comparison, effect: Effect,
                 effect_fmu: str) -> FitProblem:
     """The problem of the model that has ``effect``: the base problem's parameters and
@@ -374,7 +368,7 @@ def with_effect(problem: FitProblem, base: Comparison, effect: Effect,
     names = {p.name for p in problem.parameters}
     own = tuple(p for p in effect_parameters(problem, base, effect) if p.name not in names)
     return problem.derive(fmu_path=effect_fmu, parameters=problem.parameters + own,
-                          fixed_values=kinematic_values(problem, effect))
+                          fixed_values=effect.values_from(problem.kinematics))
 
 
 def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
@@ -395,7 +389,7 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     the better kept. Its problem then fits both, and the parameters returned are both."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     own = effect_parameters(problem, base, effect)
-    machine = kinematic_values(problem, effect)
+    machine = effect.values_from(problem.kinematics)
     held = problem.derive(fmu_path=effect_fmu, parameters=own, featurizer=featurizer,
                           fixed_values={**problem.fmu_values(base.parameters), **machine})
     if not effect.reshapes_base:

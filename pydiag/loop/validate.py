@@ -232,12 +232,6 @@ def in_model(problem: FitProblem, effect: Effect) -> bool:
             and all(p.fmu_variable in fitted for p in own))
 
 
-def unknown_lines(effect: Effect, kinematics) -> str:
-    """Why the kinematics do not say where ``effect``'s lines are, or "" when they do."""
-    missing = effect.missing(kinematics) if effect.missing else ""
-    return f"its lines are not known without {missing}" if missing else ""
-
-
 def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
     out = []
     for p in effect.parameters:
@@ -272,6 +266,16 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     if band is not None and not band[0] < band[1]:
         raise EstimationError(f"{effect.key} is scored on the envelope above the gear's bands "
                               f"({top:g} Hz), and a sample rate of {rate:g} Hz leaves none")
+    def untried(why_not: str = "") -> HeldOut:  # nothing to explain (module docstring)
+        return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
+                       math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
+                       tried=False, envelope_band_hz=band, why_not=why_not)
+    # before any spectrum: its lines unknown, or none it could fit stands above the noise
+    if effect.unknown_lines(kin):
+        return untried(effect.unknown_lines(kin))
+    if not effect_parameters(problem, base, effect):
+        return untried("no line of it stands above the noise where it can be told from the "
+                       "pair's")
     if band is not None:  # the gear's lines removed, no line left to tell a gain by
         problem = problem.derive(fixed_gains=base.gains)
     half_a = FullSpectrumFeaturizer(kin, n_half, top, half=0, envelope_band_hz=band)
@@ -298,13 +302,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     def line_name(channel: str, freq_hz: float) -> str:  # "acc envelope 87.50 Hz"
         return f"{channel}{' envelope' if band else ''} {freq_hz:.2f} Hz"
     claimed = tuple(line_name(c, fk) for c in sorted(changed) for fk in freqs[claims & between])
-    why_not = unknown_lines(effect, kin)
-    if not (why_not or effect_parameters(problem, base, effect)):
-        why_not = "no line of it stands above the noise where it can be told from the pair's"
-    if why_not or not (changed and claims.any()):  # nothing to explain (module docstring)
-        return HeldOut(effect.key, math.nan, float(norm.ppf(1 - false_alarm_rate)), 0.0,
-                       math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
-                       tried=False, envelope_band_hz=band, why_not=why_not)
+    if not (changed and claims.any()):
+        return untried()
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     base_problem = problem.derive(featurizer=fit_half)
     base_fit = dict(base.parameters)
@@ -401,7 +400,7 @@ def validate(problem: FitProblem, comparison: Comparison,
         if s.effect in present or in_model(problem, effect):
             s.status = "already in the model"
             continue
-        unknown = unknown_lines(effect, problem.kinematics)
+        unknown = effect.unknown_lines(problem.kinematics)
         if unknown:
             s.status = f"{NOT_TRIED}: {unknown}"
             continue

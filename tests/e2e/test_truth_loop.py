@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli
-from truth import BASE_PARAMETERS
+from truth import BASE_PARAMETERS, OPERATING_POINT
 from truth.gear_sim import TruthGear, envelope_margin_db, line_margin_db, record, simulate
 
 from pydiag.fit.affine import fit_affine
@@ -49,9 +49,6 @@ HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           # a misaligned motor shaft behind a first stage, 29/17 of the pinion's speed: 1x-3x
           # of its angle, 2x the strongest (GearDiag: ten orders of time, no phases)
           "other_shaft_orders": dict(other_shaft_acc=3.0)}
-#: What the engineer knows of the machine beyond the gear pair, given on every record: the
-#: motor shaft's speed ratio (29/17), so its orders are kinematic lines.
-OPERATING_POINT = {"other_shaft_ratio": TruthGear().effects.other_shaft_ratio}
 #: The strike frequency of each bearing effect on the simulator, Hz.
 STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.

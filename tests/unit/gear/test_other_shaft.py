@@ -63,10 +63,12 @@ def test_without_the_ratio_it_has_no_line_and_nothing_to_fit_and_says_what_it_ne
     kin = GearKinematics(14, 21, 25.0)
     assert OTHER.bounds(peaks_at(GearKinematics(14, 21, 25.0, other_shaft_ratio=MOTOR),
                                  [1, 2]), 0.4, kin) == ()
-    assert OTHER.missing(kin) == "the other shaft's speed ratio"
-    assert OTHER.missing(GearKinematics(14, 21, 25.0, other_shaft_ratio=MOTOR)) == ""
-    assert OTHER.kinematic_values(GearKinematics(14, 21, 25.0, other_shaft_ratio=MOTOR)) \
+    assert OTHER.unknown_lines(kin) == ("its lines are not known without the other shaft's "
+                                        "speed ratio")
+    assert OTHER.unknown_lines(GearKinematics(14, 21, 25.0, other_shaft_ratio=MOTOR)) == ""
+    assert OTHER.values_from(GearKinematics(14, 21, 25.0, other_shaft_ratio=MOTOR)) \
         == {"r_other": MOTOR}
+    assert OTHER.values_from(kin) == {}
 
 
 def test_a_line_no_shaft_explains_is_described_against_the_other_shaft_too():
