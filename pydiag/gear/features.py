@@ -15,9 +15,11 @@ Two feature modes:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import resample
 
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.gear.kinematics import GearKinematics
@@ -102,6 +104,24 @@ class KinematicFeaturizer:
         return signal_features(signal, sample_rate_hz, self.kinematics, self.mode)
 
 
+def _whole_samples_per_period(x: np.ndarray, sample_rate_hz: float, period_s: float
+                              ) -> tuple[np.ndarray, float]:
+    """``x`` (whole periods of ``period_s``) and its sample rate, resampled where a period is
+    no whole number of samples to the next whole number above it (Fourier interpolation,
+    exact for the periodic part of a window of whole periods).
+
+    Cutting such a record into periods needs it: cut at the nearest samples, its periods
+    differ by a sample; cut to one length, every joint skips a fraction of a sample, so
+    each line shows too high by that fraction of a period (0.12 % at 660.8 samples: 3.8 Hz
+    at the 3178 Hz mesh, off its bin once a half holds more than about 20 periods) and
+    the high harmonics smear."""
+    samples = period_s * sample_rate_hz
+    if abs(samples - round(samples)) < 1e-6 * samples:
+        return x, sample_rate_hz
+    n = int(round(x.size / samples)) * math.ceil(samples)
+    return resample(x, n), sample_rate_hz * n / x.size
+
+
 class FullSpectrumFeaturizer:
     """Full-resolution amplitudes of ``n_periods`` whole periods, at selected bins.
 
@@ -148,13 +168,10 @@ class FullSpectrumFeaturizer:
             x = band_envelope(without_synchronous(x, periods), sample_rate_hz,
                               self.envelope_band_hz)
         if self.half is not None:
-            # every period cut to the same length, the shortest (a period of no whole
-            # number of samples is one sample longer every so often): both halves then
-            # have the same bins
-            edges = np.round(np.arange(2 * self.n_periods + 1) * self.kinematics.period_s
-                             * sample_rate_hz).astype(int)
-            length = int(np.min(np.diff(edges)))
-            x = np.concatenate([x[edges[k]:edges[k] + length]
+            x, sample_rate_hz = _whole_samples_per_period(x, sample_rate_hz,
+                                                          self.kinematics.period_s)
+            length = x.size // (2 * self.n_periods)
+            x = np.concatenate([x[k * length:(k + 1) * length]
                                 for k in range(self.half, 2 * self.n_periods, 2)])
         freqs, amp = amplitude_spectrum(x, sample_rate_hz)
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)

@@ -86,6 +86,25 @@ def test_halves_of_periods_of_no_whole_number_of_samples_have_the_same_bins():
     assert abs(f0[k] - kin.f_mesh_hz) < 0.5 * (f0[1] - f0[0]) and a0[k] > 0.95 and a1[k] > 0.95
 
 
+def test_halves_of_many_periods_of_no_whole_number_of_samples_keep_lines_on_their_bins():
+    """75 periods a half of 660.8 samples: the mesh and its 4th harmonic (12.7 kHz) on the
+    bin at their frequency, whole (periods cut to 660 samples put them 0.12 % high, 4 bins
+    off at 1x mesh)."""
+    kin = GearKinematics(14, 21, 227.0)
+    rate = 50_000.0
+    n = int(np.ceil(150 * kin.period_s * rate))
+    t = np.arange(n) / rate
+    x = np.sin(2 * np.pi * kin.f_mesh_hz * t) + 0.5 * np.sin(2 * np.pi * 4 * kin.f_mesh_hz * t)
+    for half in (0, 1):
+        freqs, amp, _ = FullSpectrumFeaturizer(kin, 75, 15_000.0, half=half).spectrum(x, rate)
+        bin_hz = freqs[1] - freqs[0]
+        assert abs(bin_hz * 75 * kin.period_s - 1) < 1e-6
+        for harmonic, amplitude in ((1, 1.0), (4, 0.5)):
+            k = int(np.argmin(abs(freqs - harmonic * kin.f_mesh_hz)))
+            assert abs(freqs[k] - harmonic * kin.f_mesh_hz) < 1e-6 * freqs[k]
+            assert abs(amp[k] - amplitude) < 0.02 * amplitude
+
+
 def test_one_confident_effect_per_set_of_competing_lines():
     competing = {"shape": ["backlash", "housing"], "backlash": ["shape", "housing"],
                  "housing": ["shape", "backlash"], "runout": ["tooth"], "tooth": ["runout"]}
