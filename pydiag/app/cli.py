@@ -267,7 +267,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "[,ANGLE_DEG] for BPFO/BPFI/BSF/FTF")
     _other_shaft_arg(p)
     p.add_argument("--false-alarm-rate", type=rate, default=0.01,
-                   help="chance of any false peak on a perfect model, in (0, 1) (default 0.01)")
+                   help="chance of any false peak on a perfect model among the kinematic "
+                   "lines, and again among the other bins, in (0, 1) (default 0.01)")
     p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
     p.add_argument("--report", help="write a self-contained HTML report here")
     p.add_argument("--history", help="SQLite run history (default: the per-user "

@@ -14,7 +14,7 @@ from pydiag.fit.problem import build_problem
 from pydiag.fmu.plant import FmuPlant
 from pydiag.gear.conventions import kinematics_from
 from pydiag.gear.effects import EFFECTS
-from pydiag.gear.kinematic_map import Bearing
+from pydiag.gear.kinematic_map import Bearing, kinematic_map, match
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.validate import validate
@@ -331,3 +331,41 @@ def test_cli_compare_effect_through_an_adapter_whose_roles_are_not_variables(eff
     data = json.loads(out.read_text())
     assert data["parameters"]["ecc_gear"] == pytest.approx(10e-6, rel=0.1)
     assert data["fit_error"] is None and data["error"] < 0.3
+
+
+def test_a_kinematic_line_is_a_peak_at_the_margin_of_the_lines_the_kinematics_names(gear_fmu):
+    """The same excess is a peak on 1x gear (one of the L kinematic lines: alpha over L)
+    and not halfway between two synchronous lines (one of all N bins: alpha over N): a
+    change the model's form spreads thin over the pair's lines is seen (compare, step 4).
+    The noise has no component on those two bins, so each one's excess is the line put
+    there, between the two margins."""
+    from pydiag.loop.compare import measured_spectra
+    with FmuPlant(str(gear_fmu), ("acc", "disp")) as plant:
+        kin = kinematics_from(plant.parameters())
+        y = plant.simulate(BASE, 100 * kin.period_s, 0.05)
+    rate = 10_000.0
+    rng = np.random.default_rng(5)
+    noisy = {s: add_white_noise(y[i], 10.0, rng) for i, s in enumerate(("acc", "disp"))}
+    problem = build_problem(str(gear_fmu), Measurement(noisy, rate))
+    freqs, _, noise = measured_spectra(problem, 0.01).spectra["acc"]
+    bin_hz = freqs[0]
+    lines = kinematic_map(kin, freqs[-1])
+    n_lines = sum(1 for f in freqs if match(f, lines, 0.5 * bin_hz) is not None)
+    line_margin, bin_margin = (np.sqrt(noise * np.log(n / 0.01)) for n in (n_lines, freqs.size))
+    on_line, between = kin.f_gear_hz, kin.f_gear_hz + 0.5 / kin.period_s
+    spectrum = np.fft.rfft(noisy["acc"] - y[0])
+    for f in (on_line, between):
+        spectrum[int(round(f / bin_hz))] = 0.0
+    t = np.arange(y.shape[1]) / rate
+    amplitude = 0.5 * (line_margin + bin_margin)
+    noisy["acc"] = y[0] + np.fft.irfft(spectrum, y.shape[1]) + amplitude * (
+        np.sin(2 * np.pi * on_line * t) + np.sin(2 * np.pi * between * t + 1.0))
+    c = compare(build_problem(str(gear_fmu), Measurement(noisy, rate)), parameters=BASE)
+    acc = c.spectra["acc"]
+    excess = {f: acc.measured[k] - acc.model[k] for k, f in enumerate(acc.freq_hz)
+              if min(abs(f - on_line), abs(f - between)) < 1e-6}
+    assert len(excess) == 2 and all(line_margin < e < bin_margin for e in excess.values()), \
+        (line_margin, bin_margin, excess)
+    peaks = [pk.freq_hz for pk in c.peaks if pk.channel == "acc"]
+    assert any(abs(f - on_line) < 1e-6 for f in peaks), peaks
+    assert not any(abs(f - between) < 1e-6 for f in peaks), peaks
