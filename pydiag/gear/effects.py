@@ -131,11 +131,14 @@ def _second_pinion_tooth(line, freq, f_mesh):
 
 
 def _backlash(line, freq, f_mesh):
+    # the contact lost where the deflection is lowest: every mesh harmonic, the higher
+    # ones above all, and, at half weight, the lines of the pinion's turn (its faulty
+    # tooth's, its runout's) whose troughs the loss clips
     if line is None:
         return 0.0
     if line.family == "mesh":
         return 1.0 if line.order >= 2 else 0.5
-    return 0.0
+    return 0.5 if line.family in ("mesh_sb_pinion", "pinion") else 0.0
 
 
 #: The largest line of a shaft order the shaft effects fit, m/s2 at the model's sensor, like
@@ -355,8 +358,15 @@ EFFECTS = {e.key: e for e in (
            (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5, step=1.0)),
            _second_pinion_tooth, _tooth_hint("tooth2", "n_pinion", other_than_zero=True),
            reshapes_base=True),
+    # the teeth separate only where the dynamic deflection outgrows the static one (the mesh
+    # at a resonance): the loss then reshapes the lines the base makes, which a base fit
+    # without it bends to. Its transition is the teeth's surfaces coming into contact: from
+    # a hard contact to the roughness of ground teeth (Ra 0.3 um). Wider, the factor is a
+    # softening stiffness law over the whole deflection instead, which fitted the
+    # independent simulator's hard contact at 1-2 um on some records and at its bound on
+    # others (bench/backlash_resonance.py, RESULTS.md section 9).
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
-           (Parameter("delta_c", 0.05e-6, 2e-6),), _backlash),
+           (Parameter("delta_c", 0.01e-6, 0.3e-6),), _backlash, reshapes_base=True),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), _family(("bpfo",)), synchronous=False,
