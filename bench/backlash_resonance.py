@@ -18,24 +18,15 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
-from truth import BASE_PARAMETERS  # noqa: E402
-from truth.gear_sim import TruthGear, line_margin_db, record, simulate  # noqa: E402
+from truth import (RESONANCE_RATE_HZ, RESONANCE_TOP_HZ, resonance_clean,  # noqa: E402
+                   resonance_problem)
+from truth.gear_sim import line_margin_db  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.discover import discover, effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
 
-#: The pinion speed that puts the mesh (14 teeth) at the mesh resonance, sqrt(K/m)/(2 pi) =
-#: 3183 Hz: at 25 Hz the contact force never falls to zero, even at 1 N.m.
-PINION_HZ = 227.0
-TORQUE_N_M = 50.0
-#: 4.5 mesh harmonics (the analysed band, 14.3 kHz) need more than 28.6 kHz.
-RATE_HZ = 50_000.0
-#: 150 periods of 13.2 ms: a 2 s record. With 20 (0.26 s) the change the gap makes, once
-#: the base has bent to it, was within what the halves' noise lets the held-out test see.
-PERIODS = 150
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
 #: discover's candidates: backlash and those that could take its lines.
 EFFECTS = ["backlash", "gear_eccentricity", "gear_tooth_fault", "second_pinion_tooth_fault",
@@ -47,16 +38,11 @@ def main() -> None:
     ap.add_argument("--seeds", default="5,6,7")
     ap.add_argument("--gap-um", type=float, default=5.0)
     args = ap.parse_args()
-    g = TruthGear(torque_n_m=TORQUE_N_M, f_pinion_hz=PINION_HZ)
     build = Path(tempfile.mkdtemp(prefix="backlash_fmus_"))
-    duration = PERIODS * g.period_s
-    clean = {0.0: simulate(g, duration, RATE_HZ, warmup_s=0.1),
-             args.gap_um: simulate(g.with_effects(backlash_m=args.gap_um * 1e-6), duration,
-                                   RATE_HZ, warmup_s=0.1)}
-    top = 4.5 * g.n_pinion * PINION_HZ
+    clean = {0.0: resonance_clean(), args.gap_um: resonance_clean(args.gap_um * 1e-6)}
     for channel in ("acc", "disp"):
         freq, margin = line_margin_db(clean[args.gap_um][channel], clean[0.0][channel], 10.0,
-                                      RATE_HZ, top)
+                                      RESONANCE_RATE_HZ, RESONANCE_TOP_HZ)
         print(f"gap {args.gap_um:g} um, {channel}: strongest change at {freq:.1f} Hz, "
               f"{margin:.1f} dB over the noise")
     print("| gap um | seed | error | confident (compare) | backlash in discover | s |\n"
@@ -64,11 +50,7 @@ def main() -> None:
     for gap, channels in clean.items():
         for seed in (int(s) for s in args.seeds.split(",")):
             t0 = time.perf_counter()
-            problem = build_problem(str(ROOT / "build/GearPair.fmu"),
-                                    record(g, PERIODS, seed, RATE_HZ, clean=channels),
-                                    parameters=BASE_PARAMETERS,
-                                    operating_point={"f_pinion_hz": PINION_HZ},
-                                    fixed_values={"T": TORQUE_N_M})
+            problem = resonance_problem(ROOT / "build/GearPair.fmu", channels, seed)
             c = validate(problem, compare(problem, FaultEstimator(**FAST)),
                          lambda e: str(effect_fmu(e.key, ROOT / "modelica", build)))
             confident = [s.effect for s in c.suggested_effects if s.confident] or ["-"]

@@ -61,6 +61,8 @@ from pydiag.signal.spectra import local_maxima, whole_periods
 #: Groups of the residual by family, and the kinematic families each gathers.
 RESIDUAL_GROUPS = ("mesh_harmonics", "pinion_orders", "gear_orders", "assembly_hunting",
                    "bearing", "other_shaft_orders", "non_kinematic", "broadband")
+#: The indices of the groups of bins no kinematic line is on.
+NOT_KINEMATIC = (RESIDUAL_GROUPS.index("non_kinematic"), RESIDUAL_GROUPS.index("broadband"))
 FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
                 "pinion": "pinion_orders", "mesh_sb_gear": "gear_orders", "gear": "gear_orders",
                 "assembly": "assembly_hunting", "hunting": "assembly_hunting", "bpfo": "bearing",
@@ -295,7 +297,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
         raw.append(spectral_error(model[bins], meas[bins], noise))
         excess = meas - model
         channel_power = float(np.sum(meas[bins] ** 2)) or 1.0
-        kinematic = groups < RESIDUAL_GROUPS.index("non_kinematic")  # a line of the map
+        kinematic = ~np.isin(groups, NOT_KINEMATIC)  # a line of the map
         line_margin = np.sqrt(noise * np.log(max(np.count_nonzero(kinematic), 1)
                                              / false_alarm_rate))
         over = (excess > measured.margin[channel]) | (kinematic & (excess > line_margin))

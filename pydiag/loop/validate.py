@@ -271,8 +271,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
                        math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
                        tried=False, envelope_band_hz=band, why_not=why_not)
     # before any spectrum: its lines unknown, or none it could fit stands above the noise
-    if effect.unknown_lines(kin):
-        return untried(effect.unknown_lines(kin))
+    if why_not := effect.unknown_lines(kin):
+        return untried(why_not)
     if not effect_parameters(problem, base, effect):
         return untried("no line of it stands above the noise where it can be told from the "
                        "pair's")

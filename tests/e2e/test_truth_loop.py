@@ -9,7 +9,8 @@ import json
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli
-from truth import BASE_PARAMETERS, OPERATING_POINT
+from truth import (BASE_PARAMETERS, OPERATING_POINT, RESONANCE_RATE_HZ, RESONANCE_TOP_HZ,
+                   resonance_clean, resonance_problem)
 from truth.gear_sim import TruthGear, envelope_margin_db, line_margin_db, record, simulate
 
 from pydiag.fit.affine import fit_affine
@@ -29,7 +30,7 @@ BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
 #: The hidden effects these tests check at the rig's 25 Hz, made the simulator's way: those
 #: of bench/independent_truth.py (RESULTS.md section 9). The simulator's backlash is not
-#: among them: its teeth separate only with the mesh at its resonance (RESONANCE below).
+#: among them: its teeth separate only with the mesh at its resonance (truth.RESONANCE).
 HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           "gear_tooth_fault": dict(gear_tooth_loss=0.4),
           # pinion tooth 5 as weak as the gear's tooth above, beside the faulty tooth 0
@@ -53,13 +54,8 @@ STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": Trut
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
 ENVELOPE_BAND = (1575.0, ENVELOPE_TOP * RATE_HZ)
 
-#: Where the simulator's teeth do separate (bench/backlash_resonance.py): the mesh (14 x
-#: 227 Hz) at the mesh resonance, 4.5 mesh harmonics at 50 kHz, 150 periods (2 s: with 20,
-#: what the gap changes, once the base has bent to it, is within the halves' noise).
-RESONANCE = TruthGear(f_pinion_hz=227.0)
-RESONANCE_RATE_HZ = 50_000.0
-RESONANCE_PERIODS = 150
-BACKLASH = dict(backlash_m=5e-6)
+#: The gap the simulator's teeth open at the mesh resonance (truth.RESONANCE).
+BACKLASH_M = 5e-6
 
 
 @pytest.fixture(scope="module")
@@ -71,16 +67,7 @@ def truth_records():
 
 @pytest.fixture(scope="module")
 def resonance_records():
-    g = RESONANCE
-    return {key: simulate(g.with_effects(**magnitudes), RESONANCE_PERIODS * g.period_s,
-                          RESONANCE_RATE_HZ, warmup_s=0.1)
-            for key, magnitudes in {"none": {}, "backlash": BACKLASH}.items()}
-
-
-def resonance_problem(gear_fmu, clean, seed):
-    m = record(RESONANCE, RESONANCE_PERIODS, seed, RESONANCE_RATE_HZ, clean=clean)
-    return build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
-                         operating_point={"f_pinion_hz": RESONANCE.f_pinion_hz})
+    return {"none": resonance_clean(), "backlash": resonance_clean(BACKLASH_M)}
 
 
 @pytest.fixture(scope="module")
@@ -145,10 +132,9 @@ def test_hidden_effect_is_the_one_confident_suggestion(gear_fmu, truth_records, 
 
 @pytest.mark.slow
 def test_the_backlash_lines_stand_above_the_noise_at_the_mesh_resonance(resonance_records):
-    top = 4.5 * RESONANCE.n_pinion * RESONANCE.f_pinion_hz
     margins = [line_margin_db(resonance_records["backlash"][channel],
                               resonance_records["none"][channel], 10.0, RESONANCE_RATE_HZ,
-                              top)[1] for channel in ("acc", "disp")]
+                              RESONANCE_TOP_HZ)[1] for channel in ("acc", "disp")]
     print(f"backlash at the mesh resonance: {margins[0]:.1f} dB (acc), {margins[1]:.1f} dB "
           "(disp) over the noise")
     assert max(margins) > 20
