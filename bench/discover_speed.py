@@ -39,7 +39,6 @@ from truth.gear_sim import TruthGear, record  # noqa: E402
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
-from pydiag.gear.kinematic_map import Bearing  # noqa: E402
 from pydiag.loop.compare import EFFECT_REFIT, compare  # noqa: E402
 from pydiag.loop.discover import discover, effect_fmu  # noqa: E402
 
@@ -55,8 +54,6 @@ RECORDS = {"runout": dict(gear_runout_m=10e-6), "ripple": dict(torque_ripple=0.0
            # floor hid its lines: not tried)
            "ripple_races_motor": dict(torque_ripple=0.005, outer_race_acc=600.0,
                                       inner_race_acc=600.0, other_shaft_acc=30.0)}
-#: The simulator's pinion bearing, whose lines compare names (a 6205).
-BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 
 
 def main() -> None:
@@ -79,13 +76,13 @@ def main() -> None:
             problem = build_problem(str(ROOT / "build/GearPair.fmu"), m,
                                     operating_point=OPERATING_POINT)
             t0 = time.perf_counter()
-            _, found = discover(problem, FaultEstimator(n_workers=args.workers), BEARING,
+            _, found = discover(problem, FaultEstimator(n_workers=args.workers),
                                 modelica_root=ROOT / "modelica", build_dir=build,
                                 effect_estimator=FaultEstimator(**EFFECT_REFIT,
                                                                 n_workers=args.workers))
             totals.append(time.perf_counter() - t0)
             t1 = time.perf_counter()
-            compare(problem, FaultEstimator(n_workers=args.workers), BEARING)  # the base alone
+            compare(problem, FaultEstimator(n_workers=args.workers))  # the base alone
             phases.setdefault("base compare (timed alone)", []).append(time.perf_counter() - t1)
             for d in sorted(found, key=lambda d: list(EFFECTS).index(d.effect)):
                 phases.setdefault(d.effect + ("" if d.status == "ok" else f" ({d.status})"),

@@ -18,12 +18,11 @@ sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
 # the motor shaft's speed ratio, given on every case but the one that says it is not
-from truth import BASE_PARAMETERS, OPERATING_POINT  # noqa: E402
+from truth import BASE_PARAMETERS, BEARING, OPERATING_POINT  # noqa: E402
 from truth.gear_sim import TruthGear, line_margin_db, record, simulate  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
-from pydiag.gear.kinematic_map import Bearing  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
@@ -45,7 +44,6 @@ CASES = {"none": {}, "gear_eccentricity": dict(gear_runout_m=10e-6),
          "other_shaft_orders": dict(other_shaft_acc=3.0),
          "other_shaft_orders, ratio not given": dict(other_shaft_acc=3.0)}
 PERIODS, RATE_HZ = 20, 10_000.0
-BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
 
 
@@ -73,10 +71,10 @@ def main() -> None:
             t0 = time.perf_counter()
             problem = build_problem(str(ROOT / "build/GearPair.fmu"),
                                     record(g, PERIODS, seed, RATE_HZ, clean=clean),
-                                    parameters=BASE_PARAMETERS, operating_point=None
+                                    parameters=BASE_PARAMETERS,
+                                    operating_point={"bearing": BEARING}
                                     if "not given" in case else OPERATING_POINT)
-            c = validate(problem, compare(problem, FaultEstimator(**FAST), BEARING), fmu_of,
-                         bearing=BEARING)
+            c = validate(problem, compare(problem, FaultEstimator(**FAST)), fmu_of)
             dt = time.perf_counter() - t0
             confident = [s.effect for s in c.suggested_effects if s.confident] or ["-"]
             others = "; ".join(f"{s.effect}: {s.status.split(':')[0]}"

@@ -23,7 +23,7 @@ from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.indicators import SHAFTS
-from pydiag.gear.kinematic_map import Bearing
+from pydiag.gear.kinematics import Bearing
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
 from pydiag.loop.regress import DEFAULT_RTOL

@@ -111,6 +111,8 @@ def problem_settings(args) -> dict:
         op["n_pinion"], op["n_gear"] = args.teeth
     if getattr(args, "other_shaft", None) is not None:  # compare and discover
         op["other_shaft_ratio"] = args.other_shaft
+    if getattr(args, "bearing", None) is not None:  # compare and discover
+        op["bearing"] = args.bearing
     gain = {"auto": None, "fit": True, "fixed": False}[args.gain]
     return {**settings, "operating_point": op or None, "fit_gain": gain,
             "speed": SpeedSettings(args.speed, tacho=args.tacho,

@@ -38,10 +38,9 @@ def cmd_compare(args) -> int:
     update, close = progress_bar(args.quiet, "compare")
     try:
         c = compare(problem, FaultEstimator(**estimator_settings(args), progress=update),
-                    args.bearing, args.false_alarm_rate)
+                    args.false_alarm_rate)
         if effect is not None:
-            base, c = c, refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args),
-                                           args.bearing)
+            base, c = c, refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args))
             problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
     finally:
         close()
@@ -49,7 +48,7 @@ def cmd_compare(args) -> int:
         root = Path(args.modelica) if args.modelica else MODELICA_ROOT
         build = Path(args.build_dir) if args.build_dir else None
         c = validate(problem, c, lambda e: str(effect_fmu(e.key, root, build)),
-                     _effect_estimator(args), args.bearing,
+                     _effect_estimator(args),
                      present=(args.effect,) if args.effect else (),
                      progress=None if args.quiet else
                      (lambda key: print(f"validating {key} held out ...", file=sys.stderr)))
@@ -77,7 +76,7 @@ def cmd_discover(args) -> int:
     progress = None if args.quiet else (lambda d: print(f"{d.effect}: tried in {d.elapsed_s:.1f} s",
                                                         file=sys.stderr))
     base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
-                           args.bearing, args.effects,
+                           args.effects,
                            Path(args.modelica) if args.modelica else MODELICA_ROOT,
                            Path(args.build_dir) if args.build_dir else None, progress,
                            _effect_estimator(args))

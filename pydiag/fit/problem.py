@@ -334,8 +334,8 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
             where the adapter maps it to parameters; default: the record's metadata (a
             record made by ``pydiag simulate``), else the FMU's
         operating_point: some of ``n_pinion``, ``n_gear``, ``f_pinion_hz`` (nominal),
-            ``other_shaft_ratio`` over that default (the command line's --teeth, --rpm,
-            --other-shaft)
+            ``other_shaft_ratio``, ``bearing`` over that default (the command line's
+            --teeth, --rpm, --other-shaft, --bearing)
         featurizer: override the features (see :class:`pydiag.signal.features.Featurizer`)
         feature_mode: "lines" or "paper" (gear models, :mod:`pydiag.gear.features`)
         warmup_s, relative_tolerance, engine: override the adapter's simulation settings
@@ -383,7 +383,7 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
         if kin is None:
             raise EstimationError("--rpm, --teeth, --other-shaft need a gear model: this FMU has "
                                   "no Np, Ng, f_pinion and the adapter no [kinematics]")
-        op = {k: (int(v) if k in ("n_pinion", "n_gear") else float(v))
+        op = {k: (int(v) if k in ("n_pinion", "n_gear") else v if k == "bearing" else float(v))
               for k, v in operating_point.items()}
         kin = dataclasses.replace(kin, **op)
     if kin is not None and speed is not None and speed_estimate is None:
@@ -396,15 +396,15 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     if kin is not None:
         fixed = {**adapter.kinematic_values(kin), **fixed}
         speed_fixed = adapter.kinematics["f_pinion_hz"].parameter is None
-        pair = dataclasses.replace(kin, other_shaft_ratio=None)  # what the model knows
-        if speed_fixed and fmu_kin is not None and fmu_kin != pair:
+        if speed_fixed and fmu_kin is not None and fmu_kin != kin.pair:  # what the model knows
             # the model's operating point is fixed: analyse the record at it (an
             # order-tracked record is the same per revolution at any speed)
             if measurement.metadata.get("order_tracking"):
                 measurement = dataclasses.replace(
                     measurement, sample_rate_hz=measurement.sample_rate_hz
                     * fmu_kin.f_pinion_hz / kin.f_pinion_hz)
-            kin = dataclasses.replace(fmu_kin, other_shaft_ratio=kin.other_shaft_ratio)
+            kin = dataclasses.replace(fmu_kin, other_shaft_ratio=kin.other_shaft_ratio,
+                                      bearing=kin.bearing)
     spec = adapter.plant_spec(fmu_path, measurement.sample_rate_hz, maps, fixed,
                               relative_tolerance, engine)
     if featurizer is not None:

@@ -265,6 +265,18 @@ def _housing_hint(peaks, bin_hz, kin):
     return {"f_housing": band}
 
 
+def _bearing_values(kin) -> dict[str, float]:
+    """The bearing's geometry, as the bearing effects' models name it."""
+    b = None if kin is None else kin.bearing
+    return {} if b is None else {"n_balls": float(b.n_balls), "d_ball": b.ball_diameter_m,
+                                 "d_pitch": b.pitch_diameter_m,
+                                 "alpha_contact": b.contact_angle_rad}
+
+
+def _bearing_missing(kin) -> str:
+    return "the bearing's geometry (--bearing)" if kin is None or kin.bearing is None else ""
+
+
 #: The largest bearing strike the bearing effects fit, m/s2 at the model's sensor (500 g). A
 #: fitted channel gain scales it to the measurement's: the shared real records fit gains of
 #: 0.0145-0.40, and on the independent simulator a base bent by a missing effect fitted
@@ -370,12 +382,14 @@ EFFECTS = {e.key: e for e in (
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), _family(("bpfo",)), synchronous=False,
-           outputs=("acc",), envelope=True, affine=True),
+           outputs=("acc",), envelope=True, affine=True, machine_values=_bearing_values,
+           missing=_bearing_missing),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
             Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
-           _family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True),
+           _family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
+           machine_values=_bearing_values, missing=_bearing_missing),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
            _ripple_hint("f_load"), synchronous=False),

@@ -20,7 +20,6 @@ line lists the other families with a line at the very same frequency (``also``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 from pydiag.gear.kinematics import GearKinematics
@@ -35,25 +34,6 @@ SHAFT_ORDERS = 10
 
 
 @dataclass(frozen=True)
-class Bearing:
-    """Rolling bearing geometry, on the shaft that turns at ``shaft`` ("pinion" or "gear")."""
-
-    n_balls: int
-    ball_diameter_m: float
-    pitch_diameter_m: float
-    contact_angle_rad: float = 0.0
-    shaft: str = "pinion"
-
-    def frequencies(self, f_shaft_hz: float) -> dict[str, float]:
-        """BPFO, BPFI, BSF, FTF in Hz for an inner race turning at f_shaft (outer fixed)."""
-        r = self.ball_diameter_m / self.pitch_diameter_m * math.cos(self.contact_angle_rad)
-        return {"bpfo": self.n_balls / 2 * f_shaft_hz * (1 - r),
-                "bpfi": self.n_balls / 2 * f_shaft_hz * (1 + r),
-                "bsf": self.pitch_diameter_m / (2 * self.ball_diameter_m) * f_shaft_hz * (1 - r * r),
-                "ftf": f_shaft_hz / 2 * (1 - r)}
-
-
-@dataclass(frozen=True)
 class KinematicLine:
     freq_hz: float
     family: str
@@ -64,9 +44,10 @@ class KinematicLine:
     also: tuple[str, ...] = ()
 
 
-def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | None = None,
+def kinematic_map(kin: GearKinematics, max_freq_hz: float,
                   n_sidebands: int = 6) -> list[KinematicLine]:
-    """All named lines up to ``max_freq_hz``, sorted by frequency."""
+    """All named lines up to ``max_freq_hz``, sorted by frequency (a bearing's when
+    ``kin`` has one)."""
     lines: list[KinematicLine] = []
 
     def add(f: float, family: str, order: int, label: str) -> None:
@@ -96,6 +77,7 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float, bearing: Bearing | No
     if f_other is not None:
         for k in range(1, min(SHAFT_ORDERS, int(max_freq_hz / f_other)) + 1):
             add(k * f_other, "other_shaft", k, f"{k}x other shaft")
+    bearing = kin.bearing
     if bearing is not None:
         f_shaft = fp if bearing.shaft == "pinion" else fg
         for family, f in bearing.frequencies(f_shaft).items():

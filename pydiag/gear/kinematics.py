@@ -1,4 +1,5 @@
-"""Gear-pair kinematics: the characteristic frequencies of a pinion/gear mesh."""
+"""Gear-pair kinematics: the characteristic frequencies of a pinion/gear mesh, and the
+machine facts beside the pair that put lines in its spectrum (another shaft, a bearing)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,25 @@ import math
 from dataclasses import dataclass
 
 from pydiag.core.errors import UsageError
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """Rolling bearing geometry, on the shaft that turns at ``shaft`` ("pinion" or "gear")."""
+
+    n_balls: int
+    ball_diameter_m: float
+    pitch_diameter_m: float
+    contact_angle_rad: float = 0.0
+    shaft: str = "pinion"
+
+    def frequencies(self, f_shaft_hz: float) -> dict[str, float]:
+        """BPFO, BPFI, BSF, FTF in Hz for an inner race turning at f_shaft (outer fixed)."""
+        r = self.ball_diameter_m / self.pitch_diameter_m * math.cos(self.contact_angle_rad)
+        return {"bpfo": self.n_balls / 2 * f_shaft_hz * (1 - r),
+                "bpfi": self.n_balls / 2 * f_shaft_hz * (1 + r),
+                "bsf": self.pitch_diameter_m / (2 * self.ball_diameter_m) * f_shaft_hz * (1 - r * r),
+                "ftf": f_shaft_hz / 2 * (1 - r)}
 
 
 @dataclass(frozen=True)
@@ -21,12 +41,15 @@ class GearKinematics:
         other_shaft_ratio: the other shaft's speed over the pinion's, or None: no other
             shaft known. A motor shaft whose z1 teeth drive z2 on the pinion's shaft: z2/z1;
             a second stage whose z3 teeth on the gear's shaft drive z4: Np/Ng * z3/z4
+        bearing: a rolling bearing's geometry (its lines are kinematic, and a bearing
+            effect's model takes it), or None: none known
     """
 
     n_pinion: int
     n_gear: int
     f_pinion_hz: float
     other_shaft_ratio: float | None = None
+    bearing: Bearing | None = None
 
     def __post_init__(self) -> None:
         if self.n_pinion < 1 or self.n_gear < 1:
@@ -37,6 +60,12 @@ class GearKinematics:
         ratio = self.other_shaft_ratio
         if ratio is not None and not (math.isfinite(ratio) and ratio > 0):
             raise UsageError(f"the other shaft's speed ratio must be positive, got {ratio}")
+
+    @property
+    def pair(self) -> "GearKinematics":
+        """The gear pair alone: what a pair model's parameters say (no other shaft, no
+        bearing)."""
+        return GearKinematics(self.n_pinion, self.n_gear, self.f_pinion_hz)
 
     @property
     def f_mesh_hz(self) -> float:

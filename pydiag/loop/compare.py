@@ -55,7 +55,7 @@ from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import PRIORITY, Bearing, kinematic_map, match
+from pydiag.gear.kinematic_map import PRIORITY, kinematic_map, match
 from pydiag.signal.spectra import local_maxima, whole_periods
 
 #: Groups of the residual by family, and the kinematic families each gathers.
@@ -264,7 +264,7 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
 
 
 def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
-            bearing: Bearing | None = None, false_alarm_rate: float = 0.01,
+            false_alarm_rate: float = 0.01,
             max_periods: int | None = None, parameters: dict[str, float] | None = None,
             measured: MeasuredSpectra | None = None) -> Comparison:
     """Fit (unless ``parameters`` are given, by name) and compare; see the module docstring.
@@ -284,7 +284,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     with problem.spec.open() as plant:
         y = problem.model_signals(plant, x, featurizer.duration_s)
         gains = problem.gains(plant, x) if problem.fit_gain else {}
-    lines = kinematic_map(kin, featurizer.max_freq_hz, bearing)
+    lines = kinematic_map(kin, featurizer.max_freq_hz)
     bin_hz = 1.0 / featurizer.duration_s
     candidates, spectra, errors, raw, by_family = [], {}, [], [], {}
     for i, channel in enumerate(problem.channels):
@@ -421,8 +421,7 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
 
 
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
-                      estimator: FaultEstimator | None = None,
-                      bearing: Bearing | None = None) -> Comparison:
+                      estimator: FaultEstimator | None = None) -> Comparison:
     """Fit the effect's parameters on the comparison's bins, the base parameters held at
     their fitted values (freed as well for an effect that reshapes the base's lines:
     :func:`fit_effect`), then compare the effect model on the same footing as ``base``.
@@ -433,6 +432,6 @@ def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, eff
     measured = measured_spectra(problem, base.false_alarm_rate, base.n_periods)
     effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, measured.featurizer,
                                         estimator)
-    c = compare(effect_problem, None, bearing, base.false_alarm_rate, base.n_periods,
+    c = compare(effect_problem, None, base.false_alarm_rate, base.n_periods,
                 parameters=fitted, measured=measured)
     return dataclasses.replace(c, parameters={**base.parameters, **fitted})

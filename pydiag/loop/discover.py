@@ -48,7 +48,6 @@ from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
-from pydiag.gear.kinematic_map import Bearing
 from pydiag.loop.compare import EFFECT_REFIT, Comparison, compare
 from pydiag.loop.validate import NOT_TRIED, held_out, in_model, outcompeted, rivals
 
@@ -108,14 +107,14 @@ def _failed(key: str, err: Exception, started: float) -> Discovery:
 
 
 def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
-                estimator: FaultEstimator, bearing: Bearing | None) -> Discovery:
+                estimator: FaultEstimator) -> Discovery:
     """One effect held out, as a row (an effect that cannot be fitted is a row too).
     Takes the effect's key, not the effect: it runs in a worker process."""
     started = time.perf_counter()
     effect = EFFECTS[key]
     k = len(effect.parameters)  # at most: its hint may leave some out
     try:
-        h = held_out(problem, base, effect, fmu, estimator, bearing)
+        h = held_out(problem, base, effect, fmu, estimator)
     except PydiagError as err:
         return _failed(key, err, started)
     if not h.tried:
@@ -128,7 +127,7 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
-             bearing: Bearing | None = None, effects: list[str] | None = None,
+             effects: list[str] | None = None,
              modelica_root: Path = MODELICA_ROOT, build_dir: Path | None = None,
              progress: Callable[[Discovery], None] | None = None,
              effect_estimator: FaultEstimator | None = None) -> tuple[Comparison, list[Discovery]]:
@@ -146,7 +145,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:
         raise UsageError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
-    base = compare(problem, estimator, bearing)
+    base = compare(problem, estimator)
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
     # the longest first, so the short ones fill the cores at the end: an effect that is not
     # synchronous is simulated over the whole record, the others over one period (twice
@@ -171,13 +170,13 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     jobs = min(cores, len(keys))
     if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
         for key in keys:
-            found.append(_try_effect(problem, base, key, fmus[key], effect_estimator, bearing))
+            found.append(_try_effect(problem, base, key, fmus[key], effect_estimator))
             if progress:
                 progress(found[-1])
     else:
         one = effect_estimator.replace(n_workers=cores, progress=None)
         with ProcessPoolExecutor(jobs) as pool:
-            tasks = {pool.submit(_try_effect, problem, base, key, fmus[key], one, bearing): key
+            tasks = {pool.submit(_try_effect, problem, base, key, fmus[key], one): key
                      for key in keys}
             rows = {}
             for task in as_completed(tasks):

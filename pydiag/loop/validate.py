@@ -112,7 +112,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import Bearing, coinciding, kinematic_map, match
+from pydiag.gear.kinematic_map import coinciding, kinematic_map, match
 from pydiag.loop.compare import (EFFECT_REFIT, NOT_VALIDATED, Comparison, effect_parameters,
                                  evidence_channels, fit_effect, free_polish, measured_spectra)
 from pydiag.signal.spectra import local_maxima
@@ -246,7 +246,6 @@ def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
 
 def held_out(problem: FitProblem, base: Comparison, effect: Effect,
              effect_fmu: str | Callable[[], str], estimator: FaultEstimator | None = None,
-             bearing: Bearing | None = None,
              false_alarm_rate: float = FALSE_ALARM_RATE) -> HeldOut:
     """Fit ``effect`` on half A, score it against the base model on half B.
 
@@ -286,7 +285,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     # the lines where the halves' spectra show them (a non-synchronous one moves)
     bin_hz = 1.0 / (n_half * kin.period_s)
     lines = coinciding([dataclasses.replace(line, freq_hz=fit_half.joined_freq_hz(line.freq_hz))
-                        for line in kinematic_map(kin, fit_half.max_freq_hz, bearing)],
+                        for line in kinematic_map(kin, fit_half.max_freq_hz)],
                        0.5 * bin_hz)
     weight = effect.weight
     changed = evidence_channels(problem, effect)  # on the others, none of its evidence
@@ -372,7 +371,7 @@ MIN_SCORE = 0.1
 
 def validate(problem: FitProblem, comparison: Comparison,
              effect_fmu: Callable[[Effect], str], estimator: FaultEstimator | None = None,
-             bearing: Bearing | None = None, min_score: float = MIN_SCORE,
+             min_score: float = MIN_SCORE,
              false_alarm_rate: float = FALSE_ALARM_RATE, present: tuple[str, ...] = (),
              progress: Callable[[str], None] | None = None) -> Comparison:
     """The comparison with every suggestion of score >= ``min_score`` tried held out, and
@@ -415,7 +414,7 @@ def validate(problem: FitProblem, comparison: Comparison,
         try:
             fmu = (problem.spec.fmu_path if effect.in_base
                    else functools.partial(effect_fmu, effect))  # built if it is fitted
-            h = held_out(problem, comparison, effect, fmu, estimator, bearing, false_alarm_rate)
+            h = held_out(problem, comparison, effect, fmu, estimator, false_alarm_rate)
         except (PydiagError, BuildError) as err:
             s.status = f"{NOT_VALIDATED}: {err}"
             continue

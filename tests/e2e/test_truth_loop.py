@@ -9,8 +9,8 @@ import json
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli
-from truth import (BASE_PARAMETERS, OPERATING_POINT, RESONANCE_RATE_HZ, RESONANCE_TOP_HZ,
-                   resonance_clean, resonance_problem)
+from truth import (BASE_PARAMETERS, BEARING, OPERATING_POINT, RESONANCE_RATE_HZ,
+                   RESONANCE_TOP_HZ, resonance_clean, resonance_problem)
 from truth.gear_sim import TruthGear, envelope_margin_db, line_margin_db, record, simulate
 
 from pydiag.fit.affine import fit_affine
@@ -18,7 +18,6 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import Bearing
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import EFFECT_REFIT, compare, measured_spectra, refit_with_effect
 from pydiag.loop.discover import discover, effect_fmu
@@ -26,7 +25,6 @@ from pydiag.loop.validate import ENVELOPE_TOP, held_out, validate
 
 PERIODS = 20
 RATE_HZ = 10_000.0
-BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
 #: The hidden effects these tests check at the rig's 25 Hz, made the simulator's way: those
 #: of bench/independent_truth.py (RESULTS.md section 9). The simulator's backlash is not
@@ -80,8 +78,7 @@ def validated(gear_fmu, clean, seed, effect_fmu_of, operating_point=OPERATING_PO
     m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=clean)
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point=operating_point)
-    return validate(problem, compare(problem, FaultEstimator(**FAST), BEARING), effect_fmu_of,
-                    bearing=BEARING)
+    return validate(problem, compare(problem, FaultEstimator(**FAST)), effect_fmu_of)
 
 
 @pytest.mark.parametrize("effect", sorted(STRIKES))
@@ -148,8 +145,7 @@ def test_backlash_at_the_mesh_resonance_is_the_one_confident_suggestion(
     """A gap the teeth open at the mesh resonance: backlash, and only it, confident; the
     same machine without a gap: nothing confident. (make test-slow: 6 records of 2 s.)"""
     problem = resonance_problem(gear_fmu, resonance_records[hidden], seed)
-    c = validate(problem, compare(problem, FaultEstimator(**FAST), BEARING), effect_fmu_of,
-                 bearing=BEARING)
+    c = validate(problem, compare(problem, FaultEstimator(**FAST)), effect_fmu_of)
     confident = [s.effect for s in c.suggested_effects if s.confident]
     assert confident == ([] if hidden == "none" else ["backlash"]), \
         [(s.effect, round(s.score, 2), s.status) for s in c.suggested_effects]
@@ -161,7 +157,7 @@ def test_discover_ranks_backlash_first_at_the_mesh_resonance(gear_fmu, resonance
                                                              tmp_path, seed):
     """Among backlash and the effects whose lines it shares."""
     problem = resonance_problem(gear_fmu, resonance_records["backlash"], seed)
-    _, found = discover(problem, FaultEstimator(**FAST), BEARING,
+    _, found = discover(problem, FaultEstimator(**FAST),
                         effects=["backlash", "gear_eccentricity", "gear_tooth_fault",
                                  "second_pinion_tooth_fault", "housing_sensor",
                                  "load_fluctuation", "speed_fluctuation"],
@@ -179,7 +175,7 @@ def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_pat
     m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=truth_records[effect])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point=OPERATING_POINT)
-    base, found = discover(problem, FaultEstimator(**FAST), BEARING,
+    base, found = discover(problem, FaultEstimator(**FAST),
                            effects=["gear_eccentricity", "gear_tooth_fault",
                                     "second_pinion_tooth_fault", "load_fluctuation",
                                     "speed_fluctuation", "mesh_stiffness_shape",
@@ -202,7 +198,7 @@ def test_without_the_other_shafts_ratio_its_lines_are_not_kinematic_and_nothing_
     motor_hz = TruthGear().effects.other_shaft_ratio * TruthGear().f_pinion_hz
     for seed in (5, 6, 7):
         c = validated(gear_fmu, truth_records["other_shaft_orders"], seed, effect_fmu_of,
-                      operating_point=None)
+                      operating_point={"bearing": BEARING})
         assert not [s for s in c.suggested_effects if s.confident], \
             [(s.effect, s.status) for s in c.suggested_effects]
         at_motor = [p for p in c.peaks if p.channel == "acc"
@@ -218,7 +214,7 @@ def test_without_the_other_shafts_ratio_its_lines_are_not_kinematic_and_nothing_
     # discover's way in (held out, whatever compare said): not fitted, its FMU not built
     problem = build_problem(str(gear_fmu), record(TruthGear(), PERIODS, 7, RATE_HZ,
                                                   clean=truth_records["other_shaft_orders"]),
-                            parameters=BASE_PARAMETERS)
+                            parameters=BASE_PARAMETERS, operating_point={"bearing": BEARING})
     h = held_out(problem, c, EFFECTS["other_shaft_orders"], lambda: pytest.fail("built"))
     assert not h.tried and h.verdict == other.status, h.verdict
 
@@ -230,10 +226,11 @@ def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth
     compare with the effect (``compare --effect``) frees the base parameters with it and
     explains the record."""
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["speed_fluctuation"])
-    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS)
-    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
+                            operating_point={"bearing": BEARING})
+    base = compare(problem, FaultEstimator(**FAST))
     effect = EFFECTS["speed_fluctuation"]
-    c = refit_with_effect(problem, base, effect, effect_fmu_of(effect), bearing=BEARING)
+    c = refit_with_effect(problem, base, effect, effect_fmu_of(effect))
     assert c.error < 0.2 * base.error, (base.error, c.error)
     assert not [p for p in c.peaks if p.family == "unexplained"], c.peaks
     assert c.parameters["d_f"] > base.parameters["d_f"] + 0.05, (base.parameters, c.parameters)
@@ -244,8 +241,9 @@ def test_an_affine_strike_amplitude_is_fitted_from_two_simulations(gear_fmu, tru
     """The outer race's strike amplitude enters acc linearly: its fit from two simulations
     (fit_affine) finds what the swarm and polish find, at an error no larger."""
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["bearing_outer_race"])
-    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS)
-    base = compare(problem, FaultEstimator(**FAST), BEARING)
+    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
+                            operating_point={"bearing": BEARING})
+    base = compare(problem, FaultEstimator(**FAST))
     effect = EFFECTS["bearing_outer_race"]
     assert effect.affine
     envelope = FullSpectrumFeaturizer(problem.kinematics, base.n_periods,

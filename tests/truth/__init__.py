@@ -5,6 +5,7 @@ from pydiag.core.parameters import Parameter
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS
+from pydiag.gear.kinematics import Bearing
 from pydiag.model.adapter import gear_default
 from truth.gear_sim import Effects, TruthGear, record, simulate
 
@@ -15,10 +16,12 @@ BASE_PARAMETERS = (tuple(Parameter("a_f", 0.0, 0.9) if p.name == "a_f" else p
                          for p in gear_default(["acc", "disp"]).fault_parameters)
                    + (HEALTHY_TOOTH,) + EFFECTS["mesh_stiffness_shape"].parameters
                    + EFFECTS["pinion_tooth_softening"].parameters)
+#: The simulator's pinion bearing: a 6205 (9 balls of 7.94 mm on a 39.04 mm pitch circle).
+BEARING = Bearing(9, 7.94e-3, 39.04e-3)
 #: What the engineer knows of the simulator's machine beyond the gear pair, given with every
-#: record whether or not a shaft is faulty: the motor shaft's speed ratio (29/17), so its
-#: orders are kinematic lines.
-OPERATING_POINT = {"other_shaft_ratio": Effects().other_shaft_ratio}
+#: record whether or not a shaft is faulty: the pinion bearing's geometry and the motor
+#: shaft's speed ratio (29/17), so their lines are kinematic.
+OPERATING_POINT = {"other_shaft_ratio": Effects().other_shaft_ratio, "bearing": BEARING}
 
 #: Where the simulator's teeth do separate: the mesh (14 x 227 Hz = 3178 Hz) at the mesh
 #: resonance, sqrt(K/m)/(2 pi) = 3183 Hz; at 25 Hz the contact force never falls to zero,
@@ -43,5 +46,6 @@ def resonance_problem(gear_fmu: str, clean: dict, seed: int) -> FitProblem:
     """The base model's problem on a noisy record (SNR 10, ``seed``) of ``clean``."""
     m = record(RESONANCE, RESONANCE_PERIODS, seed, RESONANCE_RATE_HZ, clean=clean)
     return build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
-                         operating_point={"f_pinion_hz": RESONANCE.f_pinion_hz},
+                         operating_point={"f_pinion_hz": RESONANCE.f_pinion_hz,
+                                          "bearing": BEARING},
                          fixed_values={"T": RESONANCE.torque_n_m})

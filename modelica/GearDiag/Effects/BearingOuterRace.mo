@@ -8,8 +8,9 @@ model BearingOuterRace "Outer-race defect of the pinion bearing: strikes at BPFO
   parameter Real A_b(unit="m/s2", min=0) = 60 "Peak acceleration of one strike's ring-down at the sensor";
   parameter Real f_mode(unit="Hz") = 3000 "Natural frequency of the structural mode the strikes ring";
   parameter Real zeta_mode(min=1e-3, max=0.5) = 0.05 "Damping ratio of that mode";
-  parameter Integer n_balls = 9 "Number of rolling elements (6205-type bearing)";
-  parameter Real d_ball(unit="m") = 7.94e-3 "Ball diameter";
-  parameter Real d_pitch(unit="m") = 39.04e-3 "Pitch diameter";
-  parameter Real f_bpfo(unit="Hz") = n_balls/2*f_pinion*(1 - d_ball/d_pitch) "Ball pass frequency, outer race";
+  parameter Integer n_balls(min=1) = 9 "Number of rolling elements (6205-type bearing; pydiag sets the machine's)";
+  parameter Real d_ball(unit="m", min=0) = 7.94e-3 "Ball diameter";
+  parameter Real d_pitch(unit="m", min=0) = 39.04e-3 "Pitch diameter";
+  parameter Real alpha_contact(unit="rad") = 0 "Contact angle";
+  parameter Real f_bpfo(unit="Hz") = n_balls/2*f_pinion*(1 - d_ball/d_pitch*cos(alpha_contact)) "Ball pass frequency, outer race";
 end BearingOuterRace;

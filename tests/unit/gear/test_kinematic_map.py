@@ -2,8 +2,8 @@
 
 import pytest
 
-from pydiag.gear.kinematic_map import Bearing, KinematicLine, coinciding, kinematic_map, match
-from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
+from pydiag.gear.kinematics import Bearing, GearKinematics
 
 BASE = dict(a_f=0.3, f_f=0.6, f_ate=0.1, f_dte=0.1)
 BEARING = Bearing(9, 7.94e-3, 39.04e-3)
@@ -13,8 +13,8 @@ FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=
 
 
 def test_kinematic_map_names_the_lines():
-    kin = GearKinematics(14, 21, 25.0)
-    lines = kinematic_map(kin, 1000.0, BEARING)
+    kin = GearKinematics(14, 21, 25.0, bearing=BEARING)
+    lines = kinematic_map(kin, 1000.0)
     assert match(350.0, lines, 0.5).label == "1x mesh"  # mesh wins over 14x pinion
     assert match(375.0, lines, 0.5).family == "mesh_sb_pinion"
     assert match(350 - 350 / 21, lines, 0.5).label == "1x mesh - 1x gear"
