@@ -142,7 +142,13 @@ class FaultEstimator:
     # ------------------------------------------------------------------ fit
     def fit(self, problem: FitProblem) -> DiagnosisResult:
         """The swarm over ``problem``'s box, then the polish from its best distinct
-        positions."""
+        positions.
+
+        A discrete parameter (``Parameter.step``: which tooth) is searched exhaustively:
+        every value gets particles of its own that never leave it, and the best position
+        of each value is polished over the continuous parameters, so the value chosen is
+        the one whose own best fit is best, not the one a particle happened to land near
+        (a verdict must not hang on the last bits of floating point)."""
         self._validate()
         lows, highs = problem.lows, problem.highs
         seen: dict[bytes, np.ndarray | None] = {}  # the swarm's residuals, for the polish
@@ -154,16 +160,22 @@ class FaultEstimator:
                 seen.update((x.tobytes(), r) for x, r in zip(np.clip(xs, lows, highs), out))
                 return np.array([np.inf if r is None else np.linalg.norm(r) for r in out])
 
+            discrete = np.array([p.step is not None for p in problem.parameters])
             swarm = global_best_pso(costs, init, lows, highs, self.iterations, self.seed,
-                                    ftol=self.swarm_ftol, ftol_iter=self.swarm_ftol_iter)
-            starts, start_costs = self._distinct_starts(swarm.pbest_pos, swarm.pbest_cost,
-                                                        lows, highs)
+                                    ftol=self.swarm_ftol, ftol_iter=self.swarm_ftol_iter,
+                                    pinned=discrete if discrete.any() else None)
+            if discrete.any():
+                starts, start_costs = _best_of_each(swarm.pbest_pos, swarm.pbest_cost, discrete)
+            else:
+                starts, start_costs = self._distinct_starts(swarm.pbest_pos, swarm.pbest_cost,
+                                                            lows, highs)
             best_x, best_cost = starts[0], start_costs[0]
             if self.polish_evaluations > 0:
                 for x0, c0 in zip(starts, start_costs):
                     if np.isfinite(c0):
                         x, c = self._polish(run.residuals, x0, c0, lows, highs,
-                                            seen.get(np.clip(x0, lows, highs).tobytes()))
+                                            seen.get(np.clip(x0, lows, highs).tobytes()),
+                                            discrete)
                         if c < best_cost:
                             best_x, best_cost = x, c
         return self._result(problem, run, best_x, best_cost, swarm.best_cost_history)
@@ -257,12 +269,13 @@ class FaultEstimator:
                 break
         return starts, chosen
 
-    def _polish(self, residuals, x0, cost0, lows, highs,
-                r0: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    def _polish(self, residuals, x0, cost0, lows, highs, r0: np.ndarray | None = None,
+                held: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         """Bounded trust-region least squares from a swarm position, parallel FD Jacobian.
 
         It works on the parameters scaled to 0..1 (``polish_xtol`` is a share of each
-        range); ``r0``, the residuals at ``x0`` when the swarm has them, saves a simulation.
+        range); ``r0``, the residuals at ``x0`` when the swarm has them, saves a simulation;
+        ``held``: a boolean per parameter, True for those it does not move (a discrete one).
         """
         n = x0.size
         span = highs - lows
@@ -281,17 +294,22 @@ class FaultEstimator:
                 last = r
             return cache[key]
 
+        free = np.ones(n, dtype=bool) if held is None else ~held
+
         def jac(u: np.ndarray) -> np.ndarray:
             f0 = fun(u)
             h = np.where(u + step <= 1.0, step, -step)
-            cols = residuals(lows + (u + np.diag(h)) * span)
-            return np.column_stack([((c if c is not None else f0) - f0) / h[j]
-                                    for j, c in enumerate(cols)])
+            cols = iter(residuals(lows + (u + np.diag(h)[free]) * span))
+            out = np.zeros((f0.size, n))
+            for j in np.flatnonzero(free):
+                c = next(cols)
+                out[:, j] = ((c if c is not None else f0) - f0) / h[j]
+            return out
 
         u0 = (np.clip(x0, lows, highs) - lows) / span
         if r0 is not None:
             cache[u0.tobytes()] = last = r0
-        budget = max(1, self.polish_evaluations // (n + 1))
+        budget = max(1, self.polish_evaluations // (int(free.sum()) + 1))
         res = scipy.optimize.least_squares(fun, u0, jac=jac, bounds=(0.0, 1.0), method="trf",
                                            max_nfev=budget, xtol=self.polish_xtol,
                                            ftol=self.polish_ftol, gtol=1e-8)
@@ -299,6 +317,20 @@ class FaultEstimator:
         if cost < cost0:
             return lows + np.asarray(res.x, dtype=float) * span, cost
         return x0, cost0
+
+
+def _best_of_each(positions: np.ndarray, costs: np.ndarray, discrete: np.ndarray
+                  ) -> tuple[list, list]:
+    """The best personal best of each value of the ``discrete`` parameters, best first:
+    the polish's starts when a discrete parameter is searched exhaustively."""
+    best: dict[bytes, int] = {}
+    for i, x in enumerate(np.asarray(positions, dtype=float)):
+        key = np.round(x[discrete], 9).tobytes()
+        if key not in best or costs[i] < costs[best[key]]:
+            best[key] = i
+    order = sorted(best.values(), key=lambda i: (costs[i], i))
+    return ([np.asarray(positions[i], dtype=float) for i in order],
+            [float(costs[i]) for i in order])
 
 
 def in_box(problem: FitProblem, xs: np.ndarray) -> np.ndarray:

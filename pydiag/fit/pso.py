@@ -11,6 +11,11 @@ after ``numpy.random.seed(seed)``, so results equal pyswarms' bit for bit
 
 Coefficients: Clerc's constriction values (c1 = c2 = 1.49618, w = 0.7298).
 
+Pinned dimensions (``pinned``): a particle never moves along them, so each keeps its
+start value there (a discrete parameter such as a tooth's index, each value searched by
+its own particles); the random draws are the same, so a swarm with none pinned is
+pyswarms'.
+
 Early stop, as pyswarms' ``ftol``/``ftol_iter``: the swarm stops when, in each of the
 last ``ftol_iter`` iterations, the global best cost moved by less than
 ``ftol x (1 + |best cost before|)``. The default (``ftol = -inf``) never stops early.
@@ -57,11 +62,12 @@ def periodic(position: np.ndarray, lows: np.ndarray, highs: np.ndarray) -> np.nd
 def global_best_pso(cost: Callable[[np.ndarray], np.ndarray], init_pos: np.ndarray,
                     lows: np.ndarray, highs: np.ndarray, iterations: int, seed: int,
                     options: dict[str, float] | None = None, ftol: float = -np.inf,
-                    ftol_iter: int = 1) -> SwarmResult:
+                    ftol_iter: int = 1, pinned: np.ndarray | None = None) -> SwarmResult:
     """Minimise ``cost`` (rows of positions -> costs, ``inf`` for a failure) from ``init_pos``.
 
     ``init_pos``: (n_particles, dimensions) start positions inside ``[lows, highs]``;
-    ``ftol``, ``ftol_iter``: the early stop of the module docstring.
+    ``ftol``, ``ftol_iter``: the early stop of the module docstring; ``pinned``: a boolean
+    per dimension, True where particles do not move (module docstring).
     """
     opts = {**CLERC, **(options or {})}
     rng = np.random.RandomState(seed)
@@ -91,5 +97,7 @@ def global_best_pso(cost: Callable[[np.ndarray], np.ndarray], init_pos: np.ndarr
         cognitive = opts["c1"] * rng.uniform(0, 1, position.shape) * (pbest_pos - position)
         social = opts["c2"] * rng.uniform(0, 1, position.shape) * (best_pos - position)
         velocity = opts["w"] * velocity + cognitive + social
+        if pinned is not None:
+            velocity[:, pinned] = 0.0
         position = periodic(position + velocity, lows, highs)
     return SwarmResult(pbest_pos, pbest_cost, history)

@@ -335,12 +335,17 @@ def _ripple_hint(name):
 
 def _tooth_hint(name, teeth, other_than_zero=False):
     def hint(peaks, bin_hz, kin):
-        """The faulty tooth may be any of the wheel's (one turn of its index), or any but
-        tooth 0 (the base model's faulty tooth) when ``other_than_zero``."""
+        """The faulty tooth may be any of the wheel's (one turn of its index), or, when
+        ``other_than_zero``, a tooth 1 to N/2 from tooth 0 (the base model's faulty tooth):
+        a tooth k and a tooth N - k make patterns that are each other's time reverse, whose
+        amplitude spectra are the same but for the mesh's dynamics (on a record of the
+        independent simulator with tooth 5 of 14 faulty, tooth 9 fitted within 1 % of its
+        error), so the spectra cannot tell them apart and a search over both would choose
+        between them by rounding."""
         if kin is None:
             return {}
         n = float(getattr(kin, teeth))
-        return {name: (0.5, n - 0.5) if other_than_zero else (0.0, n)}
+        return {name: (0.5, n // 2 + 0.5) if other_than_zero else (0.0, n)}
     return hint
 
 
@@ -364,7 +369,8 @@ EFFECTS = {e.key: e for e in (
            (Parameter("d_g", 0.0, 0.6), Parameter("tooth_g", 0.0, 21.0, periodic=True)),
            _gear_tooth_fault, _tooth_hint("tooth_g", "n_gear")),
     # a second tooth is not tooth 0; its index is a whole tooth (step 1: each tooth is
-    # tried from the swarm's start; a smooth index stopped between teeth, off the right one)
+    # searched by particles of its own; a smooth index stopped between teeth), counted the
+    # shorter way from tooth 0 (the hint: tooth k and N - k are one pattern, reversed)
     Effect("second_pinion_tooth_fault", "GearDiag.Effects.SecondPinionToothFault",
            "a second faulty pinion tooth",
            (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5, step=1.0)),

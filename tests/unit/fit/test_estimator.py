@@ -82,6 +82,38 @@ def test_a_stepped_parameter_is_fitted_on_its_multiples(gear_fmu, monkeypatch):
     assert r.evaluations == tried.size >= 11 * 2
 
 
+def test_a_discrete_parameter_is_searched_exhaustively(gear_fmu, monkeypatch):
+    """Each value of a stepped parameter keeps its own particles (the swarm never moves
+    them off it) and is polished over the continuous parameters, so the value found does
+    not depend on where the swarm's random start put the continuous ones: the same tooth
+    (here f_ate in steps of 0.1) for every seed, with a_f fitted beside it."""
+    problem = build_problem(gear_fmu, noisy_measurement(gear_fmu, 8, 0, periods=2),
+                            parameters=(Parameter("f_ate", 0.0, 1.0, step=0.1),
+                                        Parameter("a_f", 0.0, 1.0)),
+                            fixed_values={"f_f": 0.6, "f_dte": 0.2})
+    batches = []
+    pool_map = IsolatedPool.map
+
+    def spy(self, xs):
+        batches.append(np.array(xs))
+        return pool_map(self, xs)
+
+    monkeypatch.setattr(IsolatedPool, "map", spy)
+    found = set()
+    for seed in (0, 1, 2):
+        batches.clear()
+        r = FaultEstimator(n_particles=3, iterations=3, polish_evaluations=30, polish_starts=1,
+                           n_workers=2, seed=seed).fit(problem)
+        swarm = [b for b in batches if len(b) == 11]
+        assert len(swarm) == 3 and all(np.array_equal(b[:, 0], swarm[0][:, 0]) for b in swarm)
+        # every value's best position polished: some simulations at each value after the swarm
+        polished = np.concatenate(batches[3:])[:, 0]
+        assert set(np.round(polished, 6)) == {round(k / 10, 6) for k in range(11)}
+        assert r.parameters["a_f"] == pytest.approx(0.3, abs=0.05)
+        found.add(round(r.parameters["f_ate"], 9))
+    assert found == {0.2}
+
+
 def test_replace_gives_a_new_estimator_with_other_settings():
     est = FaultEstimator(n_particles=8, polish_evaluations=60)
     other = est.replace(polish_evaluations=0)
