@@ -12,7 +12,7 @@ FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)
 
-.PHONY: venv fmu demo test test-slow regress bless bench loop clean
+.PHONY: venv fmu demo lint test test-fast test-slow regress bless bench loop clean
 
 venv: $(STAMP)
 
@@ -34,8 +34,16 @@ build/effects/%.fmu: $(MODELICA) $(BRIDGE) $(STAMP)
 demo: fmu
 	$(PY) -m pydiag demo --fmu build/GearPair.fmu
 
-test: fmu
-	$(PY) -m pytest -q
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+
+# every test but the slow tier, on every core (pytest-xdist), after the linter
+test: fmu lint
+	$(PY) -m pytest -q -n auto --dist loadgroup
+
+# the edit-test loop: the linter and the unit tests (a handful of FMU simulations)
+test-fast: lint build/GearPair.fmu
+	$(PY) -m pytest -q -n auto tests/unit tests/test_layers.py
 
 test-slow: fmu
 	$(PY) -m pytest -q -m slow

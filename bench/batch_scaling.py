@@ -65,7 +65,8 @@ def main() -> int:
                   f"{median[1] / median[workers]:8.2f}x  "
                   + " ".join(f"{w:.1f}" for w in walls[workers]))
         results = {w: (median[w], rows_of[w]) for w in (1, 2)}
-        strip = lambda rows: [{k: v for k, v in r.items() if k != "elapsed_s"} for r in rows]
+        def strip(rows):
+            return [{k: v for k, v in r.items() if k != "elapsed_s"} for r in rows]
         same = strip(results[1][1]) == strip(results[2][1])
         ok = sum(r["status"] == "ok" for r in results[2][1])
         print(f"identical rows with 1 and 2 workers: {same}; diagnosed {ok}/{len(tasks)}")

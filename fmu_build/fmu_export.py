@@ -96,7 +96,7 @@ def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
     sx_in = [system.time, *[s.symbol for s in system.states], *params_sx]
     starts = ca.Function("starts", params_sx, [s.start for s in system.states])
     p_mx = [*p, *d]
-    for s, i in delta_states:
+    for _, i in delta_states:
         physical[i] = x_vars[i] + starts(*p_mx)[i]
     outs = [*system.derivatives, *[o.expr for o in system.outputs]]
     f = ca.Function("f", sx_in, outs)

@@ -241,7 +241,7 @@ class IsolatedPool:
                     self._fail(payload if status == "error" else "simulation failed (non-finite "
                                "output or a failed step)")
             now = time.monotonic()
-            for w, (task, started) in list(busy.items()):
+            for w, (_, started) in list(busy.items()):
                 if now - started > self.timeout_s and self.workers[w][1] not in ready:
                     busy.pop(w)
                     self.timeouts += 1
@@ -264,7 +264,7 @@ class IsolatedPool:
 
     def close(self) -> None:
         """Stop the workers (each removes its files), then the janitor; remove the run folder."""
-        for proc, conn in self.workers:
+        for _, conn in self.workers:
             try:
                 conn.send(None)
             except (OSError, BrokenPipeError):

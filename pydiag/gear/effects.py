@@ -187,8 +187,8 @@ def _other_shaft_hint(peaks, bin_hz, kin):
     if f_other is None:
         return dict.fromkeys(names)
     top = min((SHAFT_ORDERS + 0.5) * f_other, max_band_freq_hz(kin))
-    own = {l.order: l for l in coinciding(kinematic_map(kin, top), 0.5 * bin_hz)
-           if l.family == "other_shaft"}
+    own = {ln.order: ln for ln in coinciding(kinematic_map(kin, top), 0.5 * bin_hz)
+           if ln.family == "other_shaft"}
     seen = {p.order for p in peaks if p.family == "other_shaft"}
     return {name: None for k, name in enumerate(names, 1) if k not in seen or k not in own
             or _other_shaft(own[k], own[k].freq_hz, kin.f_mesh_hz) == 0}

@@ -101,7 +101,7 @@ def coinciding(lines: list[KinematicLine], tolerance_hz: float = 0.0) -> list[Ki
     (``FullSpectrumFeaturizer.joined_freq_hz``): within half a bin of a shaft order it
     is on that order's bin."""
     rank = {f: i for i, f in enumerate(PRIORITY)}
-    lines = sorted(lines, key=lambda l: (l.freq_hz, rank[l.family]))
+    lines = sorted(lines, key=lambda ln: (ln.freq_hz, rank[ln.family]))
     out, low = [], 0
     for i, line in enumerate(lines):
         tol = max(tolerance_hz, 1e-9 * line.freq_hz)
@@ -118,8 +118,8 @@ def coinciding(lines: list[KinematicLine], tolerance_hz: float = 0.0) -> list[Ki
 def match(freq_hz: float, lines: list[KinematicLine], tolerance_hz: float) -> KinematicLine | None:
     """The line nearest ``freq_hz`` within the tolerance; the higher-priority family on ties."""
     rank = {f: i for i, f in enumerate(PRIORITY)}
-    near = [l for l in lines if abs(l.freq_hz - freq_hz) <= tolerance_hz]
+    near = [ln for ln in lines if abs(ln.freq_hz - freq_hz) <= tolerance_hz]
     if not near:
         return None
-    return min(near, key=lambda l: (round(abs(l.freq_hz - freq_hz) / max(tolerance_hz, 1e-12), 1),
-                                    rank[l.family]))
+    return min(near, key=lambda ln: (round(abs(ln.freq_hz - freq_hz) / max(tolerance_hz, 1e-12), 1),
+                                    rank[ln.family]))

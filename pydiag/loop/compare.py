@@ -184,7 +184,7 @@ def bin_groups(freqs: np.ndarray, lines: list, bin_hz: float, measured: np.ndarr
     groups = np.where((measured > margin) & local_maxima(measured),
                       RESIDUAL_GROUPS.index("non_kinematic"), RESIDUAL_GROUPS.index("broadband"))
     rank = {f: i for i, f in enumerate(PRIORITY)}
-    for line in sorted(lines, key=lambda l: -rank[l.family]):  # the first family wins
+    for line in sorted(lines, key=lambda ln: -rank[ln.family]):  # the first family wins
         k = int(round(line.freq_hz / bin_hz)) - 1
         if 0 <= k < freqs.size and abs(freqs[k] - line.freq_hz) <= bin_hz / 2:
             groups[k] = RESIDUAL_GROUPS.index(FAMILY_GROUP[line.family])
@@ -328,8 +328,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     # the plots' cursors: mesh harmonics, low shaft orders and their mesh sidebands, bearings
     orders = {"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3, "bpfo": 5,
               "bpfi": 5, "bsf": 5, "ftf": 5, "other_shaft": 3}
-    markers = [{"freq_hz": l.freq_hz, "family": l.family, "label": l.label} for l in lines
-               if l.family == "mesh" or 0 < abs(l.order) <= orders.get(l.family, 0)]
+    markers = [{"freq_hz": ln.freq_hz, "family": ln.family, "label": ln.label} for ln in lines
+               if ln.family == "mesh" or 0 < abs(ln.order) <= orders.get(ln.family, 0)]
     return Comparison(problem.spec.fmu_path, float(np.sqrt(np.sum(np.square(errors)))),
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
                       peaks, suggestions, false_alarm_rate, featurizer.n_periods,

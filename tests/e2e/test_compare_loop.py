@@ -114,9 +114,7 @@ def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
                         "held_out"}
     assert top["confident"] and top["held_out"]["z"] > top["held_out"]["threshold"]
     assert {"freq_hz", "amplitude", "family", "energy_fraction"} <= set(data["peaks"][0])
-    for channel, groups in data["residual_by_family"].items():
-        for share in ("measured", "residual"):
-            assert sum(g[share] for g in groups.values()) == pytest.approx(1.0)
+    for groups in data["residual_by_family"].values():
         # the eccentricity's gear-order lines are what the model misses, not its mesh
         assert groups["gear_orders"]["residual"] > 3 * groups["mesh_harmonics"]["residual"]
     before = out.read_bytes()
@@ -190,9 +188,9 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
         seen = []
         _, found = discover(problem, FaultEstimator(**FAST),
                             effects=["gear_eccentricity", "load_fluctuation"], build_dir=tmp_path,
-                            progress=lambda d: seen.append(d.effect),
+                            progress=seen.append,
                             effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=workers))
-        assert sorted(seen) == ["gear_eccentricity", "load_fluctuation"]
+        assert sorted(d.effect for d in seen) == ["gear_eccentricity", "load_fluctuation"]
         runs[workers] = [(d.effect, d.status, repr(d.z), d.parameters, d.confident)
                          for d in found]
     assert runs[1] == runs[2]

@@ -276,7 +276,7 @@ def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_r
                   "--iterations", "8", "--polish", "100", "--quiet",
                   "--build-dir", str(tmp_path / "fmus"))
     assert res.returncode == 0, res.stderr
-    line = next(l for l in res.stdout.splitlines() if "bearing_outer_race" in l)
+    line = next(ln for ln in res.stdout.splitlines() if "bearing_outer_race" in ln)
     assert "CONFIDENT, confirmed held out" in line and "envelope" in line, line
     data = json.loads(out.read_text())
     found = {s["effect"]: s for s in data["suggested_effects"]}
@@ -326,6 +326,6 @@ def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_recor
     assert not [s for s in with_it["suggested_effects"] if s["confident"]]
     res = run_cli("-m", "pydiag", "history", "--history", str(db))
     assert res.returncode == 0, res.stderr
-    runs = [l.split() for l in res.stdout.splitlines()[1:]]
+    runs = [ln.split() for ln in res.stdout.splitlines()[1:]]
     assert [r[2] for r in runs] == ["GearPair", "OtherShaftOrders"]
     assert float(runs[1][4]) < float(runs[0][4])

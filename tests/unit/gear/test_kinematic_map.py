@@ -38,6 +38,6 @@ def test_lines_within_the_tolerance_are_told_of_each_other():
         KinematicLine(175.15, "bpfo", 2, "2x BPFO")
     far = KinematicLine(176.0, "gear", 10, "10x gear")
     told = coinciding([far, bpfo, pinion], 0.5 / 1.2)
-    assert [l.label for l in told] == ["7x pinion", "2x BPFO", "10x gear"]  # sorted
+    assert [ln.label for ln in told] == ["7x pinion", "2x BPFO", "10x gear"]  # sorted
     assert told[0].also == ("bpfo",) and told[1].also == ("pinion",) and told[2].also == ()
     assert coinciding([pinion, bpfo])[0].also == ()  # exactly the same frequency only

@@ -20,7 +20,7 @@ def test_every_bin_goes_to_one_group_and_the_shares_are_energy_shares():
     model = measured.copy()
     at = {f: int(round(f / bin_hz)) - 1 for f in (KIN.f_mesh_hz, KIN.f_mesh_hz - 3 * KIN.f_pinion_hz,
                                                    2 * KIN.f_gear_hz, 123.456)}
-    for f, k in at.items():
+    for k in at.values():
         measured[k] = 1.0
     model[at[KIN.f_mesh_hz]] = 1.0  # the model has the mesh line only
     groups = bin_groups(freqs, lines, bin_hz, measured, margin=0.1)
