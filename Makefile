@@ -5,9 +5,8 @@ PYTHON_BOOT ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-EFFECTS := GearEccentricity GearToothFault SecondPinionToothFault Backlash BearingOuterRace \
-           BearingInnerRace LoadFluctuation HousingSensor SpeedFluctuation PinionShaftOrders \
-           OtherShaftOrders
+# the effect models: those the Modelica package lists (docs/effects.md)
+EFFECTS := $(shell cat modelica/GearDiag/Effects/package.order)
 FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)

@@ -59,7 +59,7 @@ def main() -> None:
             row = next(d for d in found if d.effect == "backlash")
             others = [d.effect for d in found if d.confident]
             print(f"| {gap:g} | {seed} | {c.error:.3f} | {', '.join(confident)} | z {row.z:.1f}: "
-                  f"{row.verdict.split(' (')[0]}; confident: {', '.join(others) or '-'} | "
+                  f"{row.status.value}; confident: {', '.join(others) or '-'} | "
                   f"{time.perf_counter() - t0:.0f} |", flush=True)
 
 

@@ -39,7 +39,8 @@ from truth.gear_sim import TruthGear, record  # noqa: E402
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
-from pydiag.loop.compare import EFFECT_REFIT, compare  # noqa: E402
+from pydiag.loop.compare import compare  # noqa: E402
+from pydiag.loop.effect_fit import EFFECT_REFIT  # noqa: E402
 from pydiag.loop.discover import discover, effect_fmu  # noqa: E402
 
 PERIODS, RATE_HZ = 33, 10_000.0
@@ -85,7 +86,8 @@ def main() -> None:
             compare(problem, FaultEstimator(n_workers=args.workers))  # the base alone
             phases.setdefault("base compare (timed alone)", []).append(time.perf_counter() - t1)
             for d in sorted(found, key=lambda d: list(EFFECTS).index(d.effect)):
-                phases.setdefault(d.effect + ("" if d.status == "ok" else f" ({d.status})"),
+                phases.setdefault(d.effect + ("" if d.held_out and d.held_out.tried
+                                              else f" ({d.status.value})"),
                                   []).append(d.elapsed_s)
             ranking = [(d.effect, d.z, d.confident) for d in found]
         print(f"\nrecord with a hidden {name} ({m.duration_s:.2f} s)")

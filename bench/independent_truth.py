@@ -77,7 +77,7 @@ def main() -> None:
             c = validate(problem, compare(problem, FaultEstimator(**FAST)), fmu_of)
             dt = time.perf_counter() - t0
             confident = [s.effect for s in c.suggested_effects if s.confident] or ["-"]
-            others = "; ".join(f"{s.effect}: {s.status.split(':')[0]}"
+            others = "; ".join(f"{s.effect}: {s.status.value}"
                                for s in c.suggested_effects if s.held_out and not s.confident)
             print(f"{case:<36} {seed:4d} {margin:6.1f}dB {c.error:6.3f} {dt:5.1f}  "
                   f"{','.join(confident):<10} | {others}", flush=True)

@@ -36,6 +36,7 @@ from pydiag.core.measurement import Measurement  # noqa: E402
 from pydiag.signal.noise import add_white_noise  # noqa: E402
 from pydiag.gear.paper_cases import TABLE1, case  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
+from pydiag.loop.diagnosis import classified  # noqa: E402
 from pydiag.fmu.plant import FmuPlant  # noqa: E402
 
 NAMES = ("a_f", "f_f", "f_ate", "f_dte")
@@ -82,7 +83,7 @@ def main() -> int:
                 problem = build_problem(args.fmu, m, feature_mode=args.features,
                                         fit_gain=args.fit_gain,
                                         speed=SpeedSettings(args.speed) if args.speed else None)
-                r = est.fit(problem)
+                r = classified(problem, est.fit(problem))
                 wall = time.perf_counter() - t0
                 with ProblemObjective(problem) as objective:
                     e_true = objective(np.array([c.parameters[n] for n in NAMES]))
@@ -91,13 +92,13 @@ def main() -> int:
                 worst, correct = max(worst, err), correct + ok
                 walls.append(wall)
                 exact[f"{number}/{seed}"] = {"parameters": r.parameters, "error": r.error,
-                                             "evaluations": r.evaluations,
-                                             "history": r.best_error_history}
-                evals.append(r.evaluations)
+                                             "evaluations": r.fit.evaluations,
+                                             "history": r.fit.best_error_history}
+                evals.append(r.fit.evaluations)
                 row = (str(number), str(seed),
                        *[f"{c.parameters[n]:.2f}/{r.parameters[n]:.4f}" for n in NAMES],
                        f"{err:.4f}", f"{r.fault_mode}/{r.severity}", "yes" if ok else "NO",
-                       f"{r.error:.4f}", f"{e_true:.4f}", str(r.evaluations), f"{wall:.1f}")
+                       f"{r.error:.4f}", f"{e_true:.4f}", str(r.fit.evaluations), f"{wall:.1f}")
                 rows.append(row)
                 print(" | ".join(row), flush=True)
     summary = (f"{len(rows)} runs: worst absolute error {worst:.4f}, mode and severity correct in "

@@ -38,6 +38,7 @@ from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings, estimate_speed, order_track  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare, refit_with_effect  # noqa: E402
+from pydiag.loop.diagnosis import diagnose  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
@@ -50,7 +51,7 @@ def real_records(data: Path, fmu: str, housing_fmu: str) -> list[tuple]:
         common = dict(operating_point=OPERATING_POINT, speed=SpeedSettings("auto"))
         t0 = time.perf_counter()
         problem = build_problem(fmu, m, fit_gain=True, **common)
-        result = FaultEstimator(seed=0).fit(problem)
+        result = diagnose(problem, FaultEstimator(seed=0))
         wall = time.perf_counter() - t0
         fixed = FaultEstimator(seed=0).fit(build_problem(fmu, m, fit_gain=False, **common))
         effect = EFFECTS["housing_sensor"]

@@ -37,6 +37,7 @@ from pydiag.gear.indicators import INDICATORS, condition_indicators  # noqa: E40
 from pydiag.gear.kinematics import GearKinematics  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
+from pydiag.loop.diagnosis import diagnose  # noqa: E402
 
 NAME = re.compile(r"^(?P<condition>[a-z])(?P<speed>\d+)hz(?P<load>\d+)\.", re.IGNORECASE)
 MODEL = ("a_f", "a0", "tooth_contrast")
@@ -60,7 +61,7 @@ def analyse(path: Path, speed_hz: int, args) -> dict:
     problem = build_problem(args.fmu, m, operating_point={"n_pinion": n_pinion,
                             "n_gear": n_gear, "f_pinion_hz": float(speed_hz)},
                             speed=SpeedSettings("auto"), fit_gain=None)
-    result = FaultEstimator(seed=0).fit(problem)
+    result = diagnose(problem, FaultEstimator(seed=0))
     diagnose_s = time.perf_counter() - started
     started = time.perf_counter()
     report = condition_indicators(m, kin, SpeedSettings("auto"))

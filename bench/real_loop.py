@@ -39,8 +39,9 @@ from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.compare import (RESIDUAL_GROUPS, compare, refit_with_effect,  # noqa: E402
-                                 with_effect)
+from pydiag.loop.compare import compare, refit_with_effect  # noqa: E402
+from pydiag.loop.effect_fit import with_effect  # noqa: E402
+from pydiag.loop.residual import RESIDUAL_GROUPS  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
 
@@ -71,12 +72,12 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
             f"{g} {100 * shares[g]['measured']:.0f}/{100 * shares[g]['residual']:.0f} %"
             for g in RESIDUAL_GROUPS), flush=True)
         for s in c.suggested_effects:
-            print(f"  {s.effect}: {s.status}", flush=True)
+            print(f"  {s.effect}: {s.message}", flush=True)
         tried = [s for s in c.suggested_effects if s.held_out]
         confident = sorted((s for s in c.suggested_effects if s.confident),
-                           key=lambda s: -s.held_out["z"])
-        base_held = f"{tried[0].held_out['error_base']:.3f}" if tried else "-"
-        verdicts = "; ".join(f"{s.effect}: {s.status.split(' (')[0].split(':')[0]}"
+                           key=lambda s: -s.held_out.z)
+        base_held = f"{tried[0].held_out.error_base:.3f}" if tried else "-"
+        verdicts = "; ".join(f"{s.effect}: {s.status.value}"
                              for s in tried) or "nothing tried"
         if not confident:
             rows.append(f"| {name} | {step} | {model} | {c.error:.3f} | {base_held} | - | - | "
@@ -84,10 +85,10 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
             break
         s = confident[0]
         effect = EFFECTS[s.effect]
-        values = ", ".join(f"{k} {v:.3g}" for k, v in s.held_out["parameters"].items())
+        values = ", ".join(f"{k} {v:.3g}" for k, v in s.held_out.parameters.items())
         rows.append(f"| {name} | {step} | {model} | {c.error:.3f} | {base_held} | "
-                    f"**{s.effect}** ({values}, z {s.held_out['z']:.0f}) | "
-                    f"{s.held_out['error_effect']:.3f} | {verdicts} | {wall:.0f} |")
+                    f"**{s.effect}** ({values}, z {s.held_out.z:.0f}) | "
+                    f"{s.held_out.error_effect:.3f} | {verdicts} | {wall:.0f} |")
         if not effect.in_base and str(problem.spec.fmu_path) != BASE_FMU:
             print(f"  {s.effect} needs a model combined with {accepted[-1]}: stop", flush=True)
             break

@@ -102,3 +102,32 @@ def test_the_checks_can_fail():
 @pytest.mark.parametrize("path", sorted((PACKAGE / "app").glob("*.py")), ids=lambda p: p.name)
 def test_cli_modules_stay_small(path):
     assert len(path.read_text().splitlines()) <= MAX_CLI_LINES
+
+
+#: A module longer than this says in its docstring why it is one concern ("One concern: ...").
+MAX_MODULE_LINES = 400
+
+
+@pytest.mark.parametrize("path", sorted(p for p in PACKAGE.rglob("*.py") if "native" not in p.parts),
+                         ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_a_long_module_is_one_concern_and_says_so(path):
+    text = path.read_text()
+    if len(text.splitlines()) > MAX_MODULE_LINES:
+        doc = ast.get_docstring(ast.parse(text)) or ""
+        assert "One concern:" in doc, f"{path.name}: {len(text.splitlines())} lines"
+
+
+def test_effect_hints_take_the_gear_stages_peak_type():
+    """The catalogue's hints read residual peaks: typed against the gear stage's Peak, not a
+    type of the loop above it."""
+    import inspect
+    import typing
+
+    from pydiag.gear.effects import EFFECTS
+    from pydiag.gear.peaks import Peak
+    hinted = [e for e in EFFECTS.values() if e.hint is not None]
+    assert hinted
+    for effect in hinted:
+        hints = typing.get_type_hints(effect.hint)
+        first = next(iter(inspect.signature(effect.hint).parameters))
+        assert hints[first] == list[Peak], (effect.key, hints)

@@ -28,6 +28,7 @@ from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
+from pydiag.loop.diagnosis import diagnose
 from pydiag.model.adapter import load_adapter
 
 ROW_COLUMNS = ("measurement", "status", "message", "fault_mode", "severity", "error",
@@ -72,13 +73,15 @@ def diagnose_task(task: BatchTask) -> dict:
                              list(task.units) if task.units else None)
         adapter = load_adapter(task.adapter) if task.adapter else None
         problem = build_problem(task.fmu, m, adapter, **task.problem)
-        result = FaultEstimator(n_workers=1, **task.estimator).fit(problem)
-        facts = {k: v for k, v in problem.record_facts().items() if k != "nominal_speed_hz"}
-        row.update(status="ok", message="; ".join(problem.warnings(result.error)),
+        result = diagnose(problem, FaultEstimator(n_workers=1, **task.estimator))
+        facts = {k: v for k, v in result.facts.items()
+                 if k not in ("nominal_speed_hz", "gains")}
+        gains = {f"gain:{c}": g for c, g in result.facts.get("gains", {}).items()}
+        row.update(status="ok", message="; ".join(result.warnings),
                    fault_mode=result.fault_mode,
                    severity=result.severity, error=result.error,
-                   evaluations=result.evaluations, **result.parameters,
-                   tooth_contrast=result.tooth_contrast, **facts)
+                   evaluations=result.fit.evaluations, **result.parameters,
+                   tooth_contrast=result.tooth_contrast, **facts, **gains)
         if task.indicators:
             kin = problem.kinematics
             nominal = GearKinematics(kin.n_pinion, kin.n_gear, problem.speed.nominal_hz

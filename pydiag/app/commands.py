@@ -14,7 +14,7 @@ from pydiag.app.formatting import (format_facts, format_indicators, format_regre
                                    format_result)
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.fit.estimator import DiagnosisResult, FaultEstimator
+from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.fmu.description import read_model_description
 from pydiag.fmu.inspect import describe, format_info
@@ -27,6 +27,7 @@ from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
+from pydiag.loop.diagnosis import Diagnosis, diagnose
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement
 
@@ -124,10 +125,10 @@ def problem_of(args, measurement: Measurement, **kwargs) -> FitProblem:
                          **{**problem_settings(args), **kwargs})
 
 
-def fit(args, problem: FitProblem) -> DiagnosisResult:
+def fit(args, problem: FitProblem) -> Diagnosis:
     update, close = progress_bar(args.quiet)
     try:
-        return FaultEstimator(**estimator_settings(args), progress=update).fit(problem)
+        return diagnose(problem, FaultEstimator(**estimator_settings(args), progress=update))
     finally:
         close()
 
@@ -151,15 +152,13 @@ def cmd_diagnose(args) -> int:
     m = read_input(args)
     problem = problem_of(args, m)
     result = fit(args, problem)
-    facts = problem.facts(result.parameters)
-    warnings = problem.warnings(result.error, facts.get("gains"))
     print(format_result(result))
-    print(format_facts(facts))
-    for warning in warnings:
+    print(format_facts(result.facts))
+    for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
     if args.json:
-        out = {**result.to_dict(), **facts, "warnings": warnings,
-               "channels": list(problem.channels), "measurement": str(args.measurement)}
+        out = {**result.to_dict(), "channels": list(problem.channels),
+               "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0
 

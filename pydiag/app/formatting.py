@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-from pydiag.fit.estimator import DiagnosisResult
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
-from pydiag.loop.compare import Comparison
-from pydiag.loop.discover import Discovery
+from pydiag.loop.diagnosis import Diagnosis
+from pydiag.loop.results import Comparison, Discovery, Status
 from pydiag.loop.regress import RegressionReport
-from pydiag.loop.validate import NOT_TRIED
 
 
-def format_result(result: DiagnosisResult, truth: dict | None = None) -> str:
+def format_result(result: Diagnosis, truth: dict | None = None) -> str:
     head = f"{'parameter':<10} {'estimate':>9}" + (f" {'true':>7} {'abs.err':>8}" if truth else "")
     lines = [head, "-" * len(head)]
     for name, value in result.parameters.items():
@@ -25,11 +23,12 @@ def format_result(result: DiagnosisResult, truth: dict | None = None) -> str:
     if result.tooth_contrast is not None:
         lines.append(f"tooth      : contrast {result.tooth_contrast:.3f} (|a_f/a0 - 1|: the faulty "
                      "tooth's stiffness variation against the others')")
-    lines += [f"error      : {result.error:.5f} (Eq. 12, relative, summed over channels)",
-              f"evaluations: {result.evaluations} in {result.elapsed_s:.1f} s"]
-    if result.failed_evaluations:
-        lines.append(f"failed     : {result.failed_evaluations} simulations, penalised: " + "; ".join(
-            f"{n} x {reason}" for reason, n in result.failure_reasons.items()))
+    fit = result.fit
+    lines += [f"error      : {fit.error:.5f} (Eq. 12, relative, summed over channels)",
+              f"evaluations: {fit.evaluations} in {fit.elapsed_s:.1f} s"]
+    if fit.failed_evaluations:
+        lines.append(f"failed     : {fit.failed_evaluations} simulations, penalised: " + "; ".join(
+            f"{n} x {reason}" for reason, n in fit.failure_reasons.items()))
     return "\n".join(lines)
 
 
@@ -67,7 +66,7 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
     shown = [s for s in c.suggested_effects if s.shown]
     lines.append("suggested  : " + ("none" if not shown else ""))
     for s in shown:
-        flag = f"CONFIDENT, {s.status}" if s.confident else s.status
+        flag = f"CONFIDENT, {s.message}" if s.confident else s.message
         lines.append(f"  {s.effect:<26} score {s.score:.2f}: {flag}")
         if s.evidence:
             lines.append(f"  {'':<26} {s.evidence[0]}")
@@ -82,14 +81,17 @@ def format_discovery(base: Comparison, found: list[Discovery]) -> str:
              f"{'rank':>4} {'effect':<26} {'z':>8} {'dBIC':>10} {'error':>8} {'reduction':>9}  "
              "parameters"]
     for i, d in enumerate(found, 1):
-        if d.status != "ok":
+        h = d.held_out
+        if h is None or not h.tried:
             lines.append(f"{i:4d} {d.effect:<26} {'-':>8} {'-':>10} {'-':>8} {'-':>9}  "
-                         + (d.verdict if d.status == NOT_TRIED else f"failed: {d.status}"))
+                         + (d.message if d.status is not Status.FAILED
+                            else f"failed: {d.message}"))
             continue
-        params = ", ".join(f"{k}={v:.4g}" for k, v in d.parameters.items())
-        lines.append(f"{i:4d} {d.effect:<26} {d.z:8.1f} {d.delta_bic:10.1f} {d.error:8.4f} "
-                     f"{100 * d.error_reduction:8.0f}%  {params}")
-        lines.append(f"{'':5}{'CONFIDENT' if d.confident else ''} {d.verdict}".rstrip())
+        params = ", ".join(f"{k}={v:.4g}" for k, v in h.parameters.items())
+        reduction = 1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0
+        lines.append(f"{i:4d} {d.effect:<26} {h.z:8.1f} {h.delta_bic:10.1f} "
+                     f"{h.error_effect:8.4f} {100 * reduction:8.0f}%  {params}")
+        lines.append(f"{'':5}{'CONFIDENT' if d.confident else ''} {d.message}".rstrip())
     return "\n".join(lines)
 
 

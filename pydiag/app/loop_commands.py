@@ -16,7 +16,9 @@ from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS
 from pydiag.io.outputs import write_text
 from pydiag.loop import history
-from pydiag.loop.compare import EFFECT_REFIT, compare, refit_with_effect, with_effect
+from pydiag.loop.compare import compare, refit_with_effect
+from pydiag.loop.diagnosis import fit_warnings
+from pydiag.loop.effect_fit import EFFECT_REFIT, with_effect
 from pydiag.loop.discover import MODELICA_ROOT, as_dict, discover, effect_fmu
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
@@ -56,7 +58,7 @@ def cmd_compare(args) -> int:
     run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
-    warnings = problem.warnings(c.fit_error, c.gains) if c.fit_error is not None else []
+    warnings = fit_warnings(problem, c.fit_error, c.gains) if c.fit_error is not None else []
     print(format_comparison(c))
     print(format_facts({**facts, "gains": c.gains}))
     for warning in warnings:

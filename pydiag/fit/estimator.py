@@ -40,8 +40,6 @@ from pydiag.core.parameters import snap
 from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.fit.pso import global_best_pso
 from pydiag.fmu.isolation import IsolatedPool
-from pydiag.gear.classify import classify, tooth_contrast
-from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
 
 #: Wall-time limit of one simulation in a worker, seconds.
 DEFAULT_EVAL_TIMEOUT_S = 60.0
@@ -50,21 +48,17 @@ DEFAULT_MAX_CONSECUTIVE_FAILURES = 20
 
 
 @dataclass
-class DiagnosisResult:
-    """Plain-data result of :meth:`FaultEstimator.fit`."""
+class FitResult:
+    """Plain-data result of :meth:`FaultEstimator.fit`: the estimate and how it was found
+    (what it means for the machine is :mod:`pydiag.loop.diagnosis`'s)."""
 
     parameters: dict[str, float]
-    fault_mode: str
-    severity: str
-    tooth_severity: str
-    te_severity: str
     error: float
     evaluations: int
     elapsed_s: float
     best_error_history: list[float]
     failed_evaluations: int = 0
     failure_reasons: dict[str, int] = field(default_factory=dict)
-    tooth_contrast: float | None = None  # |a_f/a0 - 1|, when the tooth was estimated
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -140,7 +134,7 @@ class FaultEstimator:
             raise UsageError("the evaluation timeout and the failure limit must be positive")
 
     # ------------------------------------------------------------------ fit
-    def fit(self, problem: FitProblem) -> DiagnosisResult:
+    def fit(self, problem: FitProblem) -> FitResult:
         """The swarm over ``problem``'s box, then the polish from its best distinct
         positions.
 
@@ -195,7 +189,7 @@ class FaultEstimator:
                 init[:, j] = [grid[i % len(grid)] for i in range(n)]
         return init
 
-    def refine(self, problem: FitProblem, start: dict[str, float]) -> DiagnosisResult:
+    def refine(self, problem: FitProblem, start: dict[str, float]) -> FitResult:
         """The polish alone (``polish_evaluations`` simulations), from ``start``: a value of
         each of ``problem``'s parameters, e.g. a fit of fewer parameters extended by the
         new ones' fitted values. No swarm: it stays in the basin it starts in."""
@@ -234,7 +228,7 @@ class FaultEstimator:
             objective.close()
 
     def _result(self, problem: FitProblem, run: "_Run", best_x: np.ndarray, best_cost: float,
-                history: list[float]) -> DiagnosisResult:
+                history: list[float]) -> FitResult:
         failures = run.pool.failures if run.pool is not None else None
         if not np.isfinite(best_cost):
             why = f"; the first failed with: {failures.first}" if failures and failures.first else ""
@@ -242,18 +236,9 @@ class FaultEstimator:
                                   f"evaluations){why}")
         best_x = in_box(problem, best_x)
         estimate = {p.name: float(v) for p, v in zip(problem.parameters, best_x)}
-        contrast = None
-        if any(name in estimate for name in CLASSIFIED_PARAMETERS):
-            cls = classify({**problem.fixed_values, **estimate})
-            labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
-            if "a_f" in estimate:
-                contrast = tooth_contrast({**problem.fixed_values, **estimate})
-        else:
-            labels = ("not_classified",) + ("unknown",) * 3
-        return DiagnosisResult(estimate, *labels, best_cost, run.count,
-                               time.perf_counter() - run.started, history,
-                               failures.count if failures else 0,
-                               dict(failures.reasons) if failures else {}, contrast)
+        return FitResult(estimate, best_cost, run.count, time.perf_counter() - run.started,
+                         history, failures.count if failures else 0,
+                         dict(failures.reasons) if failures else {})
 
     def _distinct_starts(self, positions, costs, lows, highs) -> tuple[list, list]:
         """The best personal bests, at least 5 % of the box apart from each other."""

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -36,26 +37,21 @@ from pydiag.core.errors import AdapterError, EstimationError, PlantError
 from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import Parameter, fmu_values
 from pydiag.fit.objective import spectral_residuals
+from pydiag.fmu.description import read_model_description
 from pydiag.fmu.plant import FmuPlant, PlantSpec
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.features import KinematicFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed, order_track
+from pydiag.fit.operating_point import at_model_speed, prepare_record, resolve_operating_point
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings
 from pydiag.model.adapter import Adapter, check_against_fmu, gear_default
 from pydiag.model.simulate import SIMULATED_SOURCE
-from pydiag.signal.features import Features, Featurizer, SpectrumFeaturizer
+from pydiag.signal.features import Featurizer, SpectrumFeaturizer
+from pydiag.signal.spectra import Spectrum, whole_periods
 
 #: Co-Simulation: communication steps per period of the highest analysed frequency,
 #: unless the adapter says otherwise.
 CS_STEPS_PER_PERIOD = 20.0
-#: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
-#: not a diagnosis: a model with no lines at all scores about 1 (measured: a record in
-#: mm/s^2 read as m/s^2 scored 1.70 with the level fixed, parameters on their bounds).
-UNEXPLAINED_ERROR = 1.0
-#: A fitted channel gain outside this range is a level mismatch (mm/s^2 read as m/s^2 is
-#: 1000), not a transfer path (a housing accelerometer sees the mesh attenuated, by up to
-#: some hundred times: the shared real records fit gains of 0.0145-0.40).
-PLAUSIBLE_GAINS = (1 / 300, 300.0)
 #: Two consecutive simulated fundamental periods that differ by no more than this share of
 #: the channel's peak make the model periodic (:func:`simulate_periodic`). Measured on
 #: GearPair and the effect models at rest: 2e-5 to 4e-5 (the integrator's tolerance); a
@@ -89,7 +85,7 @@ class FitProblem:
     channels: tuple[str, ...]
     scales: tuple[float, ...]
     parameters: tuple[Parameter, ...]
-    reference: dict[str, Features]
+    reference: dict[str, Spectrum]
     featurizer: Featurizer
     warmup_s: float
     kinematics: GearKinematics | None
@@ -117,7 +113,8 @@ class FitProblem:
         """Whole fundamental periods of the record the measured features come from."""
         if self.kinematics is None:
             return None
-        return int(np.floor(self.measurement.duration_s / self.kinematics.period_s + 1e-9))
+        m = self.measurement
+        return whole_periods(m.n_samples, m.sample_rate_hz, self.kinematics.period_s)[0]
 
     def record_facts(self) -> dict:
         """What was analysed: speed (when found), periods and seconds of the record."""
@@ -137,25 +134,6 @@ class FitProblem:
                 facts["gains"] = self.gains(plant, np.array([estimates[p.name]
                                                               for p in self.parameters]))
         return facts
-
-    def warnings(self, error: float, gains: dict[str, float] | None = None) -> list[str]:
-        """Why a fit with this ``error`` (and these fitted ``gains``) is not to be trusted:
-        an empty list when nothing looks wrong."""
-        found = []
-        check = ("check the units (--unit), the channel mapping (--channel) and the sample "
-                 "rate")
-        per_channel = error / np.sqrt(len(self.channels))
-        if per_channel >= UNEXPLAINED_ERROR:
-            found.append(f"the fit's error is {per_channel:.3g} per channel (1 = as large as the "
-                         "measured lines): the model explains none of the record; "
-                         f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "
-                         "a larger budget")
-        low, high = PLAUSIBLE_GAINS
-        for channel, gain in (gains or {}).items():
-            if not low <= gain <= high:
-                found.append(f"channel {channel}: the model had to be scaled by {gain:.3g} to "
-                             f"match the record's level; {check}")
-        return found
 
     def _simulate(self, plant: FmuPlant, x: np.ndarray, duration_s: float) -> np.ndarray:
         values = {p.fmu_variable: p.fmu_value(v) for p, v in zip(self.parameters, x)}
@@ -212,17 +190,41 @@ class FitProblem:
                fixed_values: dict[str, float] | None = None,
                featurizer: Featurizer | None = None,
                fixed_gains: dict[str, float] | None = None) -> "FitProblem":
-        """The same measurement, adapter and settings with another FMU (an effect's model),
-        other parameters, more fixed values (in FMU variable names), another featurizer or
-        more channel gains held (:attr:`fixed_gains`)."""
-        return dataclasses.replace(build_problem(
-            fmu_path or self.spec.fmu_path, self.measurement, self.adapter,
-            parameters=parameters or self.parameters,
-            fixed_values={**self.fixed_values, **(fixed_values or {})},
-            kinematics=self.kinematics, featurizer=featurizer or self.featurizer,
-            warmup_s=self.warmup_s, relative_tolerance=self.spec.relative_tolerance,
-            engine=self.spec.engine, fit_gain=self.fit_gain, speed_estimate=self.speed),
-            fixed_gains={**self.fixed_gains, **(fixed_gains or {})})
+        """The same record, adapter and settings with another FMU (an effect's model, which
+        has every variable of this one), other parameters, more fixed values (in FMU
+        variable names), another featurizer (the record's features computed again) or
+        more channel gains held (:attr:`fixed_gains`). Nothing is simulated, and the FMU
+        is not opened: its model description is read (once a file) to check that it has
+        the variables set."""
+        spec = self.spec if fmu_path is None else dataclasses.replace(self.spec,
+                                                                      fmu_path=str(fmu_path))
+        parameters = parameters or self.parameters
+        fixed = {**self.fixed_values, **(fixed_values or {})}
+        spec = dataclasses.replace(spec, fixed_values={**spec.fixed_values, **(fixed_values or {})})
+        if fmu_path is not None or parameters is not self.parameters or fixed_values:
+            _check_variables(spec.fmu_path, [p.fmu_variable for p in parameters]
+                             + list(fixed_values or {}))
+        reference = self.reference
+        if featurizer is not None and featurizer is not self.featurizer:
+            m = self.measurement
+            reference = {c: featurizer(m.channels[c], m.sample_rate_hz) for c in self.channels}
+        return dataclasses.replace(self, spec=spec, parameters=tuple(parameters),
+                                   fixed_values=fixed, featurizer=featurizer or self.featurizer,
+                                   reference=reference,
+                                   fixed_gains={**self.fixed_gains, **(fixed_gains or {})})
+
+
+def _check_variables(fmu_path: str, names: list[str]) -> None:
+    """Every one of ``names`` is a variable of the FMU, else an :class:`EstimationError`."""
+    try:
+        md, _ = read_model_description(fmu_path)
+    except PlantError as err:
+        raise EstimationError(str(err)) from err
+    known = {v.name for v in md.modelVariables}
+    missing = [n for n in names if n not in known]
+    if missing:
+        raise EstimationError(f"{', '.join(missing)} {'is' if len(missing) == 1 else 'are'} "
+                              f"not in {Path(fmu_path).name}")
 
 
 def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: float,
@@ -298,21 +300,6 @@ def _check_rate(measurement: Measurement, featurizer: Featurizer, what: str,
             f"({top:g} Hz): need at least {2 * top:g} Hz")
 
 
-def _nominal_kinematics(measurement: Measurement, fmu_kin: GearKinematics | None,
-                        given: GearKinematics | None) -> GearKinematics | None:
-    """The operating point to start from: the one given, else the record's own metadata
-    (a record made by ``pydiag simulate``), else the FMU's."""
-    if given is not None:
-        return given
-    meta = measurement.metadata.get("kinematics")
-    if isinstance(meta, dict) and fmu_kin is not None:
-        try:
-            return GearKinematics(int(meta["Np"]), int(meta["Ng"]), float(meta["f_pinion"]))
-        except (KeyError, TypeError, ValueError):
-            pass  # not ours: the FMU's operating point
-    return fmu_kin
-
-
 def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | None = None, *,
                   parameters: tuple[Parameter, ...] | None = None,
                   fixed_values: dict[str, float] | None = None,
@@ -378,33 +365,16 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
             fmu_kin = adapter.resolve_kinematics({**plant.parameters(), **plant.fixed_values})
     except (PlantError, AdapterError) as err:
         raise EstimationError(str(err)) from err
-    kin = _nominal_kinematics(measurement, fmu_kin, kinematics)
-    if operating_point:
-        if kin is None:
-            raise EstimationError("--rpm, --teeth, --other-shaft need a gear model: this FMU has "
-                                  "no Np, Ng, f_pinion and the adapter no [kinematics]")
-        op = {k: (int(v) if k in ("n_pinion", "n_gear") else v if k == "bearing" else float(v))
-              for k, v in operating_point.items()}
-        kin = dataclasses.replace(kin, **op)
-    if kin is not None and speed is not None and speed_estimate is None:
-        _check_rate(measurement, featurizer or KinematicFeaturizer(kin, feature_mode),
-                    "the highest band edge")  # before searching lines the record cannot hold
-        settings = speed if speed.channel else dataclasses.replace(speed, channel=maps[0].channel)
-        speed_estimate = estimate_speed(measurement, kin, settings)
-        measurement = order_track(measurement, speed_estimate, drop=(tacho,) if tacho else ())
-        kin = dataclasses.replace(kin, f_pinion_hz=speed_estimate.speed_hz)
+    kin = resolve_operating_point(measurement, fmu_kin, kinematics, operating_point)
     if kin is not None:
+        if speed is not None and speed_estimate is None:  # no lines the record cannot hold
+            _check_rate(measurement, featurizer or KinematicFeaturizer(kin, feature_mode),
+                        "the highest band edge")
+        measurement, kin, speed_estimate = prepare_record(measurement, kin, speed,
+                                                          speed_estimate, maps[0].channel)
         fixed = {**adapter.kinematic_values(kin), **fixed}
-        speed_fixed = adapter.kinematics["f_pinion_hz"].parameter is None
-        if speed_fixed and fmu_kin is not None and fmu_kin != kin.pair:  # what the model knows
-            # the model's operating point is fixed: analyse the record at it (an
-            # order-tracked record is the same per revolution at any speed)
-            if measurement.metadata.get("order_tracking"):
-                measurement = dataclasses.replace(
-                    measurement, sample_rate_hz=measurement.sample_rate_hz
-                    * fmu_kin.f_pinion_hz / kin.f_pinion_hz)
-            kin = dataclasses.replace(fmu_kin, other_shaft_ratio=kin.other_shaft_ratio,
-                                      bearing=kin.bearing)
+        if adapter.kinematics["f_pinion_hz"].parameter is None and fmu_kin is not None:
+            measurement, kin = at_model_speed(measurement, kin, fmu_kin)
     spec = adapter.plant_spec(fmu_path, measurement.sample_rate_hz, maps, fixed,
                               relative_tolerance, engine)
     if featurizer is not None:

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,11 +37,20 @@ def read_model_description(fmu_path: str | Path) -> tuple[ModelDescription, list
     """The model description and fmpy's validation problems (as warnings, not errors).
 
     Many vendor FMUs fail fmpy's schema validation yet run, so its complaints are
-    returned for the caller to show; only an unreadable description is an error.
+    returned for the caller to show; only an unreadable description is an error. A file
+    is read once while it is unchanged (its size and modification time): treat the
+    description as read-only.
     """
     fmu_path = Path(fmu_path)
     if not fmu_path.is_file():
         raise PlantError(f"no such FMU: {fmu_path}")
+    stat = fmu_path.stat()
+    md, warnings = _read(str(fmu_path.resolve()), stat.st_size, stat.st_mtime_ns)
+    return md, list(warnings)
+
+
+@functools.lru_cache(maxsize=32)
+def _read(fmu_path: str, size: int, mtime_ns: int) -> tuple[ModelDescription, tuple[str, ...]]:
     warnings: list[str] = []
     try:
         md = fmpy.read_model_description(str(fmu_path), validate=True)
@@ -51,7 +61,7 @@ def read_model_description(fmu_path: str | Path) -> tuple[ModelDescription, list
             md = fmpy.read_model_description(str(fmu_path), validate=False)
         except Exception as err2:
             raise PlantError(f"cannot read {fmu_path}: {err2}") from err2
-    return md, warnings
+    return md, tuple(warnings)
 
 
 def variables_of(model_description: ModelDescription) -> dict[str, FmuVariable]:

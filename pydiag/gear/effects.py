@@ -1,6 +1,10 @@
 """The effect catalogue: each candidate missing effect, its Modelica model, and the
 frequency signature that points to it.
 
+One concern: the catalogue. Each effect is declared here once (its parameters with the
+ranges its Modelica file declares too, its signature, its hint, its properties), beside
+the functions that say its signature and its hints; docs/effects.md tells how to add one.
+
 A signature weighs unexplained residual peaks by their kinematic family and order:
 1 for the effect's defining lines, 0.5 for lines it also produces, 0 otherwise. An
 effect's score is the share of the unexplained peak energy its signature covers.
@@ -23,6 +27,8 @@ from pydiag.core.parameters import Parameter
 from pydiag.gear.features import max_band_freq_hz
 from pydiag.gear.kinematic_map import (BEARING_FAMILIES, SHAFT_ORDERS, KinematicLine, coinciding,
                                       kinematic_map, match)
+from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.peaks import Peak
 
 
 @dataclass(frozen=True)
@@ -33,7 +39,7 @@ class Effect:
     parameters: tuple[Parameter, ...]  # what the effect adds, named as its FMU variables
     weight: Callable[[KinematicLine | None, float, float], float]  # (line, freq, f_mesh) -> 0..1
     # (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted on this pair}
-    hint: Callable[[list, float, object], dict] | None = None
+    hint: Callable[[list[Peak], float, GearKinematics | None], dict] | None = None
     # the parameters are the base model's own (GearDiag.GearPair), neutral by default: the
     # effect frees them in the base FMU instead of building a model of its own
     in_base: bool = False
@@ -81,7 +87,8 @@ class Effect:
         """Whether the effect changes the model output ``output`` (an FMU variable)."""
         return self.outputs is None or output in self.outputs
 
-    def bounds(self, peaks: list, bin_hz: float, kinematics=None) -> tuple[Parameter, ...]:
+    def bounds(self, peaks: list[Peak], bin_hz: float,
+               kinematics: GearKinematics | None = None) -> tuple[Parameter, ...]:
         """The effect's parameters, bounds narrowed by what the residual peaks (and the gear
         pair's ``kinematics``: :class:`pydiag.gear.kinematics.Kinematics`) say, if it can;
         those its hint leaves out (None) are not fitted: they keep the FMU's neutral value."""
@@ -156,7 +163,7 @@ def _pinion_shaft(line, freq, f_mesh):
     return 1.0 if ok else 0.0
 
 
-def _pinion_shaft_hint(peaks, bin_hz, kin):
+def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
     """The orders whose line it does not claim (:func:`_pinion_shaft`: one the gear's shaft
     has a line at too, or a mesh sideband on a pinion of few teeth) are not fitted."""
     if kin is None:
@@ -175,7 +182,7 @@ def _other_shaft(line, freq, f_mesh):
     return 1.0 if ok else 0.0
 
 
-def _other_shaft_hint(peaks, bin_hz, kin):
+def _other_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
     """Only the orders it claims (:func:`_other_shaft`) at which the residual has a peak
     are fitted: none when the other shaft's speed is not known. Its lines are not
     synchronous with the pair's period, so in a spectrum of joined halves each leaks over
@@ -227,7 +234,7 @@ MODE_BAND = 0.1
 MAX_HOUSING_HZ = 10_000.0
 
 
-def resonance_band(peaks: list, families: tuple[str, ...] = GEAR_PAIR_FAMILIES,
+def resonance_band(peaks: list[Peak], families: tuple[str, ...] = GEAR_PAIR_FAMILIES,
                    half_width: float = MODE_BAND) -> tuple[float, float] | None:
     """The band (low, high), Hz, of relative half-width ``half_width`` around the peak
     frequency that gathers the most unexplained energy of lines of ``families``; None
@@ -253,7 +260,7 @@ def _housing_start(top_hz: float) -> dict[str, float]:
     return {"f_housing": 1.25 * top_hz, "zeta_housing": 0.05}
 
 
-def _housing_hint(peaks, bin_hz, kin):
+def _housing_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
     """The mode's frequency inside the band its signature claims; when that band reaches
     the top of the analysed range, the lines there may be the skirt of a mode above it, so
     the mode may lie anywhere above the band's lower edge."""
@@ -298,7 +305,7 @@ def _load_fluctuation(line, freq, f_mesh):
     return 1.0 if freq <= MAX_RIPPLE_HZ or near_mesh else 0.0
 
 
-def ripple_frequency(peaks: list, bin_hz: float, f_mesh_hz: float) -> float | None:
+def ripple_frequency(peaks: list[Peak], bin_hz: float, f_mesh_hz: float) -> float | None:
     """The torque-ripple frequency the unexplained peaks agree on, Hz, or None.
 
     A ripple f puts lines at f and its harmonics and modulates the mesh: sidebands at
@@ -326,7 +333,7 @@ def ripple_frequency(peaks: list, bin_hz: float, f_mesh_hz: float) -> float | No
 
 
 def _ripple_hint(name):
-    def hint(peaks, bin_hz, kin):
+    def hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
         """The ripple frequency from the unexplained peaks' spacing, to within a bin."""
         f = ripple_frequency(peaks, bin_hz, kin.f_mesh_hz) if kin is not None else None
         return {} if f is None else {name: (max(0.5, f - bin_hz), f + bin_hz)}
@@ -334,7 +341,7 @@ def _ripple_hint(name):
 
 
 def _tooth_hint(name, teeth, other_than_zero=False):
-    def hint(peaks, bin_hz, kin):
+    def hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
         """The faulty tooth may be any of the wheel's (one turn of its index), or, when
         ``other_than_zero``, a tooth 1 to N/2 from tooth 0 (the base model's faulty tooth):
         a tooth k and a tooth N - k make patterns that are each other's time reverse, whose

@@ -23,9 +23,9 @@ from scipy.signal import resample
 
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.signal.features import Features, first_window
-from pydiag.signal.spectra import (SyncSpectrum, amplitude_spectrum, band_envelope, noise_power,
-                                   sync_spectrum, without_synchronous)
+from pydiag.signal.features import first_window
+from pydiag.signal.spectra import (Spectrum, SyncSpectrum, amplitude_spectrum, band_envelope,
+                                   noise_power, sync_spectrum, without_synchronous)
 
 N_MESH_HARMONICS = 4
 N_SHAFT_HARMONICS = 5
@@ -59,7 +59,7 @@ def _check_mode(mode: str) -> None:
         raise UsageError(f"feature mode must be one of {FEATURE_MODES}, got {mode!r}")
 
 
-def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = "lines") -> Features:
+def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = "lines") -> Spectrum:
     _check_mode(mode)
     bands = paper_bands(kin)
     top = max(b.high_hz for b in bands)
@@ -70,13 +70,13 @@ def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = 
     masks = [(spec.freq_hz >= b.low_hz) & (spec.freq_hz < b.high_hz) for b in bands]
     if mode == "lines":
         keep = np.any(masks, axis=0)
-        return Features(spec.amplitude[keep], spec.freq_hz[keep], spec.noise_power)
+        return Spectrum(spec.freq_hz[keep], spec.amplitude[keep], spec.noise_power)
     idx = [np.flatnonzero(m)[np.argmax(spec.amplitude[m])] for m in masks]
-    return Features(spec.amplitude[idx], spec.freq_hz[idx], spec.noise_power)
+    return Spectrum(spec.freq_hz[idx], spec.amplitude[idx], spec.noise_power)
 
 
 def signal_features(signal: np.ndarray, sample_rate_hz: float, kin: GearKinematics,
-                    mode: str = "lines") -> Features:
+                    mode: str = "lines") -> Spectrum:
     """Features of a time signal sampled at ``sample_rate_hz``."""
     spec = sync_spectrum(signal, sample_rate_hz, kin.period_s, max_freq_hz=max_band_freq_hz(kin))
     return features_from_spectrum(spec, kin, mode)
@@ -100,7 +100,7 @@ class KinematicFeaturizer:
         return (f"one fundamental period ({k.period_s:.4g} s = {k.n_assembly_phases} pinion "
                 "turns)")
 
-    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
         return signal_features(signal, sample_rate_hz, self.kinematics, self.mode)
 
 
@@ -160,8 +160,8 @@ class FullSpectrumFeaturizer:
         return f"{self.duration_s / self.kinematics.period_s:.0f} fundamental periods " \
                f"({self.duration_s:.4g} s)"
 
-    def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """(freq_hz, amplitude, noise_power) over all bins up to max_freq_hz."""
+    def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
+        """Every bin up to max_freq_hz, and the noise between the synchronous lines."""
         x = first_window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
         if self.envelope_band_hz is not None:
             periods = int(round(self.duration_s / self.kinematics.period_s))
@@ -177,7 +177,7 @@ class FullSpectrumFeaturizer:
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)
         idx = np.flatnonzero(keep)
         noise = noise_power(amp[idx[idx % self.n_periods != 0]], robust=True)
-        return freqs[keep], amp[keep], noise
+        return Spectrum(freqs[keep], amp[keep], noise)
 
     def joined_freq_hz(self, freq_hz: float) -> float:
         """Where a line at ``freq_hz`` of the record shows in this featurizer's spectrum.
@@ -202,7 +202,8 @@ class FullSpectrumFeaturizer:
         return FullSpectrumFeaturizer(self.kinematics, self.n_periods, self.max_freq_hz,
                                       self.bins, 1 - self.half, self.envelope_band_hz)
 
-    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
-        freqs, amp, noise = self.spectrum(signal, sample_rate_hz)
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
+        full = self.spectrum(signal, sample_rate_hz)
+        freqs, amp, noise = full.freq_hz, full.amplitude, full.noise_power
         mask = self.bins if self.bins is not None else np.ones(freqs.size, dtype=bool)
-        return Features(amp[mask], freqs[mask], noise)
+        return Spectrum(freqs[mask], amp[mask], noise)

@@ -37,7 +37,6 @@ import multiprocessing as mp
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -48,28 +47,14 @@ from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, model_file
-from pydiag.loop.compare import EFFECT_REFIT, Comparison, compare
-from pydiag.loop.validate import NOT_TRIED, held_out, in_model, outcompeted, rivals
+from pydiag.loop.compare import compare
+from pydiag.loop.competition import settle
+from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
+from pydiag.loop.held_out import held_out
+from pydiag.loop.results import Comparison, Discovery, Status
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
-
-
-@dataclass
-class Discovery:
-    effect: str
-    status: str  # "ok", "not tried" (none of its lines to explain), or the error that stopped it
-    z: float  # held-out improvement, in noise standard deviations
-    delta_bic: float  # on the fitted half
-    error: float  # held out, with the effect
-    error_reduction: float  # 1 - error / base error, held out
-    added_parameters: int
-    parameters: dict[str, float]
-    confident: bool = False
-    verdict: str = ""
-    elapsed_s: float = 0.0  # wall time of this effect's build, fit and test
-    claimed: tuple[str, ...] = ()  # held out, the non-synchronous lines it claims
-    significant: bool = False  # held out, it lowers the error by more than noise would
 
 
 def default_build_dir(modelica_root: Path) -> Path:
@@ -101,8 +86,8 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> 
 
 def _failed(key: str, err: Exception, started: float) -> Discovery:
     """The row of an effect that could not be built or fitted."""
-    return Discovery(key, f"{type(err).__name__}: {err}", float("-inf"), float("inf"),
-                     float("nan"), float("nan"), len(EFFECTS[key].parameters), {},
+    return Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
+                     n_parameters=len(EFFECTS[key].parameters),
                      elapsed_s=time.perf_counter() - started)
 
 
@@ -112,40 +97,34 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
     Takes the effect's key, not the effect: it runs in a worker process."""
     started = time.perf_counter()
     effect = EFFECTS[key]
-    k = len(effect.parameters)  # at most: its hint may leave some out
     try:
         h = held_out(problem, base, effect, fmu, estimator)
     except PydiagError as err:
         return _failed(key, err, started)
-    if not h.tried:
-        return Discovery(key, NOT_TRIED, math.nan, math.nan, math.nan, math.nan, k, {},
-                         verdict=h.verdict, elapsed_s=time.perf_counter() - started)
-    return Discovery(key, "ok", h.z, h.delta_bic, h.error_effect,
-                     1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0,
-                     len(h.parameters), h.parameters, h.confident, h.verdict,
-                     time.perf_counter() - started, h.claimed, h.significant)
+    return Discovery(key, h.status, h.message, h, len(effect.parameters),
+                     time.perf_counter() - started, h.confident)
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
              effects: list[str] | None = None,
              modelica_root: Path = MODELICA_ROOT, build_dir: Path | None = None,
              progress: Callable[[Discovery], None] | None = None,
-             effect_estimator: FaultEstimator | None = None) -> tuple[Comparison, list[Discovery]]:
+             effect_estimator: FaultEstimator | None = None,
+             base: Comparison | None = None) -> tuple[Comparison, list[Discovery]]:
     """Compare the base model (``problem``), then try every effect held out and rank them.
 
-    ``estimator`` fits the base model, ``effect_estimator`` each effect's parameters
-    (default: :data:`pydiag.loop.compare.EFFECT_REFIT`); the effect estimator's
-    ``n_workers`` (default: all cores) is the number of cores the effects share, one
-    effect per core, each fit free to use them all (module docstring). Effects whose
-    parameters the base model already fits are left out. ``progress`` gets each effect's
-    row as it is done. As in validation, at most one effect is confident among those that
-    claim the same lines (:func:`pydiag.loop.validate.rivals`), and none that a competitor
-    comes close to in z (:func:`pydiag.loop.validate.outcompeted`).
+    ``estimator`` fits the base model (unless ``base``, its comparison, is given),
+    ``effect_estimator`` each effect's parameters (default:
+    :data:`pydiag.loop.effect_fit.EFFECT_REFIT`); the effect estimator's ``n_workers``
+    (default: all cores) is the number of cores the effects share, one effect per core,
+    each fit free to use them all (module docstring). Effects whose parameters the base
+    model already fits are left out. ``progress`` gets each effect's row as it is done.
+    Competitors are settled as in validation (:func:`pydiag.loop.competition.settle`).
     """
     unknown = [key for key in effects or () if key not in EFFECTS]
     if unknown:
         raise UsageError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
-    base = compare(problem, estimator)
+    base = base or compare(problem, estimator)
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
     # the longest first, so the short ones fill the cores at the end: an effect that is not
     # synchronous is simulated over the whole record, the others over one period (twice
@@ -185,20 +164,15 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
                     progress(rows[tasks[task]])
         found += [rows[key] for key in keys]
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
-    beaten = outcompeted({d.effect: d.z for d in found if d.confident},
-                         rivals({s.effect: s.competing for s in base.suggested_effects},
-                                {d.effect: d.claimed for d in found}),
-                         {d.effect: d.z for d in found if d.significant})
+    beaten = settle({d.effect: d.held_out for d in found if d.held_out is not None},
+                    {s.effect: s.competing for s in base.suggested_effects})
     for d in found:
         if d.effect in beaten:
-            d.confident, d.verdict = False, beaten[d.effect]
+            d.confident, d.status, d.message = False, Status.OUTCOMPETED, beaten[d.effect]
     return base, found
 
 
 def as_dict(base: Comparison, found: list[Discovery]) -> dict:
-    """Plain data for JSON: a number an effect does not have (not tried, failed) is None."""
-    def plain(d: Discovery) -> dict:
-        return {k: None if isinstance(v, float) and not math.isfinite(v) else v
-                for k, v in asdict(d).items()}
+    """Plain data for JSON."""
     return {"base_error": base.error, "criterion": "held-out z (dBIC on the fitted half beside it)",
-            "ranking": [plain(d) for d in found]}
+            "ranking": [d.to_dict() for d in found]}

@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from pydiag.io.outputs import write_text
-from pydiag.loop.compare import RESIDUAL_GROUPS, Comparison
+from pydiag.loop.residual import RESIDUAL_GROUPS
+from pydiag.loop.results import Comparison
 
 FAMILY_COLOURS = {"mesh": "#c0392b", "pinion": "#2e86c1", "mesh_sb_pinion": "#5dade2",
                   "gear": "#27ae60", "mesh_sb_gear": "#82e0aa", "bpfo": "#8e44ad",
@@ -177,7 +178,7 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
     else:
         rows = "".join(f"<tr><td class='{'confident' if s.confident else ''}'>"
                        f"{html.escape(s.effect)}</td><td class='num'>{s.score:.2f}</td>"
-                       f"<td>{html.escape(('confident: ' if s.confident else '') + s.status)}</td>"
+                       f"<td>{html.escape(('confident: ' if s.confident else '') + s.message)}</td>"
                        f"<td>{html.escape(', '.join(s.competing))}</td>"
                        f"<td>{html.escape('; '.join(s.evidence))}</td></tr>" for s in shown)
         parts.append("<table><tr><th>effect</th><th>score</th><th>held out</th>"

@@ -1,6 +1,6 @@
 """Feature vectors: what the objective compares, and the featurizer for any model.
 
-A featurizer turns a signal into :class:`Features`; it has ``duration_s`` (the signal it
+A featurizer turns a signal into features, a :class:`pydiag.signal.spectra.Spectrum`; it has ``duration_s`` (the signal it
 needs), ``max_freq_hz`` (the highest frequency it reads), ``describe_duration()`` (for
 messages) and ``__call__(signal, sample_rate_hz)``. Gear models use the kinematic
 featurizers of :mod:`pydiag.gear.features`; any other model the windowed FFT here.
@@ -8,28 +8,12 @@ featurizers of :mod:`pydiag.gear.features`; any other model the windowed FFT her
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from pydiag.core.errors import MeasurementError
-from pydiag.signal.spectra import amplitude_spectrum, noise_power
-
-
-@dataclass(frozen=True)
-class Features:
-    """Feature amplitudes and what they are.
-
-    Attributes:
-        amplitude: feature amplitudes (signal units)
-        freq_hz: frequency of each feature (the line, or the band's maximum in paper mode)
-        noise_power: mean squared amplitude of a noise-only line (0 if unknown)
-    """
-
-    amplitude: np.ndarray
-    freq_hz: np.ndarray
-    noise_power: float
+from pydiag.signal.spectra import Spectrum, amplitude_spectrum, noise_power
 
 
 class Featurizer(Protocol):
@@ -38,7 +22,7 @@ class Featurizer(Protocol):
 
     def describe_duration(self) -> str: ...
 
-    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features: ...
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum: ...
 
 
 def first_window(signal: np.ndarray, sample_rate_hz: float, duration_s: float,
@@ -67,9 +51,9 @@ class SpectrumFeaturizer:
     def describe_duration(self) -> str:
         return f"the analysis window ({self.duration_s:.4g} s)"
 
-    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Features:
+    def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
         x = first_window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
         freqs, amp = amplitude_spectrum(x, sample_rate_hz, "hann")
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)
         noise = noise_power(amp[freqs > self.max_freq_hz], robust=True, min_bins=9)
-        return Features(amp[keep], freqs[keep], noise)
+        return Spectrum(freqs[keep], amp[keep], noise)

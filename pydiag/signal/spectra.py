@@ -95,20 +95,28 @@ def local_maxima(values: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class SyncSpectrum:
-    """Single-sided amplitude spectrum at the harmonics of 1/period.
+class Spectrum:
+    """Single-sided amplitude spectrum at some frequencies (a record's bins, the lines of a
+    machine, the features a fit compares), and the noise beside them.
 
     Attributes:
-        freq_hz: line frequencies, k/period for k = 0..n_lines-1
-        amplitude: peak amplitudes of the lines (signal units)
-        noise_power: mean squared amplitude of a noise-only bin (signal units squared)
-        n_periods: whole periods in the record
+        freq_hz: the frequencies
+        amplitude: peak amplitudes there (signal units)
+        noise_power: mean squared amplitude of a noise-only bin (signal units squared; 0
+            when unknown)
     """
 
     freq_hz: np.ndarray
     amplitude: np.ndarray
     noise_power: float
-    n_periods: int
+
+
+@dataclass(frozen=True)
+class SyncSpectrum(Spectrum):
+    """A :class:`Spectrum` at the harmonics of 1/period, k/period for k = 0..n_lines-1,
+    over ``n_periods`` whole periods of the record."""
+
+    n_periods: int = 0
 
 
 def whole_periods(n_samples: int, sample_rate_hz: float, period_s: float) -> tuple[int, int]:

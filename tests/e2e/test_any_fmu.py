@@ -15,6 +15,7 @@ from fmus import casadi_gear, pythonfmu_gear
 from pydiag.core.errors import AdapterError, PlantError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
+from pydiag.loop.diagnosis import diagnose
 from pydiag.fmu.inspect import describe
 from pydiag.fmu.plant import FmuPlant
 from pydiag.io.readers import read_measurement
@@ -110,8 +111,9 @@ def test_pythonfmu_cosimulation_gear_diagnosed(pythonfmu_fmu):
     from pydiag.core.measurement import Measurement
     from pydiag.signal.noise import add_white_noise
     m = Measurement({"acc": add_white_noise(y, 10.0, rng)}, 10_000.0)
-    r = FaultEstimator(n_particles=4, iterations=3, polish_evaluations=16, polish_starts=1,
-                       seed=0).fit(build_problem(str(fmu), m, adapter))
+    r = diagnose(build_problem(str(fmu), m, adapter),
+                 FaultEstimator(n_particles=4, iterations=3, polish_evaluations=16,
+                                polish_starts=1, seed=0))
     assert abs(r.parameters["a_f"] - 0.4) <= 0.03
     assert r.fault_mode == "tooth_fault"
 

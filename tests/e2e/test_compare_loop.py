@@ -73,7 +73,7 @@ def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect_fmu_of, eff
     assert all(abs(v - BASE[k]) < 0.03 for k, v in c.parameters.items())  # the base fit holds
     v = validate(problem, c, effect_fmu_of)
     assert [s.effect for s in v.suggested_effects if s.confident] == [effect], \
-        [(s.effect, s.status) for s in v.suggested_effects]
+        [(s.effect, s.message) for s in v.suggested_effects]
 
 
 def test_no_hidden_effect_no_confident_suggestion(gear_fmu, effect_fmu_of):
@@ -110,8 +110,9 @@ def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
     assert {"error", "peaks", "suggested_effects"} <= set(data)
     assert data["suggested_effects"][0]["effect"] == "gear_eccentricity"
     top = data["suggested_effects"][0]
-    assert set(top) == {"effect", "score", "evidence", "status", "confident", "competing",
-                        "held_out"}
+    assert set(top) == {"effect", "score", "evidence", "status", "message", "confident",
+                        "competing", "held_out"}
+    assert top["status"] == "confirmed" and top["held_out"]["status"] == "confirmed"
     assert top["confident"] and top["held_out"]["z"] > top["held_out"]["threshold"]
     assert {"freq_hz", "amplitude", "family", "energy_fraction"} <= set(data["peaks"][0])
     for groups in data["residual_by_family"].values():
@@ -180,8 +181,8 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
                                                                        tmp_path):
     """discover fits effects side by side, one per core, the ones that are not synchronous
     first; the same rows come out of one effect at a time."""
-    from pydiag.loop.compare import EFFECT_REFIT
     from pydiag.loop.discover import discover
+    from pydiag.loop.effect_fit import EFFECT_REFIT
     problem = problem_of(gear_fmu, record(effect_fmus["gear_eccentricity"], periods=10))
     runs = {}
     for workers in (1, 2):
@@ -191,10 +192,11 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
                             progress=seen.append,
                             effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=workers))
         assert sorted(d.effect for d in seen) == ["gear_eccentricity", "load_fluctuation"]
-        runs[workers] = [(d.effect, d.status, repr(d.z), d.parameters, d.confident)
+        runs[workers] = [(d.effect, d.status, d.message, repr(d.z),
+                          d.held_out.parameters if d.held_out else None, d.confident)
                          for d in found]
     assert runs[1] == runs[2]
-    assert runs[1][0][0] == "gear_eccentricity" and runs[1][0][4]
+    assert runs[1][0][0] == "gear_eccentricity" and runs[1][0][-1]
 
 
 def test_discover_makes_a_row_of_an_effect_that_cannot_be_built_trying_once(
@@ -203,7 +205,8 @@ def test_discover_makes_a_row_of_an_effect_that_cannot_be_built_trying_once(
     tried once (a build takes seconds); the other effects are ranked as usual."""
     import pydiag.loop.discover as d
     from fmu_build import ModelicaBuildError
-    from pydiag.loop.compare import EFFECT_REFIT
+    from pydiag.loop.effect_fit import EFFECT_REFIT
+    from pydiag.loop.results import Status
     tried = []
 
     def build(source, model, out):
@@ -218,8 +221,9 @@ def test_discover_makes_a_row_of_an_effect_that_cannot_be_built_trying_once(
                           effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=1))
     assert sorted(tried) == ["GearDiag.Effects.Backlash", "GearDiag.Effects.GearEccentricity"]
     rows = {row.effect: row for row in found}
-    assert rows["backlash"].status == ("ModelicaBuildError: Backlash.mo:6: equation is "
-                                       "nonlinear in its only unknown z")
+    assert rows["backlash"].status is Status.FAILED
+    assert rows["backlash"].message == ("ModelicaBuildError: Backlash.mo:6: equation is "
+                                        "nonlinear in its only unknown z")
     assert found[0].effect == "gear_eccentricity" and found[0].confident
 
 
@@ -227,19 +231,20 @@ def test_an_effect_none_of_whose_lines_is_scored_is_not_fitted(gear_fmu, effect_
     """Held out, an effect whose lines are none of the scored bins has no residual to
     explain: it is not fitted (its FMU not even built) and never confident; with its lines
     in the record, the same effect is fitted."""
-    from pydiag.loop.compare import EFFECT_REFIT
-    from pydiag.loop.validate import NOT_TRIED, held_out
+    from pydiag.loop.effect_fit import EFFECT_REFIT
+    from pydiag.loop.held_out import held_out
+    from pydiag.loop.results import Status
     estimator = FaultEstimator(**EFFECT_REFIT, n_workers=1)
     bearing = EFFECTS["bearing_outer_race"]
     problem = problem_of(gear_fmu, record(effect_fmus["gear_eccentricity"], periods=10))
     base = compare(problem, FaultEstimator(**FAST))
     h = held_out(problem, base, bearing, lambda: pytest.fail("built"), estimator)
     assert not h.tried and not h.confident and h.parameters == {}
-    assert h.verdict.startswith(NOT_TRIED)
+    assert h.status is Status.NOT_TRIED and h.message.startswith("not tried")
     problem = problem_of(gear_fmu, record(effect_fmus["bearing_outer_race"], periods=10))
     base = compare(problem, FaultEstimator(**FAST))
     h = held_out(problem, base, bearing, effect_fmus["bearing_outer_race"], estimator)
-    assert h.tried and h.confident, h.verdict
+    assert h.tried and h.confident, h.message
 
 
 @pytest.mark.slow
@@ -249,8 +254,8 @@ def test_discover_picks_the_hidden_effect(gear_fmu, effect_fmus, effect, tmp_pat
     base, found = discover(problem_of(gear_fmu, record(effect_fmus[effect], periods=10)),
                            FaultEstimator(**FAST),
                            build_dir=tmp_path)
-    assert found[0].effect == effect, [(d.effect, round(d.delta_bic, 1)) for d in found]
-    assert found[0].delta_bic < 0
+    assert found[0].effect == effect, [(d.effect, d.message) for d in found]
+    assert found[0].held_out.delta_bic < 0
 
 
 def test_html_report_renders_and_hovers_in_a_headless_browser(gear_fmu, effect_fmus, tmp_path):
@@ -366,7 +371,7 @@ def test_a_kinematic_line_is_a_peak_at_the_margin_of_the_lines_the_kinematics_na
     change the model's form spreads thin over the pair's lines is seen (compare, step 4).
     The noise has no component on those two bins, so each one's excess is the line put
     there, between the two margins."""
-    from pydiag.loop.compare import measured_spectra
+    from pydiag.loop.residual import measured_spectra
     with FmuPlant(str(gear_fmu), ("acc", "disp")) as plant:
         kin = kinematics_from(plant.parameters())
         y = plant.simulate(BASE, 100 * kin.period_s, 0.05)
@@ -374,7 +379,8 @@ def test_a_kinematic_line_is_a_peak_at_the_margin_of_the_lines_the_kinematics_na
     rng = np.random.default_rng(5)
     noisy = {s: add_white_noise(y[i], 10.0, rng) for i, s in enumerate(("acc", "disp"))}
     problem = build_problem(str(gear_fmu), Measurement(noisy, rate))
-    freqs, _, noise = measured_spectra(problem, 0.01).spectra["acc"]
+    acc_measured = measured_spectra(problem, 0.01).spectra["acc"]
+    freqs, noise = acc_measured.freq_hz, acc_measured.noise_power
     bin_hz = freqs[0]
     lines = kinematic_map(kin, freqs[-1])
     n_lines = sum(1 for f in freqs if match(f, lines, 0.5 * bin_hz) is not None)

@@ -8,6 +8,7 @@ from conftest import NAMES, noisy_measurement, run_cli
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.gear.paper_cases import TABLE1, case
+from pydiag.loop.diagnosis import diagnose
 
 
 @pytest.mark.parametrize("number", [3, 6])
@@ -15,11 +16,11 @@ def test_fast_diagnosis_recovers_parameters_mode_and_severity(gear_fmu, number):
     c = case(number)
     est = FaultEstimator(n_particles=8, iterations=6, polish_evaluations=100, polish_starts=2,
                          seed=1)
-    r = est.fit(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)))
+    r = diagnose(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)), est)
     errors = {n: abs(r.parameters[n] - c.parameters[n]) for n in NAMES}
     assert max(errors.values()) <= 0.03, errors
     assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
-    assert r.evaluations <= 8 * 6 + 2 * 100
+    assert r.fit.evaluations <= 8 * 6 + 2 * 100
 
 
 def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
@@ -47,7 +48,8 @@ def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
 @pytest.mark.parametrize("number", [c.number for c in TABLE1])
 def test_paper_case_full_diagnosis(gear_fmu, number):
     c = case(number)
-    r = FaultEstimator(seed=0).fit(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)))
+    r = diagnose(build_problem(gear_fmu, noisy_measurement(gear_fmu, number, 0)),
+                 FaultEstimator(seed=0))
     assert max(abs(r.parameters[n] - c.parameters[n]) for n in NAMES) <= 0.03
     assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
 

@@ -7,7 +7,8 @@ from pydiag.core.errors import UsageError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import SHAFT_ORDERS, kinematic_map, match
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.compare import Peak, describe_non_kinematic
+from pydiag.gear.peaks import Peak
+from pydiag.loop.residual import describe_non_kinematic
 
 OTHER = EFFECTS["other_shaft_orders"]
 MOTOR = 29 / 17  # a motor shaft whose 17 teeth drive 29 on the pinion's shaft

@@ -81,11 +81,11 @@ def test_a_bunch_at_the_top_of_the_analysed_range_leaves_the_mode_free_above_it(
 def test_the_housing_looks_for_its_band_on_the_channels_it_changes_only():
     """A housing mode rings the acceleration, not the mesh's displacement: a bunch of disp
     lines is no band of it. Yet they are its evidence: its absence bent the base parameters
-    both channels share (compare.evidence_channels)."""
+    both channels share (effect_fit.evidence_channels)."""
     from types import SimpleNamespace
 
-    from pydiag.loop.compare import Peak as ComparePeak
-    from pydiag.loop.compare import effect_peaks, evidence_channels
+    from pydiag.gear.peaks import Peak as ComparePeak
+    from pydiag.loop.effect_fit import effect_peaks, evidence_channels
 
     def on(channel, peaks):
         return [ComparePeak(channel, p.freq_hz, 0.0, 0.0, 0.0, p.family, 1, "", p.energy_fraction)

@@ -9,8 +9,10 @@ from scipy.stats import norm
 
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.validate import (FALSE_ALARM_RATE, HeldOut, held_out_statistic, in_model,
-                                  outcompeted, rivals)
+from pydiag.loop.competition import outcompeted, rivals
+from pydiag.loop.effect_fit import in_model
+from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out_statistic
+from pydiag.loop.results import HeldOut
 
 
 def rician(amplitude, noise_power, rng, size):
@@ -64,12 +66,12 @@ def test_halves_hold_the_same_lines_and_independent_noise():
     assert halves[0].duration_s == 8 * kin.period_s
     spectra = [h.spectrum(x, rate) for h in halves]
     k = int(round(kin.f_mesh_hz * 4 * kin.period_s)) - 1  # the mesh line's bin
-    for freqs, amp, _ in spectra:
-        assert abs(freqs[k] - kin.f_mesh_hz) < 1e-9 and abs(amp[k] - 2.0) < 0.1
-    noise = [np.delete(amp, k) for _, amp, _ in spectra]
+    for s in spectra:
+        assert abs(s.freq_hz[k] - kin.f_mesh_hz) < 1e-9 and abs(s.amplitude[k] - 2.0) < 0.1
+    noise = [np.delete(s.amplitude, k) for s in spectra]
     assert abs(np.corrcoef(noise[0], noise[1])[0, 1]) < 0.1  # other periods, other noise
-    whole = FullSpectrumFeaturizer(kin, 4, 1000.0).spectrum(x[:n // 2], rate)[1]
-    assert not np.allclose(whole, spectra[0][1])  # half 0 is not the first half
+    whole = FullSpectrumFeaturizer(kin, 4, 1000.0).spectrum(x[:n // 2], rate).amplitude
+    assert not np.allclose(whole, spectra[0].amplitude)  # half 0 is not the first half
 
 
 def test_halves_of_periods_of_no_whole_number_of_samples_have_the_same_bins():
@@ -80,7 +82,7 @@ def test_halves_of_periods_of_no_whole_number_of_samples_have_the_same_bins():
     n = int(np.ceil(6 * kin.period_s * rate))  # 3 periods each: 1982 and 1983 samples
     x = np.sin(2 * np.pi * kin.f_mesh_hz * np.arange(n) / rate)
     halves = [FullSpectrumFeaturizer(kin, 3, 10_000.0, half=h) for h in (0, 1)]
-    (f0, a0, _), (f1, a1, _) = (h.spectrum(x, rate) for h in halves)
+    (f0, a0), (f1, a1) = ((s.freq_hz, s.amplitude) for s in (h.spectrum(x, rate) for h in halves))
     assert f0.shape == f1.shape and np.array_equal(f0, f1)
     k = int(np.argmax(a0))
     assert abs(f0[k] - kin.f_mesh_hz) < 0.5 * (f0[1] - f0[0]) and a0[k] > 0.95 and a1[k] > 0.95
@@ -96,7 +98,8 @@ def test_halves_of_many_periods_of_no_whole_number_of_samples_keep_lines_on_thei
     t = np.arange(n) / rate
     x = np.sin(2 * np.pi * kin.f_mesh_hz * t) + 0.5 * np.sin(2 * np.pi * 4 * kin.f_mesh_hz * t)
     for half in (0, 1):
-        freqs, amp, _ = FullSpectrumFeaturizer(kin, 75, 15_000.0, half=half).spectrum(x, rate)
+        s = FullSpectrumFeaturizer(kin, 75, 15_000.0, half=half).spectrum(x, rate)
+        freqs, amp = s.freq_hz, s.amplitude
         bin_hz = freqs[1] - freqs[0]
         assert abs(bin_hz * 75 * kin.period_s - 1) < 1e-6
         for harmonic, amplitude in ((1, 1.0), (4, 0.5)):
@@ -126,7 +129,8 @@ def test_a_line_between_the_synchronous_ones_moves_where_the_half_joins_periods(
     half = FullSpectrumFeaturizer(kin, 10, 1575.0, half=0)
     assert FullSpectrumFeaturizer(kin, 10, 1575.0).joined_freq_hz(89.62) == 89.62
     for f in (89.62, 135.38, 357.3, 200.4, 75.0, kin.f_mesh_hz):
-        freqs, amp, _ = half.spectrum(np.cos(2 * np.pi * f * t + 0.3), rate)
+        s = half.spectrum(np.cos(2 * np.pi * f * t + 0.3), rate)
+        freqs, amp = s.freq_hz, s.amplitude
         k = int(np.argmax(amp))
         assert abs(freqs[k] - half.joined_freq_hz(f)) <= 1 / (10 * kin.period_s), f
         assert amp[k] ** 2 / np.sum(amp ** 2) >= 0.4

@@ -6,7 +6,7 @@ import pytest
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import kinematic_map
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.compare import (RESIDUAL_GROUPS, bin_groups, describe_non_kinematic,
+from pydiag.loop.residual import (RESIDUAL_GROUPS, bin_groups, describe_non_kinematic,
                                  residual_shares)
 
 KIN = GearKinematics(32, 80, 29.84)

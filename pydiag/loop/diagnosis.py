@@ -1,0 +1,97 @@
+"""A diagnosis: the fit of a problem, what its parameters say of the machine (failure mode
+and severity), what was analysed, and why the result may not be trusted. ``diagnose``,
+``batch`` and ``demo`` make theirs here, the same way."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pydiag.fit.estimator import FaultEstimator, FitResult
+from pydiag.fit.problem import FitProblem
+from pydiag.gear.classify import classify, tooth_contrast
+from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
+
+#: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
+#: not a diagnosis: a model with no lines at all scores about 1.
+UNEXPLAINED_ERROR = 1.0
+#: A fitted channel gain outside this range is a level mismatch (mm/s^2 read as m/s^2 is
+#: 1000), not a transfer path (a housing accelerometer sees the mesh attenuated by up to
+#: some hundred times).
+PLAUSIBLE_GAINS = (1 / 300, 300.0)
+
+
+@dataclass
+class Diagnosis:
+    """A fit (:class:`pydiag.fit.estimator.FitResult`) and what it says of the machine.
+
+    ``fault_mode``, ``severity``, ``tooth_severity``, ``te_severity``: the paper's classes
+    of the GearDiag fault parameters ("not_classified" / "unknown" for a model without
+    them); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated; ``facts``: what
+    was analysed (speed, periods, gains); ``warnings``: why it may not be trusted."""
+
+    fit: FitResult
+    fault_mode: str
+    severity: str
+    tooth_severity: str
+    te_severity: str
+    tooth_contrast: float | None = None
+    facts: dict = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        return self.fit.parameters
+
+    @property
+    def error(self) -> float:
+        return self.fit.error
+
+    def to_dict(self) -> dict:
+        """The JSON of ``diagnose``: the fit's fields, the classes, the facts, the warnings."""
+        return {**self.fit.to_dict(), "fault_mode": self.fault_mode, "severity": self.severity,
+                "tooth_severity": self.tooth_severity, "te_severity": self.te_severity,
+                "tooth_contrast": self.tooth_contrast, **self.facts,
+                "warnings": self.warnings}
+
+
+def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -> Diagnosis:
+    """The diagnosis of ``fit``, a fit of ``problem``; ``facts`` as :func:`diagnose` finds
+    them (default: the record's alone, no gains)."""
+    values = {**problem.fixed_values, **fit.parameters}
+    facts = problem.record_facts() if facts is None else facts
+    if any(name in fit.parameters for name in CLASSIFIED_PARAMETERS):
+        cls = classify(values)
+        labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
+        contrast = tooth_contrast(values) if "a_f" in fit.parameters else None
+    else:
+        labels, contrast = ("not_classified",) + ("unknown",) * 3, None
+    return Diagnosis(fit, *labels, contrast, facts,
+                     fit_warnings(problem, fit.error, facts.get("gains")))
+
+
+def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None) -> Diagnosis:
+    """Fit ``problem`` and classify the estimate; the facts include the channel gains."""
+    fit = (estimator or FaultEstimator()).fit(problem)
+    return classified(problem, fit, problem.facts(fit.parameters))
+
+
+def fit_warnings(problem: FitProblem, error: float,
+                 gains: dict[str, float] | None = None) -> list[str]:
+    """Why a fit of ``problem`` with this ``error`` (and these fitted ``gains``) is not to
+    be trusted: an empty list when nothing looks wrong."""
+    found = []
+    check = "check the units (--unit), the channel mapping (--channel) and the sample rate"
+    per_channel = error / np.sqrt(len(problem.channels))
+    if per_channel >= UNEXPLAINED_ERROR:
+        found.append(f"the fit's error is {per_channel:.3g} per channel (1 = as large as the "
+                     "measured lines): the model explains none of the record; "
+                     f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "
+                     "a larger budget")
+    low, high = PLAUSIBLE_GAINS
+    for channel, gain in (gains or {}).items():
+        if not low <= gain <= high:
+            found.append(f"channel {channel}: the model had to be scaled by {gain:.3g} to "
+                         f"match the record's level; {check}")
+    return found

@@ -1,0 +1,63 @@
+"""The effect catalogue, the Modelica package and the Makefile name the same effects, and
+each fitted parameter's range is the same in the catalogue and in its Modelica declaration
+(docs/effects.md: an effect is one Modelica file and one catalogue entry)."""
+
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from pydiag.gear.effects import EFFECTS
+
+ROOT = Path(__file__).resolve().parents[3]
+LIBRARY = ROOT / "modelica" / "GearDiag"
+DECLARATION = r"parameter\s+(?:Real|Integer)\s+{name}\s*(?:\(([^)]*)\))?\s*="
+
+
+def package_order() -> list[str]:
+    return (LIBRARY / "Effects" / "package.order").read_text().split()
+
+
+def declaration(effect, variable: str) -> dict[str, float] | None:
+    """min and max of ``variable`` where the effect's model (or what it extends) declares it."""
+    own = [] if effect.in_base else [LIBRARY / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"]
+    for path in own + sorted((LIBRARY / "Components").glob("*.mo")) + [LIBRARY / "GearPair.mo"]:
+        m = re.search(DECLARATION.format(name=re.escape(variable)), path.read_text())
+        if m:
+            attrs = dict(re.findall(r"(\w+)\s*=\s*([^,]+)", m.group(1) or ""))
+            return {k: float(v) for k, v in attrs.items() if k in ("min", "max")}
+    return None
+
+
+def test_the_package_lists_every_effect_model_of_the_catalogue_and_no_other():
+    models = [e.model.rsplit(".", 1)[1] for e in EFFECTS.values() if not e.in_base]
+    assert sorted(package_order()) == sorted(models)
+    for name in package_order():
+        text = (LIBRARY / "Effects" / f"{name}.mo").read_text()
+        assert re.search(rf"^model {name}\b", text, re.M), name
+    for e in EFFECTS.values():
+        assert e.model.startswith("GearDiag."), e.key
+        assert e.in_base == (e.model == "GearDiag.GearPair"), e.key
+
+
+def test_make_builds_the_effects_the_package_lists():
+    out = subprocess.run(["make", "-s", "--no-print-directory", "-f", "Makefile", "-f", "-",
+                          "print-effects"], cwd=ROOT, input="print-effects:\n\t@echo $(EFFECTS)\n",
+                         capture_output=True, text=True, check=True).stdout
+    assert out.split() == package_order()
+
+
+@pytest.mark.parametrize("key", sorted(EFFECTS))
+def test_each_fitted_range_is_its_modelica_declarations(key):
+    """A range searched (min/max in Modelica, low/high in the catalogue) is written twice
+    only where the test holds them equal; an angle (one turn) and a tooth's index (the
+    wheel's teeth, from the kinematics) take their range from elsewhere."""
+    effect = EFFECTS[key]
+    for p in effect.parameters:
+        declared = declaration(effect, p.fmu_variable)
+        assert declared is not None, f"{key}: {p.fmu_variable} is not declared in {effect.model}"
+        if p.periodic or p.step is not None:
+            continue
+        assert declared == {"min": pytest.approx(p.low), "max": pytest.approx(p.high)}, \
+            (key, p.name, declared, (p.low, p.high))
