@@ -51,7 +51,7 @@ regress: fmu
 	$(PY) -m pydiag regress --fmu build/GearPair.fmu --golden tests/golden/GearPair.json
 
 bless: fmu
-	$(PY) -m pydiag regress --fmu build/GearPair.fmu --golden tests/golden/GearPair.json --bless
+	$(PY) -m pydiag regress --fmu build/GearPair.fmu --golden tests/golden/GearPair.json --bless --force
 
 bench: fmu
 	$(PY) bench/paper_cases.py

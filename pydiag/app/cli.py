@@ -252,12 +252,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("regress", help="check an FMU against golden spectra")
     p.add_argument("--fmu", required=True)
     p.add_argument("--golden", required=True, help="golden JSON file")
-    p.add_argument("--bless", action="store_true", help="write the golden file from this FMU")
+    p.add_argument("--bless", action="store_true", help="write the golden file from this FMU "
+                   "(replace an existing one with --force)")
     p.add_argument("--rtol", type=_number(float, 0), default=DEFAULT_RTOL,
                    help=f"tolerance, fraction of the largest line (default {DEFAULT_RTOL:g})")
     p.add_argument("--sensor", action="append", help="output to check when blessing (repeat)")
     p.add_argument("--sample-rate", type=positive, default=10_000.0, help="Hz when blessing")
     p.add_argument("--adapter", help="adapter TOML (sensors, start values, kinematics) for --bless")
+    _force(p)
     p.set_defaults(func=cmd_regress)
 
     p = sub.add_parser("compare", help="fit, then show where the model fails and which effect is missing")

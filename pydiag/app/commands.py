@@ -58,16 +58,25 @@ def estimator_settings(args) -> dict:
 
 
 def check_outputs(args, *names: str) -> None:
-    """Before any work: every output option can be written, and none is an input."""
+    """Before any work: every output option can be written, none is an input, and no two
+    name the same file."""
     inputs = [Path(p).resolve() for p in (getattr(args, "measurement", None),
                                           getattr(args, "fmu", None),
-                                          getattr(args, "adapter", None)) if isinstance(p, str)]
+                                          getattr(args, "adapter", None),
+                                          getattr(args, "history", None),
+                                          getattr(args, "baseline", None)) if isinstance(p, str)]
+    seen: dict[Path, str] = {}
     for name in names:
         out = getattr(args, name, None)
         if out is None:
             continue
-        if Path(out).resolve() in inputs:
-            raise UsageError(f"--{name.replace('_', '-')} {out} would overwrite an input file")
+        option = f"--{name.replace('_', '-')}"
+        path = Path(out).resolve()
+        if path in inputs:
+            raise UsageError(f"{option} {out} would overwrite an input file")
+        if path in seen:
+            raise UsageError(f"{option} and {seen[path]} name the same file {out}")
+        seen[path] = option
         check_output(out, getattr(args, "force", False))
 
 
@@ -226,6 +235,7 @@ def cmd_batch(args) -> int:
 
 def cmd_regress(args) -> int:
     if args.bless:
+        check_outputs(args, "golden")  # an accepted behaviour is replaced only with --force
         path = regress.bless_fmu(args.fmu, args.golden, adapter_of(args),
                                  tuple(args.sensor) if args.sensor else None, args.sample_rate)
         print(f"blessed {path}")

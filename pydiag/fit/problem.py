@@ -1,12 +1,12 @@
 """The fit problem: built once from (FMU, adapter, measurement), then fitted, compared,
-extended with an effect.
+extended with an effect (:meth:`FitProblem.derive`, which opens no FMU).
 
-:func:`build_problem` opens the FMU to check the adapter against it and to resolve the
-kinematics; for a real record it finds the speed and order-tracks the record
-(:mod:`pydiag.gear.speed`) and puts the model at that speed; it chooses the featurizer,
-checks the sample rate and the record length, and computes the measured features from the
-whole record. The result is plain, picklable data: worker processes get it whole and open
-their own plant (:class:`ProblemObjective`).
+:func:`build_problem` makes it in three steps: the operating point and the record prepared
+at it (:mod:`pydiag.fit.operating_point`: the speed found and the record order-tracked),
+then the problem itself: the FMU opened once to check the adapter and the parameters
+against it, the featurizer chosen, the sample rate and the record length checked, and the
+measured features computed from the whole record. The result is plain, picklable data:
+worker processes get it whole and open their own plant (:class:`ProblemObjective`).
 
 Channel gains: a real accelerometer sits on a housing, behind a transfer path and in
 units of its own, so the model's level is not the measurement's. With ``fit_gain`` each
@@ -19,10 +19,7 @@ With the level free, the stiffness variation of the faulty tooth (``a_f``) and o
 healthy ones (``a0``, fixed at the paper's 0.1 otherwise) both scale the mesh lines, so
 only their ratio is identifiable: on the GearDiag model with the gain fitted, ``a0`` is
 fitted too (:data:`pydiag.gear.conventions.HEALTHY_TOOTH`), and the tooth is judged by its
-contrast ``a_f / a0 - 1`` (:mod:`pydiag.gear.classify`). Measured on the shared real
-records before this: with ``a0`` fixed, ``a_f`` came out 0.64-0.67 on the healthy records
-and 0.16-0.17 on the broken-tooth ones; with ``a0`` fitted, the contrast is 0.30/0.37
-healthy and 0.54/0.68 broken (0 % / 90 % load), the same for three swarm seeds.
+contrast ``a_f / a0 - 1`` (:mod:`pydiag.gear.classify`; bench/RESULTS.md, section 7).
 """
 
 from __future__ import annotations
@@ -336,8 +333,9 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     if fit_gain is None:
         fit_gain = measurement.metadata.get("source") != SIMULATED_SOURCE
     given = adapter
-    adapter = adapter or gear_default(list(measurement.channels))
     tacho = speed.tacho if speed is not None else None
+    # the built-in adapter: every channel but the tacho is a sensor of the same name
+    adapter = adapter or gear_default([c for c in measurement.channels if c != tacho])
     maps = tuple(s for s in adapter.sensors if s.channel in measurement.channels
                  and s.channel != tacho)
     missing = [s.channel for s in adapter.sensors if s.channel not in measurement.channels]

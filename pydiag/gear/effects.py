@@ -33,55 +33,60 @@ from pydiag.gear.peaks import Peak
 
 @dataclass(frozen=True)
 class Effect:
+    """One catalogue effect (docs/effects.md).
+
+    Attributes:
+        key: the name the CLI and the JSON use
+        model: its Modelica class (``GearDiag.GearPair`` for one whose parameters are the
+            base model's own, ``in_base``)
+        description: what it is, in a line
+        parameters: what it adds, named as its FMU variables, with the ranges its Modelica
+            file declares
+        weight: its signature, (line or None, freq_hz, f_mesh_hz) -> 0..1
+        hint: (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted here}
+        in_base: its parameters are the base model's, neutral by default: it frees them in
+            the base FMU instead of building a model of its own
+        synchronous: every line it makes is an order of the fundamental period, so its
+            model is simulated over one period and repeated; False for a bearing's strikes
+            or a ripple at a frequency of its own, simulated whole (discover starts those
+            first)
+        outputs: the GearPair outputs whose lines it changes (None: all): a housing mode or
+            a bearing's strikes ring the acceleration at the sensor, not the mesh's
+            displacement, so peaks of disp are no evidence for them
+        reshapes_base: it takes energy from the lines the base makes (a speed fluctuation,
+            a second faulty tooth, a housing mode), so a base fit without it bent its
+            parameters: it is fitted with the base parameters free as well, and the misfit
+            the bent base left on any channel is its evidence
+        free_start: (top of the analysed band, Hz) -> values of some of its parameters a
+            second polish with the base free starts from (a housing mode above the band
+            shows only as a tilt, which a fit with the base held makes up for); the better
+            polish is kept
+        affine: its outputs are affine in its parameters (a strike amplitude, a shaft's
+            orders): fitted from one simulation more than it has parameters
+        envelope: its lines show in the envelope of the acceleration above the gear's bands
+            (a bearing's strikes ringing a structural mode), where held-out validation
+            fits and scores it
+        machine_values: (kinematics) -> FMU values its model takes from the machine (a
+            bearing's geometry, another shaft's ratio) rather than fits
+        missing: (kinematics) -> what the machine's description must say for it to have
+            lines at all, "" when nothing is missing
+    """
+
     key: str
-    model: str  # Modelica class, under modelica/GearDiag/Effects
+    model: str
     description: str
-    parameters: tuple[Parameter, ...]  # what the effect adds, named as its FMU variables
-    weight: Callable[[KinematicLine | None, float, float], float]  # (line, freq, f_mesh) -> 0..1
-    # (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted on this pair}
+    parameters: tuple[Parameter, ...]
+    weight: Callable[[KinematicLine | None, float, float], float]
     hint: Callable[[list[Peak], float, GearKinematics | None], dict] | None = None
-    # the parameters are the base model's own (GearDiag.GearPair), neutral by default: the
-    # effect frees them in the base FMU instead of building a model of its own
     in_base: bool = False
-    # every line it makes is an order of the fundamental period: its model settles to a
-    # periodic response, simulated over one period and repeated (pydiag.fit.problem);
-    # False for strikes at a bearing's frequencies and a ripple at a frequency of its own,
-    # whose records must be simulated whole (discover starts those first)
     synchronous: bool = True
-    # the outputs of GearDiag.GearPair whose lines it changes (None: all of them): a housing
-    # mode or a bearing's strikes ring the acceleration at the sensor, not the mesh's
-    # displacement, so peaks of disp are no evidence for them
     outputs: tuple[str, ...] | None = None
-    # it takes energy from the lines the base model itself makes (a speed fluctuation
-    # moves it into sidebands, a second faulty tooth shares the first one's lines, a
-    # housing mode reweights every line the sensor sees), so a base fit without it bent
-    # its parameters to them: its held-out fit frees the base parameters with its own
-    # (pydiag.loop.validate), and since the base's parameters are every channel's, the
-    # misfit the bent base left on any channel is its evidence (pydiag.loop.compare.
-    # evidence_channels). (A housing mode was left out while the base's tooth form was a
-    # bump: with the base free it absorbed that form's misfit, confident on 2 of 3 records
-    # of the independent simulator with no hidden effect; with the two-level tooth, none.)
     reshapes_base: bool = False
-    # (top of the analysed band, Hz) -> values of some of its parameters that its polish
-    # with the base free also starts from: a housing mode above the band shows only as a
-    # tilt of the lines, which the base held makes up for, so its fit with the base held
-    # lands anywhere; the better of the two polishes is kept (pydiag.loop.compare.fit_effect)
     free_start: Callable[[float], dict[str, float]] | None = None
-    # the model's outputs are affine in its parameters (a strike amplitude, a shaft's
-    # orders, added to what the sensor sees of the mesh): fitted from one simulation more
-    # than it has parameters (pydiag.fit.affine)
     affine: bool = False
-    # its lines show in the envelope of the acceleration above the gear's analysed bands,
-    # not in its spectrum: a bearing's strikes ring a structural mode kHz above the gear's
-    # lines, and the rolling elements' slip smears their harmonics there into a hump. Held-
-    # out validation fits and scores it on the envelope's spectrum (pydiag.loop.validate)
     envelope: bool = False
-    # (kinematics) -> FMU values its model takes from the machine rather than fits (the
-    # other shaft's speed ratio); None: it takes none (:meth:`values_from`)
-    machine_values: Callable[[object], dict[str, float]] | None = None
-    # (kinematics) -> what they must say and do not for it to have lines at all ("" when
-    # nothing is missing); None: it needs nothing beyond the gear pair (:meth:`unknown_lines`)
-    missing: Callable[[object], str] | None = None
+    machine_values: Callable[[GearKinematics | None], dict[str, float]] | None = None
+    missing: Callable[[GearKinematics | None], str] | None = None
 
     def changes(self, output: str) -> bool:
         """Whether the effect changes the model output ``output`` (an FMU variable)."""
@@ -90,7 +95,7 @@ class Effect:
     def bounds(self, peaks: list[Peak], bin_hz: float,
                kinematics: GearKinematics | None = None) -> tuple[Parameter, ...]:
         """The effect's parameters, bounds narrowed by what the residual peaks (and the gear
-        pair's ``kinematics``: :class:`pydiag.gear.kinematics.Kinematics`) say, if it can;
+        machine's ``kinematics``: :class:`pydiag.gear.kinematics.GearKinematics`) say, if it can;
         those its hint leaves out (None) are not fitted: they keep the FMU's neutral value."""
         narrowed = self.hint(peaks, bin_hz, kinematics) if self.hint else {}
         return tuple(dataclasses.replace(p, low=narrowed[p.name][0], high=narrowed[p.name][1])

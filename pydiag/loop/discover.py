@@ -19,7 +19,7 @@ shaft orders).
 Effects are fitted side by side, one per core (each in a process of its own): an
 effect's fit keeps a core busy only part of the time (its least-squares polish asks for
 one simulation at a time), so running them one after another with all cores each left
-about a fifth of the machine idle (bench/discover_speed.py, RESULTS section 11). Each
+about a fifth of the machine idle (bench/RESULTS.md, section 11). Each
 effect's fit may use every core (its swarm's particles, its polish's Jacobian columns):
 when the others are done, the last one's polish runs on all of them. The effects that
 are not synchronous with the shafts (``Effect.synchronous``: their records are simulated

@@ -17,14 +17,8 @@ from pydiag.loop.results import Comparison
 #: looser stops, as the effect is judged by a held-out test, not reported to six digits.
 #: The swarm stops when its best cost stood still (by 1e-3 of 1 + the cost) for 2
 #: iterations; one polish, from the swarm's best, stops at steps under 1e-3 of the ranges
-#: (its own difference step) or when a step lowers the squared error by under 1e-6 of
-#: it. On the 4 s simulator record of bench/discover_speed.py, the load ripple's held-out
-#: z of 56 came with a 1e-3 fall of the squared error on the fitted half, so these stops
-#: are worth well under 1 in z. With the tighter defaults, an effect the record does not
-#: hold spent 10-20 simulations per polish start on changes of 1e-7, and its swarm 3
-#: iterations on no change at all. A second polish start (from the swarm's next distinct
-#: position) changed no verdict of bench/independent_truth.py (8 hidden effects x 3
-#: seeds) and cost the ripple's refit 55 of its 125 simulations of the whole record.
+#: (its own difference step) or when a step lowers the squared error by under 1e-6 of it:
+#: changes worth well under 1 in the held-out z (bench/RESULTS.md, section 11).
 EFFECT_REFIT = dict(n_particles=8, iterations=6, polish_evaluations=60, polish_starts=1,
                     polish_xtol=1e-3, polish_ftol=1e-6, swarm_ftol=1e-3, swarm_ftol_iter=2)
 #: Swarm positions an effect that reshapes the base's lines is polished from, base held
@@ -36,8 +30,8 @@ RESHAPE_STARTS = 2
 #: half-way depends on where it started (bench/RESULTS.md, changelog: 8 iterations left
 #: the second faulty tooth's fit on one record 45 % above its converged error).
 FREE_POLISH_ITERATIONS = 16
-#: ... and the diagnosis's own stops, not :data:`EFFECT_REFIT`'s loose ones, which stopped
-#: such a polish at its start.
+#: ... and tighter stops than :data:`EFFECT_REFIT`'s, which stopped such a polish at its
+#: start: it goes on while a step lowers the squared error by 1e-5 of it.
 FREE_POLISH = dict(polish_xtol=1e-6, polish_ftol=1e-5)
 
 
@@ -101,9 +95,8 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     An effect that takes energy from the base model's own lines (``Effect.reshapes_base``)
     found a base fit bent to make up for it, which its own parameters alone cannot undo:
     its swarm (base held) is polished from its two best distinct positions, base still
-    held, sharing half of one start's budget (the swarm alone stopped outside the narrow
-    basin of a ripple's frequency on one record of the independent simulator: 7.68 Hz for
-    7.3), and the best is polished once more, with the base parameters free as well
+    held, sharing half of one start's budget (the swarm alone can stop outside the narrow
+    basin of a ripple's frequency), and the best is polished once more, with the base parameters free as well
     (:func:`free_polish`), and, for an effect with a ``free_start``, once more from there,
     the better kept. Its problem then fits both, and the parameters returned are both."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)

@@ -94,3 +94,46 @@ def test_a_record_in_the_wrong_units_gets_a_warning_not_a_silent_diagnosis(
     res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
                   str(short_measurement), "--gain", gain, "--quiet")
     assert res.returncode == 0 and "warning" not in res.stderr, res.stderr
+
+
+def test_a_tacho_channel_works_with_our_own_fmus(gear_fmu, short_measurement, tmp_path):
+    """--tacho with the built-in adapter: the tacho is the speed's channel, not a sensor the
+    FMU must have (it was 'sensor variable tacho is not in the FMU')."""
+    m = read_measurement(short_measurement)
+    t = np.arange(m.n_samples) / m.sample_rate_hz
+    pulses = (np.mod(t * 25.0 * 10, 1.0) < 0.2).astype(float)  # 10 a turn at 25 Hz
+    path = write_csv(tmp_path / "tacho.csv", ["time_s", "acc", "disp", "tacho"],
+                     zip(t, m.channels["acc"], m.channels["disp"], pulses))
+    out = tmp_path / "r.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement", str(path),
+                  "--tacho", "tacho", "--pulses-per-rev", "10", "--particles", "4",
+                  "--iterations", "2", "--polish", "0", "--json", str(out), "--quiet")
+    assert res.returncode == 0, res.stderr
+    data = json.loads(out.read_text())
+    assert data["speed_method"] == "tacho" and data["channels"] == ["acc", "disp"]
+    assert data["speed_hz"] == pytest.approx(25.0, rel=1e-3)
+
+
+def test_two_outputs_may_not_name_one_file_nor_the_history(gear_fmu, short_measurement,
+                                                           tmp_path):
+    """Refused before any work, whatever --force says: nothing is written."""
+    out, db = tmp_path / "x", tmp_path / "h.sqlite"
+    base = ["-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--measurement",
+            str(short_measurement), "--quiet", "--force"]
+    res = run_cli(*base, "--json", str(out), "--report", str(out))
+    assert res.returncode == 2 and "--report and --json name the same file" in res.stderr
+    res = run_cli(*base, "--json", str(db), "--history", str(db))
+    assert res.returncode == 2 and "would overwrite an input file" in res.stderr
+    assert not out.exists() and not db.exists()
+
+
+def test_bless_keeps_an_existing_golden_without_force(gear_fmu, tmp_path):
+    golden = tmp_path / "g.json"
+    golden.write_text("{}")
+    args = ["-m", "pydiag", "regress", "--fmu", str(gear_fmu), "--golden", str(golden),
+            "--bless"]
+    res = run_cli(*args)
+    assert res.returncode == 2 and "exists" in res.stderr and golden.read_text() == "{}"
+    res = run_cli(*args, "--force")
+    assert res.returncode == 0, res.stderr
+    assert json.loads(golden.read_text())
