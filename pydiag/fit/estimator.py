@@ -9,13 +9,11 @@ whole periods.
 The swarm (:mod:`pydiag.fit.pso`, seeded, Clerc's constriction coefficients) finds
 candidate basins; a bounded trust-region least-squares polish (scipy
 ``least_squares``, method "trf") on the residuals of Eq. (12) then converges in each of
-the best few distinct personal-best positions, and the lowest error wins. Measured on
-Table 1 case 2: polishing only the global best converged to f_f = 0 (E = 0.50, the
-truth scores 0.066). Measured on case 5: the swarm alone (16 x 20) stopped at E = 0.157
-while the true parameters score 0.040, and a Nelder-Mead polish of 150 evaluations did
-not close the gap: the valley is narrow in f_ate (displacement channel) and shallow in
-a_f, f_f, which a Gauss-Newton step handles and a simplex does not. The Jacobian is by
-forward differences, its columns simulated in parallel.
+the best few distinct personal-best positions, and the lowest error wins: polishing the
+global best alone can converge in the wrong basin, and the valley is narrow in f_ate
+(displacement channel) and shallow in a_f, f_f, which a Gauss-Newton step handles and a
+simplex does not (docs/method.md). The Jacobian is by forward differences, its columns
+simulated in parallel.
 
 Particles and Jacobian columns are evaluated in worker processes, each with its own
 FMU instance; the result does not depend on the number of workers, and the same seed

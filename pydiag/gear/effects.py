@@ -191,9 +191,8 @@ def _other_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | No
     """Only the orders it claims (:func:`_other_shaft`) at which the residual has a peak
     are fitted: none when the other shaft's speed is not known. Its lines are not
     synchronous with the pair's period, so in a spectrum of joined halves each leaks over
-    the bins around it: an order with no line in the record, fitted, took noise peaks of
-    the fitted half by its leakage (10x at 3.15 m/s2 on one record of the independent
-    simulator, whose motor shaft makes 1x-3x) and predicted lines the other half lacks."""
+    the bins around it: an order with no line in the record, fitted, takes noise peaks of
+    the fitted half by its leakage and predicts lines the other half lacks."""
     names = [f"A_o{k}" for k in range(1, SHAFT_ORDERS + 1)]
     f_other = None if kin is None else kin.f_other_shaft_hz
     if f_other is None:
@@ -259,9 +258,8 @@ def resonance_band(peaks: list[Peak], families: tuple[str, ...] = GEAR_PAIR_FAMI
 
 def _housing_start(top_hz: float) -> dict[str, float]:
     # a mode a quarter above the analysed band, of a housing's usual damping: from there
-    # the polish reaches a mode anywhere above the band (independent simulator, 2.5 kHz
-    # above a band ending at 1575 Hz: from starts of 1.6, 2.2, 2.5 and 4 kHz it reached
-    # 2.4-2.9 kHz; from 1 kHz, 1.16 kHz; from the held fit's 57 Hz, 23 Hz)
+    # the polish reaches a mode anywhere above the band; from below the band's top, or
+    # from the held fit's start, it stays below it
     return {"f_housing": 1.25 * top_hz, "zeta_housing": 0.05}
 
 
@@ -289,10 +287,9 @@ def _bearing_missing(kin) -> str:
     return "the bearing's geometry (--bearing)" if kin is None or kin.bearing is None else ""
 
 
-#: The largest bearing strike the bearing effects fit, m/s2 at the model's sensor (500 g). A
-#: fitted channel gain scales it to the measurement's: the shared real records fit gains of
-#: 0.0145-0.40, and on the independent simulator a base bent by a missing effect fitted
-#: 0.094, for which its 60 m/s2 strikes needed 640.
+#: The largest bearing strike the bearing effects fit, m/s2 at the model's sensor (500 g):
+#: a fitted channel gain scales it to the measurement's, and real records fit gains down
+#: to about 0.01.
 MAX_STRIKE_M_S2 = 5000.0
 #: The highest torque-ripple frequency the load-fluctuation effect models, Hz.
 MAX_RIPPLE_HZ = 20.0
@@ -392,9 +389,7 @@ EFFECTS = {e.key: e for e in (
     # at a resonance): the loss then reshapes the lines the base makes, which a base fit
     # without it bends to. Its transition is the teeth's surfaces coming into contact: from
     # a hard contact to the roughness of ground teeth (Ra 0.3 um). Wider, the factor is a
-    # softening stiffness law over the whole deflection instead, which fitted the
-    # independent simulator's hard contact at 1-2 um on some records and at its bound on
-    # others (bench/backlash_resonance.py, RESULTS.md section 9).
+    # softening stiffness law over the whole deflection instead (RESULTS.md, changelog).
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
            (Parameter("delta_c", 0.01e-6, 0.3e-6),), _backlash, reshapes_base=True),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
