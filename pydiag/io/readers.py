@@ -3,14 +3,17 @@
 =================  ==========================================================================
 extension          how
 =================  ==========================================================================
-.csv .tsv .txt     pandas with the pyarrow engine; delimiter sniffed (``,`` ``;`` tab space),
-.dat (+ .gz)       decimal comma accepted with ``;`` or tab, header optional (columns are then
-                   ``ch1``, ``ch2``...), leading ``#`` lines skipped, ``# meta: {json}`` kept
+.csv .tsv .txt     pandas with the pyarrow engine; delimiter sniffed (``,`` ``;`` tab space;
+.dat (+ .gz)       whitespace-aligned columns with leading blanks as MATLAB's ``save -ascii``
+                   writes them), a delimiter ending every line ignored, decimal comma accepted
+                   with ``;`` or tab, header optional (columns are then ``ch1``, ``ch2``...),
+                   leading ``#`` lines skipped, ``# meta: {json}`` kept
 .parquet           pandas/pyarrow; the file's ``pydiag`` key-value metadata kept
 .mat               MATLAB v5 (scipy.io) or v7.3 (h5py): every numeric vector is a channel
                    (a matrix gives ``NAME_1``, ``NAME_2``... per column)
 .wav               scipy.io.wavfile: channels ``ch1``...; integer PCM scaled to full scale 1
 .tdms              npTDMS: channels named ``group/channel`` (or ``channel`` when unique)
+.zip               one record file of the formats above inside (as data sets ship them)
 =================  ==========================================================================
 
 The sample rate comes from, in this order: a time column (``time_s``, ``time``, ``t``;
@@ -20,7 +23,8 @@ of a MAT file), or ``sample_rate_hz``. Given as well, it must agree with the fil
 The source is kept in ``metadata["sample_rate_source"]``.
 
 Channels are chosen and mapped to model outputs with specs ``NAME=OUTPUT`` (``NAME`` alone
-keeps the name), and converted to SI with ``units`` (:mod:`pydiag.io.units`). A chosen
+keeps the name), and converted to SI with ``units`` (:mod:`pydiag.io.units`); a column
+not chosen is not checked (a label column, a channel at another rate). A chosen
 channel that is constant (a dead sensor), a duplicated column name, a missing or non-numeric
 value, and a value more than ``MAX_SPIKE`` times the channel's median absolute deviation
 from its median (a corrupt value or a DAQ's overflow code such as 9.9e37; the sharpest
@@ -34,6 +38,7 @@ import csv
 import gzip
 import io
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +57,10 @@ RATE_TOLERANCE = 1e-3
 MAX_SPIKE = 1e6
 RATE_VARIABLES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "sampling_rate", "sr")
 TEXT_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
-SUFFIXES = TEXT_SUFFIXES + (".parquet", ".mat", ".wav", ".tdms")
+SUFFIXES = TEXT_SUFFIXES + (".parquet", ".mat", ".wav", ".tdms", ".zip")
+#: The largest record a zip may hold, bytes uncompressed (a 4 s record of three channels
+#: at 66.7 kHz as text is 13 MB).
+MAX_ZIPPED_BYTES = 2 * 1024 ** 3
 
 
 class _Table:
@@ -109,15 +117,24 @@ def _read_text(path: Path) -> _Table:
     body = [line for line in head[n_comments:] if line.strip()]
     if not body:
         raise _fail(path, "no data rows found")
-    try:
-        delimiter = csv.Sniffer().sniff("".join(body[:20]), delimiters=",;\t ").delimiter
-    except csv.Error:
-        delimiter = ","  # one column
+    if not any(c in line for line in body[:20] for c in ",;\t") and \
+            any(len(line.split()) > 1 for line in body[:20]):
+        delimiter = " "  # whitespace-aligned (MATLAB's save -ascii: leading blanks, runs)
+    else:
+        try:
+            delimiter = csv.Sniffer().sniff("".join(body[:20]), delimiters=",;\t ").delimiter
+        except csv.Error:
+            delimiter = ","  # one column
     sample = body[1] if len(body) > 1 else body[0]
     decimal = "," if delimiter in ";\t " and "," in sample and not _is_number(
         sample.split(delimiter)[0], ".") else "."
-    first = [t.strip() for t in next(csv.reader([body[0]], delimiter=delimiter)) if
-             delimiter != " " or t.strip()]
+    first = [t.strip() for t in next(csv.reader([body[0].rstrip("\r\n")],
+                                                delimiter=delimiter))
+             if delimiter != " " or t.strip()]
+    trailing = delimiter != " " and len(first) > 1 and first[-1] == "" and all(
+        line.rstrip("\r\n").endswith(delimiter) for line in body[:20])
+    if trailing:  # every line ends with the delimiter: no column after it
+        first = first[:-1]
     has_header = not all(_is_number(t, decimal) for t in first)
     if has_header:
         duplicated = sorted({t for t in first if first.count(t) > 1})
@@ -127,13 +144,16 @@ def _read_text(path: Path) -> _Table:
         names = first
     else:
         names = [f"ch{i + 1}" for i in range(len(first))]
-    fast = decimal == "." and delimiter != " "
+    fast = decimal == "." and delimiter != " " and not trailing
     try:
         frame = pd.read_csv(path, sep=r"\s+" if delimiter == " " else delimiter,
                             skiprows=n_comments + (1 if has_header else 0), header=None,
-                            names=names, decimal=decimal, engine="pyarrow" if fast else "c",
+                            names=names + ([""] if trailing else []), decimal=decimal,
+                            engine="pyarrow" if fast else "c",
                             compression="gzip" if _gzipped(path) else None,
                             encoding="utf-8-sig")
+        if trailing:
+            frame = frame.iloc[:, :-1]
     except (ValueError, pd.errors.ParserError, OSError, UnicodeDecodeError) as err:
         first_line = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         raise _fail(path, f"cannot parse as {'decimal-comma ' if decimal == ',' else ''}text "
@@ -141,27 +161,35 @@ def _read_text(path: Path) -> _Table:
     return _Table(_numeric_columns(path, frame), metadata)
 
 
-def _numeric_columns(path: Path, frame) -> dict[str, np.ndarray]:
+class _Unusable(str):
+    """Why a column cannot be a signal: an error only if the column is chosen (a label
+    column or a channel at another rate beside the one asked for stops nothing)."""
+
+
+def _numeric_columns(path: Path, frame) -> dict[str, np.ndarray | _Unusable]:
     import pandas as pd
 
-    columns = {}
+    columns: dict[str, np.ndarray | _Unusable] = {}
     for name in frame.columns:
         col = frame[name]
         if not pd.api.types.is_numeric_dtype(col):
             values = pd.to_numeric(col, errors="coerce")
             bad = np.flatnonzero(values.isna() & col.notna())
             if bad.size:
-                raise _fail(path, f"column '{name}' has a non-numeric value "
-                                  f"({col.iloc[bad[0]]!r}, data row {bad[0] + 1})")
+                columns[str(name)] = _Unusable(f"column '{name}' has a non-numeric value "
+                                               f"({col.iloc[bad[0]]!r}, data row {bad[0] + 1})")
+                continue
             col = values
         values = col.to_numpy(dtype=float, na_value=np.nan)
         missing = np.flatnonzero(np.isnan(values))
         if missing.size:
-            raise _fail(path, f"column '{name}' has {missing.size} missing or NaN value(s), "
-                              f"the first in data row {missing[0] + 1}")
-        if not np.isfinite(values).all():
-            raise _fail(path, f"column '{name}' has infinite values")
-        columns[str(name)] = values
+            columns[str(name)] = _Unusable(
+                f"column '{name}' has {missing.size} missing or NaN value(s), the first in "
+                f"data row {missing[0] + 1}")
+        elif not np.isfinite(values).all():
+            columns[str(name)] = _Unusable(f"column '{name}' has infinite values")
+        else:
+            columns[str(name)] = values
     return columns
 
 
@@ -253,6 +281,46 @@ def _read_tdms(path: Path) -> _Table:
 READERS = {".parquet": _read_parquet, ".mat": _read_mat, ".wav": _read_wav, ".tdms": _read_tdms}
 
 
+def _read_zipped(path: Path, sample_rate_hz: float | None, channels: list[str] | None,
+                 units) -> Measurement:
+    """The one record a zip holds (as data sets ship them), read as its own format."""
+    import tempfile
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            members = [m for m in archive.infolist() if not m.is_dir()
+                       and not Path(m.filename).name.startswith(".")
+                       and not m.filename.startswith("__MACOSX/")]
+            if len(members) != 1:
+                raise _fail(path, f"a zip must hold one record file, it holds {len(members)}"
+                                  + (f": {', '.join(m.filename for m in members[:5])}"
+                                     if members else ""))
+            member = members[0]
+            name = Path(member.filename).name
+            if _suffix(Path(name)) not in SUFFIXES or _suffix(Path(name)) == ".zip":
+                raise _fail(path, f"its record {name} is of no format pydiag reads")
+            if member.file_size > MAX_ZIPPED_BYTES:
+                raise _fail(path, f"its record {name} is {member.file_size / 1e9:.1f} GB "
+                                  f"unpacked, over the {MAX_ZIPPED_BYTES / 1e9:.1f} GB pydiag "
+                                  "reads from a zip: unpack it first")
+            with tempfile.TemporaryDirectory(prefix="pydiag_zip_") as tmp:
+                inner = Path(tmp) / name
+                with archive.open(member) as src, open(inner, "wb") as dst:
+                    shutil.copyfileobj(src, dst, 1 << 20)
+                m = read_measurement(inner, sample_rate_hz, channels, units)
+    except (zipfile.BadZipFile, OSError) as err:
+        raise _fail(path, f"cannot read the zip: {err}") from err
+    return Measurement(m.channels, m.sample_rate_hz,
+                       {**m.metadata, "file": f"{path}:{member.filename}"})
+
+
+def _usable(path: Path, column: np.ndarray | _Unusable) -> np.ndarray:
+    if isinstance(column, _Unusable):
+        raise _fail(path, str(column))
+    return column
+
+
 def _suffix(path: Path) -> str:
     suffixes = [s.lower() for s in path.suffixes]
     return suffixes[-2] if suffixes[-1:] == [".gz"] and len(suffixes) > 1 else (suffixes or [""])[-1]
@@ -334,6 +402,8 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     if not path.is_file():
         raise _fail(path, "cannot read: no such file" if not path.exists() else
                     "cannot read: not a regular file")
+    if suffix == ".zip":
+        return _read_zipped(path, sample_rate_hz, channels, units)
     try:
         table = (_read_text if suffix in TEXT_SUFFIXES else READERS[suffix])(path)
     except (OSError, EOFError, UnicodeDecodeError, gzip.BadGzipFile) as err:
@@ -342,7 +412,8 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     rate, source = table.rate_hz, table.rate_source
     time_name = next((c for c in columns if c.lower() in TIME_COLUMNS), None)
     if time_name is not None:
-        rate, source = _time_rate(path, time_name, columns.pop(time_name)), f"column '{time_name}'"
+        rate, source = _time_rate(path, time_name, _usable(path, columns.pop(time_name))), \
+            f"column '{time_name}'"
     if rate is not None and sample_rate_hz is not None:
         if abs(rate - sample_rate_hz) > RATE_TOLERANCE * rate:
             raise _fail(path, f"--sample-rate {sample_rate_hz:g} Hz disagrees with {source} "
@@ -353,14 +424,15 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
         rate, source = float(sample_rate_hz), "--sample-rate"
     if not columns:
         raise _fail(path, "no signal column")
-    lengths = {c: v.size for c, v in columns.items()}
-    if len(set(lengths.values())) > 1:
-        raise _fail(path, f"channels have different lengths: {lengths}")
     specs = [parse_channel(s) for s in channels] if channels else [(c, c) for c in columns]
     missing = [n for n, _ in specs if n not in columns]
     if missing:
         raise _fail(path, f"channel(s) {', '.join(missing)} not in the file; it has: "
                           f"{', '.join(columns)}")
+    columns = {n: _usable(path, columns[n]) for n, _ in specs}  # the others are not read
+    lengths = {c: v.size for c, v in columns.items()}
+    if len(set(lengths.values())) > 1:
+        raise _fail(path, f"channels have different lengths: {lengths}")
     outputs = [o for _, o in specs]
     if len(set(outputs)) < len(outputs):
         raise UsageError(f"two channels map to the same output: {', '.join(outputs)}")

@@ -192,3 +192,55 @@ def test_unknown_format_and_not_a_file(tmp_path):
     (tmp_path / "d.csv").mkdir()
     with pytest.raises(MeasurementError, match="not a regular file"):
         read_measurement(tmp_path / "d.csv")
+
+
+def test_whitespace_aligned_text_with_leading_blanks_and_crlf(tmp_path, signals):
+    """What MATLAB's save -ascii writes (the PHM 2009 records): no header, columns aligned
+    by runs of blanks, a blank before each line, CRLF; read as ch1, ch2."""
+    path = tmp_path / "r.txt"
+    path.write_bytes("".join(f"  {a: .7e} {b: .7e}\r\n" for a, b in zip(*signals.values()))
+                     .encode())
+    _check(read_measurement(path, FS), signals, names=("ch1", "ch2"), rtol=1e-7)
+
+
+def test_a_zip_holding_one_record_is_read_as_that_record(tmp_path, signals):
+    import zipfile
+    inner = tmp_path / "r.txt"
+    inner.write_text("".join(f"  {a: .7e} {b: .7e}\r\n" for a, b in zip(*signals.values())))
+    archive = tmp_path / "r 1.zip"
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(inner, "r 1.txt")
+    m = read_measurement(archive, FS, ["ch2=acc"])
+    assert list(m.channels) == ["acc"] and m.metadata["file"].endswith("r 1.zip:r 1.txt")
+    np.testing.assert_allclose(m.channels["acc"], signals["a2"], rtol=1e-7)
+    with zipfile.ZipFile(tmp_path / "two.zip", "w") as z:
+        z.write(inner, "a.txt")
+        z.write(inner, "b.txt")
+    with pytest.raises(MeasurementError, match="must hold one record file, it holds 2"):
+        read_measurement(tmp_path / "two.zip", FS)
+
+
+@pytest.mark.parametrize("delimiter", [",", "\t", ";"])
+def test_a_delimiter_ending_every_line_is_no_column(tmp_path, signals, delimiter):
+    path = tmp_path / "r.csv"
+    lines = [delimiter.join(["a1", "a2"]) + delimiter]
+    lines += [delimiter.join(f"{v:.17g}" for v in row) + delimiter
+              for row in zip(*signals.values())]
+    path.write_text("\n".join(lines) + "\n")
+    _check(read_measurement(path, FS), signals)
+
+
+def test_a_column_not_chosen_is_not_checked(tmp_path, signals):
+    """A label column (text) or a column with gaps beside the one asked for stops nothing;
+    asked for, it is refused with its reason."""
+    frame = pd.DataFrame({**signals, "label": ["healthy"] * N,
+                          "slow": np.where(np.arange(N) % 2 == 0, 1.0, np.nan)})
+    frame.to_parquet(tmp_path / "r.parquet")
+    frame.to_csv(tmp_path / "r.csv", index=False)
+    for name in ("r.parquet", "r.csv"):
+        m = read_measurement(tmp_path / name, FS, ["a1"])
+        assert list(m.channels) == ["a1"]
+        with pytest.raises(MeasurementError, match="column 'label' has a non-numeric value"):
+            read_measurement(tmp_path / name, FS, ["label"])
+        with pytest.raises(MeasurementError, match="column 'slow' has 300 missing"):
+            read_measurement(tmp_path / name, FS, ["slow"])
