@@ -33,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
@@ -77,15 +78,24 @@ class SpeedSettings:
             raise UsageError(f"pulses per revolution must be >= 1, got {self.pulses_per_rev}")
 
 
+class SpeedSource(str, Enum):
+    """Where a speed estimate comes from."""
+
+    TACHO = "tacho"
+    MESH = "mesh"
+    NOMINAL = "nominal"  # not measured: the record is taken at the nominal speed
+
+
 @dataclass(frozen=True)
 class SpeedEstimate:
     """Attributes:
         speed_hz: mean pinion speed over the record
         variation_pct: speed range over the record, % of the mean (see module docstring)
-        method: "tacho", "mesh harmonic <h>" or "nominal"
+        method: how, in words: "tacho", "mesh harmonic <h>" or "nominal" (and why)
         nominal_hz: the nominal speed the estimate started from
         revolutions: pinion revolutions at every sample (not serialised)
         valid: (first, last) sample where the angle is measured, not extrapolated
+        source: where it comes from (:class:`SpeedSource`)
     """
 
     speed_hz: float
@@ -94,6 +104,7 @@ class SpeedEstimate:
     nominal_hz: float
     revolutions: np.ndarray = dataclasses.field(repr=False, compare=False)
     valid: tuple[int, int] = (0, -1)
+    source: SpeedSource = SpeedSource.MESH
 
     def to_dict(self) -> dict:
         return {"speed_hz": self.speed_hz, "speed_variation_pct": self.variation_pct,
@@ -194,12 +205,14 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
                                    f"{', '.join(measurement.channels)}")
         revs = tacho_revolutions(measurement.channels[tacho], pulses_per_rev)
         mean = _mean_speed(revs, fs)
-        return SpeedEstimate(mean, _variation_pct(revs, fs, mean), "tacho", nominal, revs)
+        return SpeedEstimate(mean, _variation_pct(revs, fs, mean), "tacho", nominal, revs,
+                             source=SpeedSource.TACHO)
     if method == "nominal":
         revs = np.arange(measurement.n_samples) * (nominal / fs)
         why = (f" (auto: a record of {measurement.duration_s:.3g} s is too short to follow the "
                "mesh phase)" if settings.method == "auto" else "")
-        return SpeedEstimate(nominal, 0.0, "nominal" + why, nominal, revs)
+        return SpeedEstimate(nominal, 0.0, "nominal" + why, nominal, revs,
+                             source=SpeedSource.NOMINAL)
     names = [c for c in measurement.channels if c != tacho]
     channel = channel or names[0]
     if channel not in measurement.channels:
@@ -235,7 +248,7 @@ def order_track(measurement: Measurement, estimate: SpeedEstimate,
     The result is the record at constant speed ``estimate.speed_hz``: its sample rate is
     samples_per_rev x speed_hz. Metadata gain the speed estimate and ``order_tracking``.
     """
-    if estimate.method.startswith("nominal"):
+    if estimate.source is SpeedSource.NOMINAL:
         channels = {c: v for c, v in measurement.channels.items() if c not in drop}
         return Measurement(channels, measurement.sample_rate_hz,
                            {**measurement.metadata, **estimate.to_dict()})

@@ -1,5 +1,8 @@
 """Read a measurement from the files engineers have, picked by extension.
 
+One concern: a record file in, a :class:`~pydiag.core.measurement.Measurement` out, with
+every way a real file goes wrong refused in one line that names it.
+
 =================  ==========================================================================
 extension          how
 =================  ==========================================================================

@@ -50,7 +50,7 @@ from pydiag.gear.effects import EFFECTS, model_file
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import settle
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
-from pydiag.loop.held_out import held_out
+from pydiag.loop.held_out import envelope_band, halves, held_out
 from pydiag.loop.results import Comparison, Discovery, Status
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
@@ -92,17 +92,28 @@ def _failed(key: str, err: Exception, started: float) -> Discovery:
 
 
 def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
-                estimator: FaultEstimator) -> Discovery:
+                estimator: FaultEstimator, memo: dict | None = None) -> Discovery:
     """One effect held out, as a row (an effect that cannot be fitted is a row too).
     Takes the effect's key, not the effect: it runs in a worker process."""
     started = time.perf_counter()
     effect = EFFECTS[key]
     try:
-        h = held_out(problem, base, effect, fmu, estimator)
+        h = held_out(problem, base, effect, fmu, estimator, memo=memo)
     except PydiagError as err:
         return _failed(key, err, started)
     return Discovery(key, h.status, h.message, h, len(effect.parameters),
                      time.perf_counter() - started, h.confident)
+
+
+def _shared_halves(problem: FitProblem, base: Comparison, keys: list[str]) -> dict:
+    """What every effect's held-out test shares (:class:`pydiag.loop.held_out.Halves`), made
+    once here for the workers; empty when it cannot be made (each effect's row then says
+    why)."""
+    try:
+        bands = {envelope_band(problem, EFFECTS[key]) for key in keys}
+        return {band: halves(problem, base, band, with_base_signals=True) for band in bands}
+    except PydiagError:
+        return {}
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
@@ -144,18 +155,19 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
             if progress:
                 progress(found[-1])
     keys = [key for key in keys if key in fmus]
+    memo = _shared_halves(problem, base, keys)
     effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
     cores = effect_estimator.n_workers or os.cpu_count() or 1
     jobs = min(cores, len(keys))
     if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
         for key in keys:
-            found.append(_try_effect(problem, base, key, fmus[key], effect_estimator))
+            found.append(_try_effect(problem, base, key, fmus[key], effect_estimator, memo))
             if progress:
                 progress(found[-1])
     else:
         one = effect_estimator.replace(n_workers=cores, progress=None)
         with ProcessPoolExecutor(jobs) as pool:
-            tasks = {pool.submit(_try_effect, problem, base, key, fmus[key], one): key
+            tasks = {pool.submit(_try_effect, problem, base, key, fmus[key], one, memo): key
                      for key in keys}
             rows = {}
             for task in as_completed(tasks):

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
@@ -55,10 +56,10 @@ from pydiag.fit.objective import noise_corrected_error, rician_mean, spectral_er
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import coinciding, kinematic_map, match
+from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
 from pydiag.loop.effect_fit import (EFFECT_REFIT, effect_parameters, evidence_channels,
                                     fit_effect, free_polish)
-from pydiag.loop.residual import measured_spectra
+from pydiag.loop.residual import MeasuredSpectra, measured_spectra
 from pydiag.loop.results import Comparison, HeldOut
 from pydiag.signal.spectra import local_maxima
 
@@ -70,6 +71,62 @@ FALSE_ALARM_RATE = 0.01
 ENVELOPE_TOP = 0.45
 #: A parameter closer to a bound than this share of its range is at the bound.
 AT_BOUND = 0.01
+
+
+@dataclass
+class Halves:
+    """What held-out validation takes from the record and the base fit alone, the same for
+    every effect scored on one band (the spectrum's, or an envelope's): half A's spectra,
+    peak margins and the bins scored, the kinematic lines where the joined halves show
+    them, and the base model's signals at its fit (for the effects that hold the base)."""
+
+    problem: FitProblem  # the base problem, its gains held on an envelope
+    base_problem: FitProblem  # the same on half A's bins
+    measured: MeasuredSpectra
+    lines: list[KinematicLine]
+    base_signals: np.ndarray | None = None
+
+
+def envelope_band(problem: FitProblem, effect: Effect) -> tuple[float, float] | None:
+    """The band whose envelope ``effect`` is scored on, or None: its spectrum."""
+    if not effect.envelope:
+        return None
+    top, rate = problem.featurizer.max_freq_hz, problem.measurement.sample_rate_hz
+    band = (top, ENVELOPE_TOP * rate)
+    if not band[0] < band[1]:
+        raise EstimationError(f"{effect.key} is scored on the envelope above the gear's bands "
+                              f"({top:g} Hz), and a sample rate of {rate:g} Hz leaves none")
+    return band
+
+
+def halves(problem: FitProblem, base: Comparison, band: tuple[float, float] | None,
+           with_base_signals: bool = False) -> Halves:
+    """The :class:`Halves` of the record of ``problem`` and the fit ``base``, on ``band``."""
+    kin = problem.kinematics
+    n_half = base.n_periods // 2
+    if kin is None or n_half < 1:
+        raise EstimationError("held-out validation needs a gear model and a record of at "
+                              "least two fundamental periods")
+    if band is not None:  # the gear's lines removed, no line left to tell a gain by
+        problem = problem.derive(fixed_gains=base.gains)
+    half_a = FullSpectrumFeaturizer(kin, n_half, problem.featurizer.max_freq_hz, half=0,
+                                    envelope_band_hz=band)
+    measured = measured_spectra(problem, base.false_alarm_rate, featurizer=half_a)
+    fit_half = measured.featurizer
+    bin_hz = 1.0 / (n_half * kin.period_s)
+    lines = coinciding([dataclasses.replace(line, freq_hz=fit_half.joined_freq_hz(line.freq_hz))
+                        for line in kinematic_map(kin, fit_half.max_freq_hz)], 0.5 * bin_hz)
+    out = Halves(problem, problem.derive(featurizer=fit_half), measured, lines)
+    if with_base_signals:
+        out.base_signals = _signals(out.base_problem, base.parameters)
+    return out
+
+
+def _signals(problem: FitProblem, parameters: dict[str, float]) -> np.ndarray:
+    """The model's channel signals at ``parameters`` (by name), gains as ``problem`` has them."""
+    with problem.spec.open() as plant:
+        return problem.model_signals(plant, np.array([parameters[p.name]
+                                                      for p in problem.parameters]))
 
 
 def threshold(false_alarm_rate: float = FALSE_ALARM_RATE) -> float:
@@ -103,13 +160,15 @@ def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
 
 def held_out(problem: FitProblem, base: Comparison, effect: Effect,
              effect_fmu: str | Callable[[], str], estimator: FaultEstimator | None = None,
-             false_alarm_rate: float = FALSE_ALARM_RATE) -> HeldOut:
+             false_alarm_rate: float = FALSE_ALARM_RATE,
+             memo: dict | None = None) -> HeldOut:
     """Fit ``effect`` on half A, score it against the base model on half B.
 
     ``problem`` is the base fit's problem and ``base`` its comparison (parameters, peaks
     for the effect's bounds); ``effect_fmu`` the effect's FMU, or what builds it (called
     only when the effect is fitted: not for one with nothing to explain); ``estimator``
-    defaults to ``FaultEstimator(**EFFECT_REFIT)``."""
+    defaults to ``FaultEstimator(**EFFECT_REFIT)``; ``memo``: band -> :class:`Halves` of
+    this record and fit, filled as effects need them (what every effect shares)."""
     kin = problem.kinematics
     n_half = base.n_periods // 2
     if kin is None or n_half < 1:
@@ -117,11 +176,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
                               "least two fundamental periods")
     m = problem.measurement
     rate = m.sample_rate_hz
-    top = problem.featurizer.max_freq_hz
-    band = (top, ENVELOPE_TOP * rate) if effect.envelope else None
-    if band is not None and not band[0] < band[1]:
-        raise EstimationError(f"{effect.key} is scored on the envelope above the gear's bands "
-                              f"({top:g} Hz), and a sample rate of {rate:g} Hz leaves none")
+    band = envelope_band(problem, effect)
     def untried(why_not: str = "") -> HeldOut:  # nothing to explain (module docstring)
         return HeldOut(effect.key, math.nan, threshold(false_alarm_rate), 0.0,
                        math.nan, math.nan, {}, n_periods=n_half, delta_bic=math.nan,
@@ -132,18 +187,17 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     if not effect_parameters(problem, base, effect):
         return untried("no line of it stands above the noise where it can be told from the "
                        "pair's")
-    if band is not None:  # the gear's lines removed, no line left to tell a gain by
-        problem = problem.derive(fixed_gains=base.gains)
-    half_a = FullSpectrumFeaturizer(kin, n_half, top, half=0, envelope_band_hz=band)
-    measured_a = measured_spectra(problem, base.false_alarm_rate, featurizer=half_a)
+    memo = {} if memo is None else memo
+    if band not in memo:
+        memo[band] = halves(problem, base, band)
+    shared = memo[band]
+    problem = shared.problem  # its gains held on an envelope
+    measured_a = shared.measured
     fit_half = measured_a.featurizer
     bins = fit_half.bins
     test_half = fit_half.other_half()
-    # the lines where the halves' spectra show them (a non-synchronous one moves)
     bin_hz = 1.0 / (n_half * kin.period_s)
-    lines = coinciding([dataclasses.replace(line, freq_hz=fit_half.joined_freq_hz(line.freq_hz))
-                        for line in kinematic_map(kin, fit_half.max_freq_hz)],
-                       0.5 * bin_hz)
+    lines = shared.lines  # where the halves' spectra show them (a non-synchronous one moves)
     weight = effect.weight
     changed = evidence_channels(problem, effect)  # on the others, none of its evidence
     all_freqs = next(iter(measured_a.spectra.values())).freq_hz
@@ -161,7 +215,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     if not (changed and claims.any()):
         return untried()
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
-    base_problem = problem.derive(featurizer=fit_half)
+    base_problem = shared.base_problem
     base_fit = dict(base.parameters)
     if callable(effect_fmu):
         effect_fmu = effect_fmu()
@@ -169,12 +223,13 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     if effect.reshapes_base:  # its fit freed the base: the base model gets the same polish
         base_fit = free_polish(estimator, len(base_problem.parameters)).refine(
             base_problem, base_fit).parameters
-    x0 = np.array([base_fit[p.name] for p in base_problem.parameters])
-    x1 = np.array([fitted[p.name] for p in effect_problem.parameters])
-    with base_problem.spec.open() as plant:
-        y0 = base_problem.model_signals(plant, x0)  # channel gains fitted on A (or held)
-    with effect_problem.spec.open() as plant:
-        y1 = effect_problem.model_signals(plant, x1)
+    if effect.reshapes_base:  # channel gains fitted on A (or held)
+        y0 = _signals(base_problem, base_fit)
+    else:
+        if shared.base_signals is None:
+            shared.base_signals = _signals(base_problem, base_fit)
+        y0 = shared.base_signals
+    y1 = _signals(effect_problem, fitted)
     total_w, total_d, signature_d, signature_excess = 0.0, 0.0, 0.0, 0.0
     err0, err1, raw0, raw1 = [], [], [], []
     line_terms: dict[str, tuple[float, float]] = {}

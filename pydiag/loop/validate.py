@@ -58,6 +58,7 @@ def validate(problem: FitProblem, comparison: Comparison,
                                          f"and {model.modelName} is not one of its models")
     suggestions = [dataclasses.replace(s) for s in comparison.suggested_effects]
     fits: dict[str, HeldOut] = {}
+    memo: dict = {}  # what every effect's test shares (held_out.Halves)
 
     def mark(s, status: Status, message: str) -> None:
         s.status, s.message = status, f"{status.value}: {message}"
@@ -88,7 +89,8 @@ def validate(problem: FitProblem, comparison: Comparison,
             try:
                 fmu = (problem.spec.fmu_path if effect.in_base
                        else functools.partial(effect_fmu, effect))  # built if it is fitted
-                h = held_out(problem, comparison, effect, fmu, estimator, false_alarm_rate)
+                h = held_out(problem, comparison, effect, fmu, estimator, false_alarm_rate,
+                             memo)
             except (PydiagError, BuildError) as err:
                 mark(s, Status.NOT_VALIDATED, str(err))
                 continue

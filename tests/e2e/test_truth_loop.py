@@ -5,6 +5,7 @@ a contact-ratio law in series with the shafts, its faulty tooth a weaker tooth o
 parabolic contact, its speed not constant."""
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -60,10 +61,24 @@ BACKLASH_M = 5e-6
 
 
 @pytest.fixture(scope="module")
-def truth_records():
-    g = TruthGear()
-    return {key: simulate(g.with_effects(**magnitudes), PERIODS * g.period_s, RATE_HZ)
-            for key, magnitudes in {"none": {}, **HIDDEN}.items()}
+def truth_records(tmp_path_factory):
+    """The simulator's noise-free records, made once a test run: under pytest-xdist the
+    workers share them through a file of this run (the first makes it, the others wait)."""
+    def make():
+        g = TruthGear()
+        return {key: simulate(g.with_effects(**magnitudes), PERIODS * g.period_s, RATE_HZ)
+                for key, magnitudes in {"none": {}, **HIDDEN}.items()}
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if run is None:
+        return make()
+    import fcntl
+    import pickle
+    shared = tmp_path_factory.getbasetemp().parent / f"truth_records_{run}.pickle"
+    with open(shared.with_suffix(".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not shared.exists():
+            shared.write_bytes(pickle.dumps(make()))
+        return pickle.loads(shared.read_bytes())
 
 
 @pytest.fixture(scope="module")
