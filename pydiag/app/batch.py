@@ -146,17 +146,29 @@ def _dask_client(scheduler) -> tuple[object, bool]:
         raise UsageError(f"cannot reach the Dask scheduler at {scheduler}: {err}") from err
 
 
+#: The results table's formats, by the name's extension.
+RESULT_SUFFIXES = (".parquet", ".csv")
+
+
+def check_results_name(out: str | Path) -> None:
+    """A results table is named .parquet or .csv (its format): else a UsageError."""
+    if Path(out).suffix.lower() not in RESULT_SUFFIXES:
+        raise UsageError(f"--out {out}: the results table is written as Parquet or CSV; name "
+                         f"it .parquet or .csv")
+
+
 def write_results(rows: list[dict], out: str | Path, force: bool = False) -> Path:
     """Write the rows as Parquet (or CSV for a .csv name) under the output policy."""
     import pandas as pd
 
+    check_results_name(out)
     out = Path(out)
     frame = pd.DataFrame(rows)
     for col in ROW_COLUMNS:
         if col not in frame:
             frame[col] = None
     with atomic_output(out, force) as tmp:
-        if out.suffix == ".csv":
+        if out.suffix.lower() == ".csv":
             frame.to_csv(tmp, index=False)
         else:
             frame.to_parquet(tmp, index=False)

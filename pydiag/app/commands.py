@@ -203,6 +203,7 @@ def cmd_indicators(args) -> int:
 
 def cmd_batch(args) -> int:
     check_outputs(args, "out")
+    batch.check_results_name(args.out)
     paths = batch.find_measurements(args.measurements)
     if args.adapter:
         load_adapter(args.adapter)  # fail early, once, on a bad adapter

@@ -373,7 +373,7 @@ def parse_units(specs: list[str] | None) -> dict[str | None, str]:
     units: dict[str | None, str] = {}
     for spec in specs or []:
         name, sep, unit = spec.rpartition("=") if "=" in spec else ("", "", spec)
-        if sep and not name.strip():
+        if (sep and not name.strip()) or not unit.strip():
             raise UsageError(f"a unit is UNIT or NAME=UNIT, got '{spec}'")
         units[name.strip() or None] = unit.strip()
     return units
@@ -439,6 +439,11 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     outputs = [o for _, o in specs]
     if len(set(outputs)) < len(outputs):
         raise UsageError(f"two channels map to the same output: {', '.join(outputs)}")
+    names = [n for n, _ in specs]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise UsageError(f"channel(s) {', '.join(twice)} chosen more than once: one column is "
+                         "one sensor")
     unit_of = parse_units(units) if not isinstance(units, dict) else units
     known = {n for n, _ in specs} | set(outputs)
     stray = [n for n in unit_of if n is not None and n not in known]

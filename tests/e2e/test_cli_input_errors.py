@@ -137,3 +137,12 @@ def test_bless_keeps_an_existing_golden_without_force(gear_fmu, tmp_path):
     res = run_cli(*args, "--force")
     assert res.returncode == 0, res.stderr
     assert json.loads(golden.read_text())
+
+
+def test_batch_refuses_a_results_name_of_another_format(gear_fmu, short_measurement, tmp_path):
+    """Parquet bytes in a .xlsx file would be a file the user's tools cannot open."""
+    out = tmp_path / "r.xlsx"
+    res = run_cli("-m", "pydiag", "batch", "--fmu", str(gear_fmu), "--measurements",
+                  str(short_measurement), "--out", str(out), "--quiet")
+    assert res.returncode == 2 and "name it .parquet or .csv" in res.stderr, res.stderr
+    assert not out.exists()

@@ -155,17 +155,10 @@ def test_channels_are_mapped_and_units_converted(tmp_path, signals):
     ("acc,b\n1,2\n,5\n1,4\n", {"sample_rate_hz": FS}, "'acc' has 1 missing.*row 2"),
     ("time_s,acc\n0,1\n", {}, "one row only"),
     ("acc\n1\n2\n", {}, "give --sample-rate"),
-    ("acc\n1\n2\n", {"channels": ["acc=acc", "acc=disp"]}, None),
 ])
 def test_bad_files_get_one_clear_line(tmp_path, text, kwargs, message):
     path = tmp_path / "r.csv"
     path.write_text(text)
-    if message is None:  # two outputs from one column are fine; one output twice is not
-        m = read_measurement(path, FS, **kwargs)
-        assert list(m.channels) == ["acc", "disp"]
-        with pytest.raises(UsageError, match="same output"):
-            read_measurement(path, FS, channels=["acc", "acc"])
-        return
     with pytest.raises(MeasurementError, match=message) as err:
         read_measurement(path, **kwargs)
     assert "\n" not in str(err.value) and str(path) in str(err.value)
@@ -244,3 +237,14 @@ def test_a_column_not_chosen_is_not_checked(tmp_path, signals):
             read_measurement(tmp_path / name, FS, ["label"])
         with pytest.raises(MeasurementError, match="column 'slow' has 300 missing"):
             read_measurement(tmp_path / name, FS, ["slow"])
+
+
+def test_an_empty_unit_and_a_column_chosen_twice_are_refused(tmp_path, signals):
+    path = tmp_path / "r.csv"
+    pd.DataFrame(signals).to_csv(path, index=False)
+    with pytest.raises(UsageError, match="a unit is UNIT or NAME=UNIT, got 'a1='"):
+        read_measurement(path, FS, ["a1"], ["a1="])
+    with pytest.raises(UsageError, match="a1 chosen more than once"):  # one sensor, one output
+        read_measurement(path, FS, ["a1=acc", "a1=disp"])
+    with pytest.raises(UsageError, match="same output"):
+        read_measurement(path, FS, ["a1=acc", "a2=acc"])
