@@ -34,12 +34,12 @@ from pydiag.core.errors import AdapterError, EstimationError, PlantError
 from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import Parameter, fmu_values
 from pydiag.fit.objective import spectral_residuals
+from pydiag.fit.operating_point import at_model_speed, prepare_record, resolve_operating_point
 from pydiag.fmu.description import read_model_description
 from pydiag.fmu.plant import FmuPlant, PlantSpec
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.features import KinematicFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.fit.operating_point import at_model_speed, prepare_record, resolve_operating_point
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings
 from pydiag.model.adapter import Adapter, check_against_fmu, gear_default
 from pydiag.model.simulate import SIMULATED_SOURCE

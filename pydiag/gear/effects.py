@@ -347,10 +347,9 @@ def _tooth_hint(name, teeth, other_than_zero=False):
         """The faulty tooth may be any of the wheel's (one turn of its index), or, when
         ``other_than_zero``, a tooth 1 to N/2 from tooth 0 (the base model's faulty tooth):
         a tooth k and a tooth N - k make patterns that are each other's time reverse, whose
-        amplitude spectra are the same but for the mesh's dynamics (on a record of the
-        independent simulator with tooth 5 of 14 faulty, tooth 9 fitted within 1 % of its
-        error), so the spectra cannot tell them apart and a search over both would choose
-        between them by rounding."""
+        amplitude spectra are the same but for the mesh's dynamics, so the spectra cannot
+        tell them apart and a search over both would choose between them by rounding
+        (bench/RESULTS.md, changelog)."""
         if kin is None:
             return {}
         n = float(getattr(kin, teeth))

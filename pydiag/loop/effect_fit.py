@@ -27,8 +27,7 @@ RESHAPE_STARTS = 2
 #: A polish with the base parameters free (:func:`free_polish`) gets at least this many
 #: least-squares iterations (each a difference Jacobian of n + 1 simulations), whatever
 #: the estimator's budget, so that it converges: a verdict taken on a polish stopped
-#: half-way depends on where it started (bench/RESULTS.md, changelog: 8 iterations left
-#: the second faulty tooth's fit on one record 45 % above its converged error).
+#: half-way depends on where it started (bench/RESULTS.md, changelog).
 FREE_POLISH_ITERATIONS = 16
 #: ... and tighter stops than :data:`EFFECT_REFIT`'s, which stopped such a polish at its
 #: start: it goes on while a step lowers the squared error by 1e-4 of it (1e-5 and 1e-8

@@ -136,7 +136,9 @@ def test_bearing_geometry_reaches_the_bearing_effects_model(effect_fmus, tmp_pat
     """--bearing sets the effect model's geometry, not only the names of the lines: a record
     of a 12-ball bearing (10/50 mm, BPFO 120 Hz at 25 Hz) is explained by the outer-race
     effect with its strike amplitude recovered (the 6205 the model defaults to left A_b at
-    0: its strikes fell between the record's). The record is simulated at exactly the
+    0: its strikes fell between the record's). A plumbing check, not a diagnosis: the
+    record is made by the model fitted (the simulator's races are tested in
+    test_truth_loop). The record is simulated at exactly the
     nominal speed; its BPFO comb lines up with the mesh comb 2.9 % off nominal, which the
     mesh speed search cannot tell apart, hence --speed nominal."""
     fmu = str(effect_fmus["bearing_outer_race"])
