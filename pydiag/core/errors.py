@@ -29,6 +29,10 @@ class AdapterError(PydiagError):
     """An adapter file that cannot be used; the message names the file, table and key."""
 
 
+class MachineError(PydiagError):
+    """A machine description that cannot be used; the message names the file and key."""
+
+
 class PlantError(PydiagError):
     """The FMU cannot be loaded or simulated as asked."""
 

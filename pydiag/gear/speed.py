@@ -13,7 +13,17 @@ harmonics. :func:`estimate_speed` finds the shaft angle over the record:
   close (1.4 % for a 32-tooth pinion); otherwise use a tacho. The harmonic that stands
   highest above its band's median is then phase-demodulated in a band of +- half the
   slower shaft's speed (Tukey taper, flat over the inner half), which excludes the
-  shaft-order sidebands, so the phase is the shaft angle times h Np. The mean speed is the slope of that phase (far below one FFT bin);
+  shaft-order sidebands, so the phase is the shaft angle times h Np. The mean speed is
+  the slope of that phase (far below one FFT bin);
+- ``"mesh"`` on a machine of two or more stages (:class:`~pydiag.gear.machine.Machine`):
+  one input speed must put every stage's mesh harmonics and their sideband families
+  (1 to ``COMB_SIDEBANDS`` orders of both of a stage's shafts) on lines, summed over every
+  channel, within +- ``MACHINE_SEARCH``. A sideband taken for a mesh can line up one
+  stage's comb with another's (32/96 then 48/80 teeth: 2 % below the truth, mesh 1 minus
+  2x idler and mesh 2 minus 1x idler), but then every family's spacing is 2 % short and
+  its sidebands miss their lines. The line followed is the one that stands highest over
+  the rest of its own band (another stage's lines may fall in it). The estimate's
+  ``confidence_db`` says how far the best speed stands over the next distinct one;
 - ``"nominal"``: the nominal speed, constant.
 
 The mesh line must stand above the noise: its amplitude over its band's median must
@@ -40,6 +50,7 @@ import numpy as np
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.machine import Machine
 from pydiag.signal.angle import (EDGE_BANDWIDTHS, angular_resample, extend_linearly,
                                  tacho_revolutions, tone_phase)
 from pydiag.signal.spectra import amplitude_spectrum
@@ -50,6 +61,12 @@ SPEED_METHODS = ("auto", "mesh", "tacho", "nominal")
 SPEED_SEARCH = 0.08
 #: ... and within this many pinion orders at the mesh (module docstring).
 SIDEBAND_FRACTION = 0.45
+#: The search window of a machine of two or more stages, either side of nominal (module
+#: docstring): a real drive slips a few per cent below its nominal speed.
+MACHINE_SEARCH = 0.08
+#: Sideband orders either side of each mesh harmonic that the search of a machine scores
+#: (:class:`MeshComb`).
+COMB_SIDEBANDS = 3
 #: Mesh harmonics used by the search (fewer when the sample rate cannot hold them).
 SEARCH_HARMONICS = 4
 BLOCK_REVS = 10
@@ -96,6 +113,10 @@ class SpeedEstimate:
         revolutions: pinion revolutions at every sample (not serialised)
         valid: (first, last) sample where the angle is measured, not extrapolated
         source: where it comes from (:class:`SpeedSource`)
+        confidence_db: from the mesh: how far the best speed's lines stand over the next
+            candidate's (:func:`comb_speed`); None otherwise
+        mesh_speed_hz: with a tacho, the speed the mesh lines give, to check it; None
+            when the mesh was not searched or not found
     """
 
     speed_hz: float
@@ -105,10 +126,25 @@ class SpeedEstimate:
     revolutions: np.ndarray = dataclasses.field(repr=False, compare=False)
     valid: tuple[int, int] = (0, -1)
     source: SpeedSource = SpeedSource.MESH
+    confidence_db: float | None = None
+    mesh_speed_hz: float | None = None
+
+    @property
+    def tacho_disagreement_pct(self) -> float | None:
+        """The mesh's speed over the tacho's, minus 1, in %: None unless both were found."""
+        if self.source is not SpeedSource.TACHO or self.mesh_speed_hz is None:
+            return None
+        return 100 * (self.mesh_speed_hz / self.speed_hz - 1)
 
     def to_dict(self) -> dict:
-        return {"speed_hz": self.speed_hz, "speed_variation_pct": self.variation_pct,
-                "speed_method": self.method, "nominal_speed_hz": self.nominal_hz}
+        out = {"speed_hz": self.speed_hz, "speed_variation_pct": self.variation_pct,
+               "speed_method": self.method, "nominal_speed_hz": self.nominal_hz}
+        if self.confidence_db is not None:
+            out["speed_confidence_db"] = (self.confidence_db
+                                          if math.isfinite(self.confidence_db) else None)
+        if self.mesh_speed_hz is not None:
+            out["mesh_speed_hz"] = self.mesh_speed_hz
+        return out
 
 
 def _variation_pct(revs: np.ndarray, sample_rate_hz: float, mean_hz: float) -> float:
@@ -128,75 +164,188 @@ def _mean_speed(revs: np.ndarray, sample_rate_hz: float) -> float:
     return float(np.polyfit(n, revs, 1)[0] * sample_rate_hz)
 
 
+@dataclass(frozen=True)
+class MeshComb:
+    """The mesh lines a speed search looks for, in orders of the shaft whose speed is
+    sought (the input shaft; a pair's pinion).
+
+    Attributes:
+        orders: each stage's mesh frequency in shaft orders
+        bands: each mesh's demodulation half-width in shaft orders: half the slower of the
+            stage's two shafts, so that no shaft-order sideband enters it
+        search: the search window, a fraction of the nominal speed either side
+        sidebands: per mesh, the shaft speeds (in shaft orders) whose sidebands 1 to
+            :data:`COMB_SIDEBANDS` around each mesh harmonic are scored too: the spacing of
+            a mesh's sideband family tells its speed apart from a sideband's (empty: the
+            mesh lines alone)
+    """
+
+    orders: tuple[float, ...]
+    bands: tuple[float, ...]
+    search: float
+    sidebands: tuple[tuple[float, ...], ...] = ()
+
+    @classmethod
+    def of_pair(cls, kinematics: GearKinematics, search: float = SPEED_SEARCH) -> "MeshComb":
+        """One mesh: the window is also held within 0.45/Np (module docstring)."""
+        n_p, n_g = kinematics.n_pinion, kinematics.n_gear
+        return cls((float(n_p),), (0.5 * min(1.0, n_p / n_g),),
+                   min(search, SIDEBAND_FRACTION / n_p))
+
+    @classmethod
+    def of_machine(cls, machine: Machine, search: float = MACHINE_SEARCH) -> "MeshComb":
+        """Every stage's mesh; one stage is a pair. With two or more stages the window is
+        ``search`` whole: one speed must put every stage's mesh on a line, and no shaft
+        order moves all of them onto sidebands at once as it moves one."""
+        if len(machine.stages) == 1:
+            s = machine.stages[0]
+            return cls.of_pair(GearKinematics(s.pinion_teeth, s.gear_teeth, 1.0), search)
+        orders = tuple(float(machine.mesh_order(k)) for k in range(len(machine.stages)))
+        bands = tuple(0.5 * float(min(machine.shaft_ratio(k), machine.shaft_ratio(k + 1)))
+                      for k in range(len(machine.stages)))
+        sidebands = tuple((float(machine.shaft_ratio(k)), float(machine.shaft_ratio(k + 1)))
+                          for k in range(len(machine.stages)))
+        return cls(orders, bands, search, sidebands)
+
+
 def _demodulation_band_hz(kinematics: GearKinematics) -> float:
-    """Half-width of the band around a mesh harmonic: half the slower shaft's speed, so no
-    shaft-order sideband enters it (module docstring)."""
+    """Half-width of the band around a pair's mesh harmonic (:class:`MeshComb`)."""
     return 0.5 * min(kinematics.f_pinion_hz, kinematics.f_gear_hz)
+
+
+def comb_speed(signals: list[np.ndarray], sample_rate_hz: float, comb: MeshComb,
+               nominal_hz: float) -> SpeedEstimate:
+    """The shaft speed at which every mesh line of ``comb`` (and its harmonics) stands
+    highest over its band's median in the summed log spectra of ``signals``, refined by the
+    phase of the harmonic that stands highest (module docstring).
+
+    The estimate's ``confidence_db`` is how far (geometric mean over the lines, dB) the
+    lines stand higher at the best speed than at the best speed elsewhere in the window
+    (more than a bin's width away at the lowest mesh: a distinct set of lines)."""
+    low, high = nominal_hz * (1 - comb.search), nominal_hz * (1 + comb.search)
+    spectra = [amplitude_spectrum(np.asarray(x, dtype=float), sample_rate_hz, "hann")
+               for x in signals]
+    freqs = spectra[0][0]
+    bin_hz = freqs[1]
+    lines = [(m, h) for m in range(len(comb.orders))
+             for h in range(1, SEARCH_HARMONICS + 1)
+             if h * comb.orders[m] * high <= 0.45 * sample_rate_hz]
+    if not lines:
+        raise MeasurementError(f"the mesh frequency near {min(comb.orders) * nominal_hz:.1f} Hz "
+                               f"is above the record's Nyquist frequency ({sample_rate_hz / 2:.1f}"
+                               " Hz): check the speed, the teeth and the sample rate")
+    n_side = COMB_SIDEBANDS if comb.sidebands else 0
+    finest = max(h * comb.orders[m] for m, h in lines) + max(
+        (n_side * max(sb) for sb in comb.sidebands), default=0.0)
+    grid = np.arange(low, high, bin_hz / (4 * finest))
+    score = np.zeros(grid.size)
+    heights = []  # (the band's median, bins in the band, line, channel)
+    n_terms = 0
+    for c, (_, amp) in enumerate(spectra):
+        for m, h in lines:
+            f_line = h * comb.orders[m]
+            band = (freqs >= f_line * low) & (freqs <= f_line * high)
+            floor = max(float(np.median(amp[band])), 1e-300)
+            score += np.log(np.interp(f_line * grid, freqs, amp) / floor + 1e-12)
+            n_terms += 1
+            for shaft in (comb.sidebands[m] if comb.sidebands else ()):
+                for k in range(1, n_side + 1):
+                    for side in (f_line - k * shaft, f_line + k * shaft):
+                        score += np.log(np.interp(side * grid, freqs, amp) / floor + 1e-12)
+                        n_terms += 1
+            heights.append((floor, int(np.count_nonzero(band)), (m, h), c))
+    best = int(np.argmax(score))
+    coarse = float(grid[best])
+    apart = np.abs(grid - coarse) > bin_hz / min(comb.orders)
+    confidence_db = (20 / math.log(10) * float(score[best] - np.max(score[apart]))
+                     / n_terms if np.any(apart) else math.inf)
+    ratios = np.array([np.interp(h * comb.orders[m] * coarse, freqs, spectra[c][1]) / floor
+                       for floor, _, (m, h), c in heights])
+    needs = np.array([math.sqrt(math.log(max(n, 2) / FALSE_ALARM) / math.log(2))
+                      for _, n, _, _ in heights])
+    pick = int(np.argmax(ratios))
+    ratio, needed = float(ratios[pick]), float(needs[pick])
+    if comb.sidebands and ratio >= needed:
+        # a machine's band may hold another stage's lines: follow the line that stands
+        # highest over the rest of its own demodulation band, among those over chance
+        purity = [_purity(spectra[c], h * comb.orders[m] * coarse,
+                          comb.bands[m] * coarse) if r >= n else 0.0
+                  for (_, _, (m, h), c), r, n in zip(heights, ratios, needs)]
+        pick = int(np.argmax(purity))
+    _, _, (m, h), c = heights[pick]
+    if ratio < needed:
+        raise MeasurementError(
+            f"no mesh line stands out near {comb.orders[0] * nominal_hz:.1f} Hz "
+            f"(+-{100 * comb.search:g} %): the best is {ratio:.1f}x its band's median, chance "
+            f"reaches {needed:.1f}x; check the speed and the teeth, or give a tacho channel "
+            "(--tacho)")
+    x = np.asarray(signals[c], dtype=float)
+    order = h * comb.orders[m]
+    index, cycles = tone_phase(x, sample_rate_hz, order * coarse, comb.bands[m] * coarse)
+    revs = extend_linearly(index, cycles / order, x.size)
+    inner = (np.arange(x.size) >= index[0]) & (np.arange(x.size) <= index[-1])
+    mean = _mean_speed(revs[inner], sample_rate_hz)
+    where = f" of stage {m + 1}" if len(comb.orders) > 1 else ""
+    return SpeedEstimate(mean, _variation_pct(revs[inner], sample_rate_hz, mean),
+                         f"mesh harmonic {h}{where}", nominal_hz, revs,
+                         (int(np.ceil(index[0])), int(np.floor(index[-1]))),
+                         confidence_db=confidence_db)
+
+
+def _purity(spectrum: tuple[np.ndarray, np.ndarray], freq_hz: float, band_hz: float) -> float:
+    """A line's amplitude over the largest elsewhere in ``freq_hz +- band_hz`` (two bins
+    either side of the line are its own, a Hann window's main lobe)."""
+    freqs, amp = spectrum
+    bin_hz = freqs[1]
+    near = np.abs(freqs - freq_hz)
+    rest = (near <= band_hz) & (near > 2 * bin_hz)
+    if not np.any(rest):
+        return math.inf
+    return float(np.interp(freq_hz, freqs, amp) / max(float(np.max(amp[rest])), 1e-300))
 
 
 def mesh_speed(signal: np.ndarray, sample_rate_hz: float, kinematics: GearKinematics,
                search: float = SPEED_SEARCH) -> SpeedEstimate:
     """Pinion speed from the mesh harmonics of ``signal`` around the nominal
     ``kinematics.f_pinion_hz`` (see the module docstring)."""
-    x = np.asarray(signal, dtype=float)
-    n_pinion, nominal_hz = kinematics.n_pinion, kinematics.f_pinion_hz
-    freqs, amp = amplitude_spectrum(x, sample_rate_hz, "hann")
-    bin_hz = freqs[1]
-    search = min(search, SIDEBAND_FRACTION / n_pinion)
-    low, high = nominal_hz * (1 - search), nominal_hz * (1 + search)
-    n_harm = min(SEARCH_HARMONICS, int(0.45 * sample_rate_hz // (n_pinion * high)))
-    if n_harm < 1:
-        raise MeasurementError(f"the mesh frequency near {n_pinion * nominal_hz:.1f} Hz is above "
-                               f"the record's Nyquist frequency ({sample_rate_hz / 2:.1f} Hz): "
-                               "check --rpm, --teeth and the sample rate")
-    grid = np.arange(low, high, bin_hz / (4 * n_harm * n_pinion))
-    score = np.zeros(grid.size)
-    floors = []
-    for h in range(1, n_harm + 1):
-        band = (freqs >= h * n_pinion * low) & (freqs <= h * n_pinion * high)
-        floor = float(np.median(amp[band]))
-        floors.append((floor, int(np.count_nonzero(band))))
-        score += np.log(np.interp(h * n_pinion * grid, freqs, amp) / max(floor, 1e-300) + 1e-12)
-    coarse = float(grid[np.argmax(score)])
-    ratios = [np.interp(h * n_pinion * coarse, freqs, amp) / max(f, 1e-300)
-              for h, (f, _) in zip(range(1, n_harm + 1), floors)]
-    best = int(np.argmax(ratios))
-    h, ratio, n_bins = best + 1, float(ratios[best]), floors[best][1]
-    needed = math.sqrt(math.log(max(n_bins, 2) / FALSE_ALARM) / math.log(2))
-    if ratio < needed:
-        raise MeasurementError(
-            f"no mesh line stands out near {n_pinion * nominal_hz:.1f} Hz (+-{100 * search:g} %): "
-            f"the best is {ratio:.1f}x its band's median, chance reaches {needed:.1f}x; check "
-            "--rpm and --teeth, or give a tacho channel (--tacho)")
-    band = _demodulation_band_hz(dataclasses.replace(kinematics, f_pinion_hz=coarse))
-    index, cycles = tone_phase(x, sample_rate_hz, h * n_pinion * coarse, band)
-    revs = extend_linearly(index, cycles / (h * n_pinion), x.size)
-    inner = (np.arange(x.size) >= index[0]) & (np.arange(x.size) <= index[-1])
-    mean = _mean_speed(revs[inner], sample_rate_hz)
-    return SpeedEstimate(mean, _variation_pct(revs[inner], sample_rate_hz, mean),
-                         f"mesh harmonic {h}", nominal_hz, revs,
-                         (int(np.ceil(index[0])), int(np.floor(index[-1]))))
+    return comb_speed([signal], sample_rate_hz, MeshComb.of_pair(kinematics, search),
+                      kinematics.f_pinion_hz)
 
 
 def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
                    settings: SpeedSettings = SpeedSettings(),
-                   tracked_s: float | None = None) -> SpeedEstimate:
+                   tracked_s: float | None = None,
+                   machine: Machine | None = None) -> SpeedEstimate:
     """The pinion speed of ``measurement`` around ``kinematics.f_pinion_hz`` (nominal).
 
     ``settings.method``: "auto" (the tacho when one is named, else the mesh), "mesh",
     "tacho" or "nominal"; see :class:`SpeedSettings`. ``tracked_s``: under "auto", the
     shortest stretch worth following beyond the demodulation's edges (default
-    :data:`MIN_TRACKED_PERIODS` fundamental periods: what a fit needs).
+    :data:`MIN_TRACKED_PERIODS` fundamental periods: what a fit needs). ``machine``: the
+    whole machine whose first stage ``kinematics`` is: the mesh search then looks for
+    every stage's mesh at once, in every channel but the tacho unless
+    ``settings.channel`` names one. A tacho's estimate carries the mesh's beside it
+    (``mesh_speed_hz``) when the record is long enough to find it.
     """
     method, channel, tacho = settings.method, settings.channel, settings.tacho
     pulses_per_rev = settings.pulses_per_rev
+    comb = (MeshComb.of_machine(machine) if machine is not None
+            else MeshComb.of_pair(kinematics))
     if tracked_s is None:
         tracked_s = MIN_TRACKED_PERIODS * kinematics.period_s
-    short = measurement.duration_s < (2 * EDGE_BANDWIDTHS / _demodulation_band_hz(kinematics)
+    fs, nominal = measurement.sample_rate_hz, kinematics.f_pinion_hz
+    short = measurement.duration_s < (2 * EDGE_BANDWIDTHS / (min(comb.bands) * nominal)
                                       + tracked_s)
     if method == "auto":
         method = "tacho" if tacho else "nominal" if short else "mesh"
-    fs, nominal = measurement.sample_rate_hz, kinematics.f_pinion_hz
+    names = [c for c in measurement.channels if c != tacho]
+    if channel is not None and channel not in measurement.channels:
+        raise MeasurementError(f"channel '{channel}' not in the measurement")
+    searched = [channel] if channel else names if machine is not None else names[:1]
+
+    def from_mesh() -> SpeedEstimate:
+        return comb_speed([measurement.channels[c] for c in searched], fs, comb, nominal)
+
     if method == "tacho":
         if not tacho:
             raise UsageError("the tacho method needs a tacho channel (--tacho NAME)")
@@ -205,19 +354,23 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
                                    f"{', '.join(measurement.channels)}")
         revs = tacho_revolutions(measurement.channels[tacho], pulses_per_rev)
         mean = _mean_speed(revs, fs)
+        mesh_hz = None
+        if not short and searched:
+            try:
+                mesh_hz = from_mesh().speed_hz
+            except MeasurementError:
+                mesh_hz = None  # no mesh line stands out: nothing to check the tacho with
         return SpeedEstimate(mean, _variation_pct(revs, fs, mean), "tacho", nominal, revs,
-                             source=SpeedSource.TACHO)
+                             source=SpeedSource.TACHO, mesh_speed_hz=mesh_hz)
     if method == "nominal":
         revs = np.arange(measurement.n_samples) * (nominal / fs)
         why = (f" (auto: a record of {measurement.duration_s:.3g} s is too short to follow the "
                "mesh phase)" if settings.method == "auto" else "")
         return SpeedEstimate(nominal, 0.0, "nominal" + why, nominal, revs,
                              source=SpeedSource.NOMINAL)
-    names = [c for c in measurement.channels if c != tacho]
-    channel = channel or names[0]
-    if channel not in measurement.channels:
-        raise MeasurementError(f"channel '{channel}' not in the measurement")
-    return mesh_speed(measurement.channels[channel], fs, kinematics)
+    if not searched:
+        raise MeasurementError("the record has no channel but the tacho to find the mesh in")
+    return from_mesh()
 
 
 def track_revolutions(measurement: Measurement, estimate: SpeedEstimate, samples_per_rev: int,

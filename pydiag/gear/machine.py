@@ -1,0 +1,347 @@
+"""A machine description: the shafts, gear stages, bearings, sensors and tacho of one
+gearbox, read from a TOML file (one file a machine).
+
+Stages are listed from the input; stage k+1's pinion sits on stage k's gear shaft, so a
+machine of n stages has n + 1 shafts, shaft 0 the input. Every speed follows from the
+input shaft's: shaft k turns at ``Machine.shaft_ratio(k)`` times it. Example::
+
+    name = "PHM09 spur gearbox"
+    input_rpm = 1800                  # nominal input-shaft speed (--rpm overrides)
+    shafts = ["input", "idler", "output"]   # optional names, input first
+    [[stages]]
+    name = "first"                    # optional
+    type = "spur"                     # optional: spur | helical (parallel axes)
+    pinion_teeth = 32
+    gear_teeth = 96
+    [[stages]]
+    pinion_teeth = 48
+    gear_teeth = 80
+    [[bearings]]                      # optional, any number
+    shaft = "input"                   # a shaft's name
+    n_balls = 9
+    ball_diameter_mm = 7.94
+    pitch_diameter_mm = 39.04
+    contact_angle_deg = 0             # optional
+    [[sensors]]                       # optional: what a record's channel is
+    channel = "ch1"
+    unit = "V"                        # V, g, m/s2, mm/s, um, ...
+    sensitivity = "100 mV/g"          # optional: makes a channel in volts an acceleration
+    near_stage = "first"              # optional: the stage it sits closest to
+    [tacho]                           # optional
+    channel = "ch3"
+    pulses_per_rev = 10
+    shaft = "input"                   # optional, default the input
+
+Planetary stages (``type = "planetary"``) are recognised and refused: their kinematics
+are not built yet. Every mistake is a :class:`~pydiag.core.errors.MachineError` naming the
+file and the key.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+
+from pydiag.core.errors import MachineError
+from pydiag.gear.kinematics import Bearing, GearKinematics
+
+#: Stage types whose kinematics are those of a parallel-axis pair.
+PARALLEL_TYPES = ("spur", "helical")
+#: Stage types known but not built yet.
+LATER_TYPES = ("planetary",)
+
+_TOP_KEYS = {"name", "input_rpm", "shafts", "stages", "bearings", "sensors", "tacho"}
+_STAGE_KEYS = {"name", "type", "pinion_teeth", "gear_teeth"}
+_BEARING_KEYS = {"name", "shaft", "n_balls", "ball_diameter_mm", "pitch_diameter_mm",
+                 "contact_angle_deg"}
+_SENSOR_KEYS = {"channel", "unit", "sensitivity", "near_stage", "output"}
+_TACHO_KEYS = {"channel", "pulses_per_rev", "shaft"}
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One parallel-axis gear stage: ``pinion_teeth`` on its input shaft drive
+    ``gear_teeth`` on its output shaft."""
+
+    pinion_teeth: int
+    gear_teeth: int
+    name: str
+    type: str = "spur"
+
+
+@dataclass(frozen=True)
+class MachineBearing:
+    """A rolling bearing on the shaft with index ``shaft`` (0: input)."""
+
+    bearing: Bearing
+    shaft: int
+    name: str
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """What a record's channel is: its ``unit`` as recorded, the ``sensitivity`` that
+    turns volts into it (text as written, e.g. "100 mV/g"), the stage it is near and the
+    model output it maps to (default ``acc``)."""
+
+    channel: str
+    unit: str | None = None
+    sensitivity: str | None = None
+    near_stage: int | None = None
+    output: str = "acc"
+
+
+@dataclass(frozen=True)
+class Tacho:
+    channel: str
+    pulses_per_rev: int = 1
+    shaft: int = 0
+
+
+@dataclass(frozen=True)
+class Machine:
+    """A gearbox: stages from the input, shaft names (input first), bearings, sensors,
+    tacho; ``input_hz`` the nominal input speed or None (then ``--rpm`` must say it)."""
+
+    name: str
+    stages: tuple[Stage, ...]
+    shafts: tuple[str, ...]
+    input_hz: float | None = None
+    bearings: tuple[MachineBearing, ...] = ()
+    sensors: tuple[Sensor, ...] = ()
+    tacho: Tacho | None = None
+    source: str = "(in memory)"
+
+    def __post_init__(self) -> None:
+        if not self.stages:
+            raise MachineError(f"{self.source}: a machine needs at least one stage")
+        if len(self.shafts) != len(self.stages) + 1:
+            raise MachineError(f"{self.source}: shafts: {len(self.stages)} stage(s) make "
+                               f"{len(self.stages) + 1} shafts, {len(self.shafts)} named")
+
+    @classmethod
+    def pair(cls, n_pinion: int, n_gear: int, input_hz: float | None = None) -> "Machine":
+        """The one-stage shorthand (``--teeth NP,NG --rpm``): shafts "pinion" and "gear"."""
+        return cls("gear pair", (Stage(n_pinion, n_gear, "stage 1"),), ("pinion", "gear"),
+                   input_hz)
+
+    def shaft_ratio(self, shaft: int) -> Fraction:
+        """Speed of shaft ``shaft`` over the input shaft's (exact)."""
+        ratio = Fraction(1)
+        for stage in self.stages[:shaft]:
+            ratio *= Fraction(stage.pinion_teeth, stage.gear_teeth)
+        return ratio
+
+    def mesh_order(self, stage: int) -> Fraction:
+        """Stage ``stage``'s mesh frequency in orders of the input shaft."""
+        return self.stages[stage].pinion_teeth * self.shaft_ratio(stage)
+
+    def shaft_index(self, name: str) -> int:
+        """The index of the shaft called ``name`` (MachineError if none is)."""
+        if name not in self.shafts:
+            raise MachineError(f"{self.source}: no shaft called '{name}'; the shafts are "
+                               f"{', '.join(self.shafts)}")
+        return self.shafts.index(name)
+
+    def stage_kinematics(self, stage: int, input_hz: float) -> GearKinematics:
+        """Stage ``stage`` as a gear pair at ``input_hz`` on the input shaft; the pair's
+        bearings are those on its pinion shaft (the first one)."""
+        s = self.stages[stage]
+        bearing = next((b.bearing for b in self.bearings if b.shaft == stage), None)
+        return GearKinematics(s.pinion_teeth, s.gear_teeth,
+                              float(input_hz * self.shaft_ratio(stage)), bearing=bearing)
+
+    @property
+    def fundamental_order(self) -> Fraction:
+        """The slowest line every shaft and stage of the machine repeats at, in input
+        orders: the greatest common divisor of the shafts' hunting-tooth orders."""
+        orders = []
+        for k, s in enumerate(self.stages):
+            ratio = self.shaft_ratio(k)
+            orders.append(ratio * s.pinion_teeth / math.lcm(s.pinion_teeth, s.gear_teeth))
+        common = orders[0]
+        for o in orders[1:]:
+            common = Fraction(math.gcd(common.numerator * o.denominator,
+                                       o.numerator * common.denominator),
+                              common.denominator * o.denominator)
+        return common
+
+
+# ---------------------------------------------------------------------- reading
+def _where(source: str, table: str, key: str) -> str:
+    return f"{source}: {table}{'.' if table and key else ''}{key}"
+
+
+def _check_keys(data: dict, allowed: set[str], source: str, table: str) -> None:
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise MachineError(f"{_where(source, table, unknown[0])}: unknown key (known: "
+                           f"{', '.join(sorted(allowed))})")
+
+
+def _teeth(value, source: str, table: str, key: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or value != int(value) or value < 1:
+        raise MachineError(f"{_where(source, table, key)}: a number of teeth is a positive "
+                           f"whole number, got {value!r}")
+    return int(value)
+
+
+def _positive(value, source: str, table: str, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or not math.isfinite(value) or value <= 0:
+        raise MachineError(f"{_where(source, table, key)}: must be a positive number, "
+                           f"got {value!r}")
+    return float(value)
+
+
+def _text(value, source: str, table: str, key: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise MachineError(f"{_where(source, table, key)}: must be a non-empty string, "
+                           f"got {value!r}")
+    return value.strip()
+
+
+def _tables(data: dict, key: str, source: str) -> list[dict]:
+    value = data.get(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise MachineError(f"{source}: {key}: must be an array of tables ([[{key}]])")
+    return value
+
+
+def _default_shafts(n_stages: int) -> tuple[str, ...]:
+    if n_stages == 1:
+        return ("input", "output")
+    middle = ["intermediate"] if n_stages == 2 else [f"intermediate {k}"
+                                                     for k in range(1, n_stages)]
+    return ("input", *middle, "output")
+
+
+def _stage(table: dict, k: int, source: str) -> Stage:
+    where = f"stages[{k}]"
+    _check_keys(table, _STAGE_KEYS, source, where)
+    kind = _text(table.get("type", "spur"), source, where, "type")
+    if kind in LATER_TYPES:
+        raise MachineError(f"{_where(source, where, 'type')}: {kind} stages are not supported "
+                           "yet (parallel-axis stages only: spur, helical)")
+    if kind not in PARALLEL_TYPES:
+        raise MachineError(f"{_where(source, where, 'type')}: unknown stage type '{kind}' "
+                           f"(known: {', '.join(PARALLEL_TYPES + LATER_TYPES)})")
+    for key in ("pinion_teeth", "gear_teeth"):
+        if key not in table:
+            raise MachineError(f"{_where(source, where, key)}: missing")
+    return Stage(_teeth(table["pinion_teeth"], source, where, "pinion_teeth"),
+                 _teeth(table["gear_teeth"], source, where, "gear_teeth"),
+                 _text(table.get("name", f"stage {k + 1}"), source, where, "name"), kind)
+
+
+def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
+    """A :class:`Machine` from the parsed TOML ``data`` (``source`` names it in errors)."""
+    _check_keys(data, _TOP_KEYS, source, "")
+    stages = tuple(_stage(t, k, source) for k, t in enumerate(_tables(data, "stages", source)))
+    if not stages:
+        raise MachineError(f"{source}: stages: a machine needs at least one [[stages]] table")
+    names = [s.name for s in stages]
+    if len(set(names)) != len(names):
+        raise MachineError(f"{source}: stages: two stages are called the same")
+    shafts = data.get("shafts")
+    if shafts is None:
+        shafts = _default_shafts(len(stages))
+    else:
+        if not isinstance(shafts, list) or len(shafts) != len(stages) + 1:
+            raise MachineError(f"{source}: shafts: {len(stages)} stage(s) need a list of "
+                               f"{len(stages) + 1} shaft names (input first)")
+        shafts = tuple(_text(s, source, "", f"shafts[{i}]") for i, s in enumerate(shafts))
+        if len(set(shafts)) != len(shafts):
+            raise MachineError(f"{source}: shafts: two shafts are called the same")
+    machine = Machine(_text(data.get("name", Path(source).stem), source, "", "name"),
+                      stages, tuple(shafts),
+                      _positive(data["input_rpm"], source, "", "input_rpm") / 60.0
+                      if "input_rpm" in data else None, source=source)
+
+    def shaft_of(table: dict, where: str, default: int | None = None) -> int:
+        if "shaft" not in table:
+            if default is None:
+                raise MachineError(f"{_where(source, where, 'shaft')}: missing")
+            return default
+        name = table["shaft"]
+        if not isinstance(name, str) or name not in machine.shafts:
+            raise MachineError(f"{_where(source, where, 'shaft')}: no shaft called {name!r}; "
+                               f"the shafts are {', '.join(machine.shafts)}")
+        return machine.shafts.index(name)
+
+    bearings = []
+    for i, t in enumerate(_tables(data, "bearings", source)):
+        where = f"bearings[{i}]"
+        _check_keys(t, _BEARING_KEYS, source, where)
+        for key in ("n_balls", "ball_diameter_mm", "pitch_diameter_mm"):
+            if key not in t:
+                raise MachineError(f"{_where(source, where, key)}: missing")
+        n = _teeth(t["n_balls"], source, where, "n_balls")
+        d = _positive(t["ball_diameter_mm"], source, where, "ball_diameter_mm")
+        pitch = _positive(t["pitch_diameter_mm"], source, where, "pitch_diameter_mm")
+        if d >= pitch:
+            raise MachineError(f"{_where(source, where, 'ball_diameter_mm')}: must be below "
+                               f"pitch_diameter_mm ({d:g} >= {pitch:g})")
+        angle = t.get("contact_angle_deg", 0.0)
+        if isinstance(angle, bool) or not isinstance(angle, (int, float)) \
+                or not 0 <= angle < 90:
+            raise MachineError(f"{_where(source, where, 'contact_angle_deg')}: must lie in "
+                               f"[0, 90), got {angle!r}")
+        shaft = shaft_of(t, where)
+        bearings.append(MachineBearing(Bearing(n, d * 1e-3, pitch * 1e-3, math.radians(angle)),
+                                       shaft, _text(t.get("name", f"bearing {i + 1}"), source,
+                                                    where, "name")))
+    sensors = []
+    for i, t in enumerate(_tables(data, "sensors", source)):
+        where = f"sensors[{i}]"
+        _check_keys(t, _SENSOR_KEYS, source, where)
+        if "channel" not in t:
+            raise MachineError(f"{_where(source, where, 'channel')}: missing")
+        near = None
+        if "near_stage" in t:
+            if t["near_stage"] not in names:
+                raise MachineError(f"{_where(source, where, 'near_stage')}: no stage called "
+                                   f"{t['near_stage']!r}; the stages are {', '.join(names)}")
+            near = names.index(t["near_stage"])
+        sensors.append(Sensor(
+            _text(t["channel"], source, where, "channel"),
+            _text(t["unit"], source, where, "unit") if "unit" in t else None,
+            _text(t["sensitivity"], source, where, "sensitivity") if "sensitivity" in t
+            else None, near, _text(t.get("output", "acc"), source, where, "output")))
+    channels = [s.channel for s in sensors]
+    if len(set(channels)) != len(channels):
+        raise MachineError(f"{source}: sensors: a channel is described twice")
+    tacho = None
+    if "tacho" in data:
+        t = data["tacho"]
+        if not isinstance(t, dict):
+            raise MachineError(f"{source}: tacho: must be a table ([tacho])")
+        _check_keys(t, _TACHO_KEYS, source, "tacho")
+        if "channel" not in t:
+            raise MachineError(f"{_where(source, 'tacho', 'channel')}: missing")
+        tacho = Tacho(_text(t["channel"], source, "tacho", "channel"),
+                      _teeth(t.get("pulses_per_rev", 1), source, "tacho", "pulses_per_rev"),
+                      shaft_of(t, "tacho", 0))
+        if tacho.channel in channels:
+            raise MachineError(f"{_where(source, 'tacho', 'channel')}: '{tacho.channel}' is "
+                               "also a vibration sensor")
+    return Machine(machine.name, stages, machine.shafts, machine.input_hz, tuple(bearings),
+                   tuple(sensors), tacho, source)
+
+
+def load_machine(path: str | Path) -> Machine:
+    """The machine described by the TOML file ``path`` (module docstring)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError as err:
+        raise MachineError(f"machine file {path} not found") from err
+    except (OSError, UnicodeDecodeError) as err:
+        raise MachineError(f"machine file {path} cannot be read: {err}") from err
+    except tomllib.TOMLDecodeError as err:
+        raise MachineError(f"{path}: not valid TOML: {err}") from err
+    return machine_from_dict(data, str(path))

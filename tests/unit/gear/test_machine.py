@@ -1,0 +1,165 @@
+"""The machine description: reading the TOML file (and refusing a bad one with the file and
+the key named), the shafts' speeds, and the speed found from every stage's mesh at once.
+
+The two-stage records here are written from a drifting input-shaft angle: each stage's
+mesh harmonics amplitude-modulated by both of its shafts (strong, as a chipped tooth or an
+eccentric gear makes them), not by the search's own comb of lines.
+"""
+
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pydiag.core.errors import MachineError, MeasurementError
+from pydiag.core.measurement import Measurement
+from pydiag.gear.machine import Machine, load_machine, machine_from_dict
+from pydiag.gear.speed import SpeedSettings, estimate_speed
+
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+
+TWO_STAGE = {"name": "test box", "input_rpm": 1800,
+             "stages": [{"pinion_teeth": 32, "gear_teeth": 96},
+                        {"pinion_teeth": 48, "gear_teeth": 80}]}
+
+
+def to_toml(data: dict) -> str:
+    """The few TOML forms these tests write: scalars, lists of them, tables, arrays of
+    tables (top-level keys first, as TOML needs)."""
+    def value(v):
+        if isinstance(v, str):
+            return f'"{v}"'
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return repr(v).lower() if isinstance(v, bool) else repr(v)
+
+    plain = [f"{k} = {value(v)}" for k, v in data.items()
+             if not isinstance(v, dict) and not (isinstance(v, list) and v
+                                                  and isinstance(v[0], dict))]
+    tables = []
+    for k, v in data.items():
+        rows = [v] if isinstance(v, dict) else v if isinstance(v, list) and v and \
+            isinstance(v[0], dict) else []
+        for row in rows:
+            tables.append(f"[{k}]" if isinstance(v, dict) else f"[[{k}]]")
+            tables += [f"{rk} = {value(rv)}" for rk, rv in row.items()]
+    return "\n".join(plain + tables) + "\n"
+
+
+def test_example_files_read_and_their_shafts_turn_as_the_teeth_say():
+    phm = load_machine(EXAMPLES / "phm09_spur.toml")
+    assert [s.pinion_teeth for s in phm.stages] == [32, 48]
+    assert phm.shafts == ("input", "idler", "output")
+    assert phm.shaft_ratio(1) == Fraction(1, 3) and phm.shaft_ratio(2) == Fraction(1, 5)
+    assert phm.mesh_order(0) == 32 and phm.mesh_order(1) == 16
+    assert phm.tacho.channel == "ch3" and phm.tacho.pulses_per_rev == 10
+    # stage 2's hunting tooth repeats every 15 input turns, stage 1's every 3
+    assert phm.fundamental_order == Fraction(1, 15)
+    kin = phm.stage_kinematics(1, 30.0)
+    assert (kin.n_pinion, kin.n_gear, kin.f_pinion_hz) == (48, 80, pytest.approx(10.0))
+    gfd = load_machine(EXAMPLES / "gfd_spectraquest.toml")
+    assert len(gfd.stages) == 1 and gfd.input_hz == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize("change, key", [
+    ({"stages": [{"pinion_teeth": 0, "gear_teeth": 96}]}, "stages[0].pinion_teeth"),
+    ({"stages": [{"pinion_teeth": 32, "gear_teeth": 96.5}]}, "stages[0].gear_teeth"),
+    ({"stages": [{"pinion_teeth": 32, "gear_teeth": 96, "teeth": 3}]}, "stages[0].teeth"),
+    ({"stages": [{"pinion_teeth": 32, "gear_teeth": 96, "type": "planetary"}]},
+     "stages[0].type"),
+    ({"stages": []}, "stages"),
+    ({"input_rpm": -5}, "input_rpm"),
+    ({"gears": 2}, "gears"),
+    ({"bearings": [{"shaft": "layshaft", "n_balls": 9, "ball_diameter_mm": 8,
+                    "pitch_diameter_mm": 39}]}, "bearings[0].shaft"),
+    ({"bearings": [{"shaft": "input", "n_balls": 9, "ball_diameter_mm": 40,
+                    "pitch_diameter_mm": 39}]}, "bearings[0].ball_diameter_mm"),
+    ({"sensors": [{"channel": "ch1", "near_stage": "third"}]}, "sensors[0].near_stage"),
+    ({"shafts": ["a", "b"]}, "shafts"),
+    ({"tacho": {"channel": "ch3", "pulses_per_rev": 0}}, "tacho.pulses_per_rev"),
+])
+def test_a_bad_machine_file_is_refused_naming_the_file_and_the_key(tmp_path, change, key):
+    path = tmp_path / "box.toml"
+    path.write_text(to_toml({**TWO_STAGE, **change}))
+    with pytest.raises(MachineError) as err:
+        load_machine(path)
+    message = str(err.value)
+    assert str(path) in message and key in message, message
+    assert "\n" not in message
+
+
+def test_unreadable_machine_files_are_the_users_to_fix(tmp_path):
+    with pytest.raises(MachineError, match="not found"):
+        load_machine(tmp_path / "none.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[[stages]\npinion_teeth = 3\n")
+    with pytest.raises(MachineError, match="not valid TOML"):
+        load_machine(bad)
+
+
+# ---------------------------------------------------------------------- speed of a machine
+FS, DURATION = 25_000.0, 4.0
+MACHINE = machine_from_dict(TWO_STAGE)
+
+
+def two_stage_record(true_hz: float, seed: int = 3,
+                     noise: float = 0.3) -> tuple[Measurement, np.ndarray]:
+    """Both stages' meshes, each modulated by its two shafts so strongly that the first
+    sidebands stand almost as high as the mesh; the input speed drifts by 0.05 %."""
+    n = int(FS * DURATION)
+    t = np.arange(n) / FS
+    speed = true_hz * (1 + 0.0005 * np.sin(2 * np.pi * 0.3 * t))
+    revs = np.cumsum(speed) / FS
+    rng = np.random.default_rng(seed)
+    x = np.zeros(n)
+    for k in range(len(MACHINE.stages)):
+        shafts = [float(MACHINE.shaft_ratio(k)), float(MACHINE.shaft_ratio(k + 1))]
+        modulation = 1 + sum(0.8 / j * np.cos(2 * np.pi * j * r * revs + j)
+                             for r in shafts for j in (1, 2))
+        mesh = sum(np.cos(2 * np.pi * h * float(MACHINE.mesh_order(k)) * revs + h) / h
+                   for h in (1, 2, 3))
+        x += mesh * modulation
+    x += noise * rng.standard_normal(n)
+    return Measurement({"acc": x}, FS), revs
+
+
+def mean_hz(revs: np.ndarray, valid: tuple[int, int] = (0, -1)) -> float:
+    """The true mean speed over the samples ``valid`` (where an estimate measured it)."""
+    a, b = valid[0], valid[1] % revs.size
+    return float((revs[b] - revs[a]) / ((b - a) / FS))
+
+
+@pytest.mark.parametrize("slip", [0.0, 0.02, 0.035])
+def test_one_speed_for_every_mesh_finds_a_slipping_machine_within_a_hundredth_percent(slip):
+    record, revs = two_stage_record(30.0 * (1 - slip))
+    kin = MACHINE.stage_kinematics(0, 30.0)
+    found = estimate_speed(record, kin, SpeedSettings("mesh"), machine=MACHINE)
+    truth = mean_hz(revs, found.valid)
+    assert abs(found.speed_hz / truth - 1) < 1e-4, (found.speed_hz, truth)
+    assert found.confidence_db > 1, found.confidence_db
+    assert found.to_dict()["speed_confidence_db"] == found.confidence_db
+    if slip > 0.015:  # beyond the one-stage search's window (0.45 pinion orders)
+        try:
+            pair = estimate_speed(record, kin, SpeedSettings("mesh"))
+        except MeasurementError:
+            return  # refused: no mesh line stands out in its window
+        assert abs(pair.speed_hz / truth - 1) > 1e-3
+
+
+def test_a_tacho_estimate_carries_the_mesh_speed_to_check_it_by():
+    record, revs = two_stage_record(29.5)
+    # the tacho gives 2 pulses a turn and the user says 1: it reads twice the speed
+    tacho = (np.mod(revs * 2, 1.0) < 0.2).astype(float)
+    record.channels["tacho"] = tacho
+    kin = MACHINE.stage_kinematics(0, 30.0)
+    found = estimate_speed(record, kin, SpeedSettings("tacho", tacho="tacho"), machine=MACHINE)
+    assert found.speed_hz == pytest.approx(2 * mean_hz(revs), rel=1e-3)
+    assert found.mesh_speed_hz == pytest.approx(mean_hz(revs), rel=1e-3)
+    assert found.tacho_disagreement_pct == pytest.approx(-50, abs=0.1)
+
+
+def test_the_pair_shorthand_is_a_one_stage_machine():
+    pair = Machine.pair(14, 21, 25.0)
+    assert pair.shafts == ("pinion", "gear") and pair.mesh_order(0) == 14
+    assert pair.stage_kinematics(0, 25.0).f_gear_hz == pytest.approx(25.0 * 14 / 21)
