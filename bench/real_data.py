@@ -35,7 +35,8 @@ sys.path.insert(0, str(ROOT))
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
-from pydiag.gear.speed import SpeedSettings, estimate_speed, order_track  # noqa: E402
+from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
+from pydiag.gear.tracking import order_track  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare, refit_with_effect  # noqa: E402
 from pydiag.loop.diagnosis import diagnose  # noqa: E402

@@ -16,7 +16,7 @@ import signal
 import sys
 import threading
 
-from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators, cmd_inspect,
+from pydiag.app.commands import (apply_machine, cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators, cmd_inspect,
                                  cmd_regress, cmd_simulate, warn_validation)
 from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
 from pydiag.core.errors import PydiagError
@@ -76,6 +76,14 @@ def bearing(text: str) -> Bearing:
     if not 0 <= angle < 90:
         raise argparse.ArgumentTypeError(f"the contact angle must lie in [0, 90) degrees, got {angle:g}")
     return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, math.radians(angle))
+
+
+def sensitivity(text: str) -> tuple[str, str]:
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"takes NAME=SENSITIVITY (e.g. ch1=100mV/g), got "
+                                         f"'{text}'")
+    return name.strip(), value.strip()
 
 
 def speed_ratio(text: str) -> float:
@@ -151,10 +159,17 @@ def _reading_args(p: argparse.ArgumentParser) -> None:
                    help="unit of the channels (or of one), converted to SI: g, m/s2, mm/s, um")
     p.add_argument("--sample-rate", type=positive, help="Hz, if the file has no time column "
                    "or rate")
+    p.add_argument("--sensitivity", action="append", type=sensitivity, metavar="NAME=VALUE",
+                   help="a sensor's sensitivity (e.g. ch1=100mV/g): its channel, in volts, "
+                   "becomes an acceleration (velocity, displacement); without one a channel "
+                   "in volts keeps its level unknown, and a fit takes it as a gain")
 
 
 def _operating_args(p: argparse.ArgumentParser) -> None:
     """The record's operating point and how to find its speed."""
+    p.add_argument("--machine", metavar="FILE", help="machine description (TOML: stages, "
+                   "shafts, bearings, sensors, tacho; see examples/); --rpm then sets the "
+                   "input shaft's nominal speed")
     p.add_argument("--rpm", type=positive, help="nominal pinion speed, rev/min (sets f_pinion)")
     p.add_argument("--teeth", type=teeth, metavar="NP,NG", help="pinion and gear teeth "
                    "(set Np, Ng)")
@@ -162,8 +177,9 @@ def _operating_args(p: argparse.ArgumentParser) -> None:
                    help="how to find the speed in the record: auto (tacho if given, else the "
                    "mesh lines), mesh, tacho, or nominal (take it as constant; default auto)")
     p.add_argument("--tacho", metavar="NAME", help="tacho channel (pulses), not a sensor")
-    p.add_argument("--pulses-per-rev", type=_number(int, 1), default=1,
-                   help="tacho pulses per pinion revolution (default 1)")
+    p.add_argument("--pulses-per-rev", type=_number(int, 1),
+                   help="tacho pulses per pinion (input shaft) revolution (default: the "
+                   "machine file's, else 1)")
 
 
 def _other_shaft_arg(p: argparse.ArgumentParser) -> None:
@@ -230,8 +246,10 @@ def build_parser() -> argparse.ArgumentParser:
     _operating_args(p)
     p.add_argument("--shaft", choices=SHAFTS, default="pinion",
                    help="the shaft the synchronous average follows (default pinion)")
-    p.add_argument("--baseline", metavar="FILE", help="reference record (healthy, or the first "
-                   "of a trend) for NA4 and NB4; without it they use the record itself")
+    p.add_argument("--baseline", metavar="FILE", action="append",
+                   help="reference record of the machine in a known healthy state (or the "
+                   "first of a trend): NA4 and NB4 against it; with --machine every stage is "
+                   "judged against it (repeat for more baselines)")
     p.add_argument("--json", help="write the indicators as JSON here")
     _force(p)
     p.set_defaults(func=cmd_indicators)
@@ -356,6 +374,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         if isinstance(getattr(args, "fmu", None), str):
             warn_validation(args.fmu)
+        args.machine_description = apply_machine(args)
         return args.func(args)
     except PydiagError as err:
         print(f"pydiag {args.command}: error: {err}", file=sys.stderr)

@@ -10,8 +10,8 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.formatting import (format_facts, format_indicators, format_regression,
-                                   format_result)
+from pydiag.app.formatting import (format_facts, format_indicators, format_machine_report,
+                                   format_regression, format_result)
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
@@ -21,10 +21,12 @@ from pydiag.fmu.inspect import describe, format_info
 from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.machine import Machine, load_machine
+from pydiag.gear.machine_indicators import machine_report
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.measurements import write_measurement
-from pydiag.io.readers import read_measurement
+from pydiag.io.readers import parse_units, read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
 from pydiag.loop.diagnosis import Diagnosis, diagnose
@@ -96,6 +98,65 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
+#: The mesh lines' speed may differ from a tacho's by this much (%) before a warning: ten
+#: times what the mesh search measures on real records, far below a wrong pulse count.
+TACHO_TOLERANCE_PCT = 0.1
+#: The commands that fit a pair model: a machine of several stages is not theirs yet.
+PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
+
+
+def apply_machine(args) -> Machine | None:
+    """The machine file's facts as the options they stand for, where the command line did
+    not give them (it wins): channels and their units and sensitivities, the tacho, the
+    nominal speed; for the commands that fit a pair, its teeth and its pinion bearing.
+    Returns the machine (None without --machine)."""
+    if not getattr(args, "machine", None):
+        if getattr(args, "pulses_per_rev", None) is None and hasattr(args, "pulses_per_rev"):
+            args.pulses_per_rev = 1
+        return None
+    if args.teeth is not None:
+        raise UsageError("--teeth and --machine both give the gears' teeth: give one")
+    machine = load_machine(args.machine)
+    fits = args.command in PAIR_COMMANDS
+    if fits and len(machine.stages) > 1:
+        raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
+                         "one gear pair (per-stage fits are not built yet): `pydiag indicators "
+                         "--machine` judges every stage against a baseline")
+    if args.rpm is None:
+        if machine.input_hz is None:
+            raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
+                             "input_rpm")
+        args.rpm = 60 * machine.input_hz
+    tacho = machine.tacho
+    if tacho is not None and args.tacho is None and args.speed != "mesh":
+        if tacho.shaft != 0:
+            raise UsageError(f"{args.machine}: a tacho on the {machine.shafts[tacho.shaft]} "
+                             "shaft is not supported yet (only on the input shaft)")
+        args.tacho = tacho.channel
+        if args.pulses_per_rev is None:
+            args.pulses_per_rev = tacho.pulses_per_rev
+    if args.pulses_per_rev is None:
+        args.pulses_per_rev = 1
+    if not args.channel and machine.sensors:
+        args.channel = [f"{s.channel}={s.output}" if fits else s.channel
+                        for s in machine.sensors]
+    given_units = parse_units(args.unit)
+    if None not in given_units:
+        args.unit = list(args.unit or []) + [f"{s.channel}={s.unit}" for s in machine.sensors
+                                             if s.unit and s.channel not in given_units]
+    given = dict(args.sensitivity or [])
+    args.sensitivity = list(args.sensitivity or []) + [
+        (s.channel, s.sensitivity) for s in machine.sensors
+        if s.sensitivity and s.channel not in given]
+    if fits:
+        stage = machine.stages[0]
+        args.teeth = (stage.pinion_teeth, stage.gear_teeth)
+        bearing = next((b.bearing for b in machine.bearings if b.shaft == 0), None)
+        if bearing is not None and getattr(args, "bearing", "absent") is None:
+            args.bearing = bearing
+    return machine
+
+
 def channels_to_read(args) -> list[str] | None:
     """The --channel specs, with the tacho channel added when channels are chosen."""
     chosen = list(args.channel or [])
@@ -104,8 +165,10 @@ def channels_to_read(args) -> list[str] | None:
     return chosen or None
 
 
-def read_input(args) -> Measurement:
-    return read_measurement(args.measurement, args.sample_rate, channels_to_read(args), args.unit)
+def read_input(args, path: str | None = None) -> Measurement:
+    """The record ``path`` (default ``--measurement``) as the options say to read it."""
+    return read_measurement(path or args.measurement, args.sample_rate, channels_to_read(args),
+                            args.unit, dict(getattr(args, "sensitivity", None) or []))
 
 
 def problem_settings(args) -> dict:
@@ -188,13 +251,34 @@ def record_kinematics(args, measurement: Measurement) -> GearKinematics:
 def cmd_indicators(args) -> int:
     check_outputs(args, "json")
     m = read_input(args)
-    baseline = None
-    if args.baseline:
-        baseline = read_measurement(args.baseline, args.sample_rate, channels_to_read(args),
-                                    args.unit)
     speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
+    machine = args.machine_description
+    if machine is not None:
+        return _machine_indicators(args, machine, m, speed)
+    if args.baseline and len(args.baseline) > 1:
+        raise UsageError("NA4 and NB4 of one pair take one --baseline (with --machine, "
+                         "several judge every stage)")
+    baseline = read_input(args, args.baseline[0]) if args.baseline else None
     report = condition_indicators(m, record_kinematics(args, m), speed, args.shaft, baseline)
     print(format_indicators(report))
+    if args.json:
+        out = {**report.to_dict(), "measurement": str(args.measurement)}
+        write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
+    return 0
+
+
+def _machine_indicators(args, machine: Machine, m: Measurement, speed: SpeedSettings) -> int:
+    """indicators --machine: every shaft's TSA, and every stage judged against the
+    baselines when there are some."""
+    baselines = [read_input(args, path) for path in args.baseline or []]
+    report = machine_report(m, machine, speed, args.rpm / 60.0, baselines)
+    print(format_machine_report(report))
+    s = report.record.speed
+    disagree = s.tacho_disagreement_pct
+    if disagree is not None and abs(disagree) > TACHO_TOLERANCE_PCT:
+        print(f"pydiag indicators: warning: the mesh lines give {s.mesh_speed_hz:.5f} Hz, "
+              f"{disagree:+.3f} % from the tacho's {s.speed_hz:.5f} Hz: check the tacho "
+              "channel and --pulses-per-rev", file=sys.stderr)
     if args.json:
         out = {**report.to_dict(), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
+from pydiag.gear.machine_indicators import MachineReport
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.results import Comparison, Discovery, Status
 from pydiag.loop.regress import RegressionReport
@@ -125,4 +126,37 @@ def format_indicators(report: IndicatorReport) -> str:
               f"speed      : {s.speed_hz:.5f} Hz pinion ({60 * s.speed_hz:.2f} rpm; nominal "
               f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}",
               f"NA4, NB4   : relative to {report.reference}"]
+    return "\n".join(lines)
+
+
+def format_machine_report(report: MachineReport) -> str:
+    """The speed, a row per shaft (residual energy and indicators, first channel's), then a
+    row per stage when it was judged."""
+    s = report.record.speed
+    confidence = ("" if s.confidence_db is None
+                  else f"; stands {s.confidence_db:.1f} dB over the next candidate")
+    lines = [f"machine    : {report.machine.name}, {len(report.machine.stages)} stage(s)",
+             f"speed      : {s.speed_hz:.5f} Hz input ({60 * s.speed_hz:.2f} rpm; nominal "
+             f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}{confidence}",
+             "", f"{'shaft':<14}{'speed Hz':>10}{'turns':>7}{'teeth':>9}  "
+             + "  ".join(f"{'resid ' + c:>14}" for c in report.record.shafts[0].residual_energy)]
+    for shaft in report.record.shafts:
+        lines.append(f"{shaft.shaft:<14}{shaft.speed_hz:>10.4f}{shaft.revolutions:>7d}"
+                     f"{'/'.join(map(str, shaft.teeth)):>9}  "
+                     + "  ".join(f"{e:>14.4g}" for e in shaft.residual_energy.values()))
+    if not report.stages:
+        lines += ["", "stages     : not judged: give a baseline record of the machine in a "
+                  "known healthy state (--baseline)"]
+        return "\n".join(lines)
+    lines += ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'pinion dB':>11}{'gear dB':>9}"
+              f"  verdict (threshold {report.stages[0].threshold_db:.2f} dB = "
+              f"{report.stages[0].threshold_db / report.spread_db:g} x the healthy spread "
+              f"{report.spread_db:.2f} dB)"]
+    for v in report.stages:
+        verdict = "changed" if v.changed else "healthy"
+        if v.suspect:
+            verdict += f", {v.suspect} suspect"
+        lines.append(f"{v.stage:<16}{f'{v.pinion_teeth}/{v.gear_teeth}':>7}{v.mesh_hz:>10.2f}"
+                     f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}  {verdict}")
+    lines.append(f"baselines  : {', '.join(report.baselines)}")
     return "\n".join(lines)

@@ -20,7 +20,8 @@ from pydiag.core.errors import EstimationError, PydiagError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.conventions import kinematics_from
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed, order_track
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
+from pydiag.gear.tracking import order_track
 
 #: The keys of an operating point (``build_problem``'s ``operating_point``) and their types.
 OPERATING_POINT_KEYS = {"n_pinion": int, "n_gear": int, "f_pinion_hz": float,

@@ -17,7 +17,8 @@ import numpy as np
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed, track_revolutions
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
+from pydiag.gear.tracking import track_revolutions
 from pydiag.signal.condition import (TrendReference, TsaSignals, raw_indicators,
                                      synchronous_average, tsa_indicators, tsa_signals)
 

@@ -33,9 +33,7 @@ exceed what the largest of the band's bins reaches by chance with probability 1e
 ``speed_variation_pct`` is 100 (max - min) / mean of the speed averaged over blocks of
 ``BLOCK_REVS`` pinion revolutions (or over quarters of a shorter record).
 
-:func:`order_track` resamples every channel at a whole number of samples per pinion
-revolution (at least the original rate), so each fundamental period holds the same
-samples; the result is a record at constant speed ``speed_hz``.
+The record order-tracked to the speed found: :mod:`pydiag.gear.tracking`.
 """
 
 from __future__ import annotations
@@ -51,7 +49,7 @@ from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import Machine
-from pydiag.signal.angle import (EDGE_BANDWIDTHS, angular_resample, extend_linearly,
+from pydiag.signal.angle import (EDGE_BANDWIDTHS, extend_linearly,
                                  tacho_revolutions, tone_phase)
 from pydiag.signal.spectra import amplitude_spectrum
 
@@ -371,44 +369,3 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
     if not searched:
         raise MeasurementError("the record has no channel but the tacho to find the mesh in")
     return from_mesh()
-
-
-def track_revolutions(measurement: Measurement, estimate: SpeedEstimate, samples_per_rev: int,
-                      ratio: float = 1.0, drop: tuple[str, ...] = (), shaft: str = "pinion"
-                      ) -> tuple[list[str], list[np.ndarray], int]:
-    """(channel names, signals, revolutions): every channel but ``drop`` resampled at
-    ``samples_per_rev`` per revolution of a shaft that turns ``ratio`` times per pinion
-    turn, over that shaft's whole revolutions where the angle was measured (not
-    extrapolated)."""
-    a, b = estimate.valid
-    revs = estimate.revolutions[a:(b + 1) or None] * ratio
-    first = math.ceil(revs[0])
-    n_revs = int(math.floor(revs[-1] - first))
-    if n_revs < 1:
-        raise MeasurementError(f"record of {measurement.duration_s:.3g} s holds no whole {shaft} "
-                               "revolution")
-    names = [c for c in measurement.channels if c not in drop]
-    tracked = angular_resample([measurement.channels[c][a:(b + 1) or None] for c in names], revs,
-                               samples_per_rev, first, n_revs)
-    return names, tracked, n_revs
-
-
-def order_track(measurement: Measurement, estimate: SpeedEstimate,
-                drop: tuple[str, ...] = ()) -> Measurement:
-    """``measurement`` resampled at a whole number of samples per pinion revolution (at
-    least the original rate), over its whole revolutions, without the ``drop`` channels.
-
-    The result is the record at constant speed ``estimate.speed_hz``: its sample rate is
-    samples_per_rev x speed_hz. Metadata gain the speed estimate and ``order_tracking``.
-    """
-    if estimate.source is SpeedSource.NOMINAL:
-        channels = {c: v for c, v in measurement.channels.items() if c not in drop}
-        return Measurement(channels, measurement.sample_rate_hz,
-                           {**measurement.metadata, **estimate.to_dict()})
-    fs = measurement.sample_rate_hz
-    samples_per_rev = int(math.ceil(fs / estimate.speed_hz))
-    names, tracked, n_revs = track_revolutions(measurement, estimate, samples_per_rev, drop=drop)
-    meta = {**measurement.metadata, **estimate.to_dict(),
-            "order_tracking": {"samples_per_rev": samples_per_rev, "revolutions": n_revs,
-                               "original_sample_rate_hz": fs}}
-    return Measurement(dict(zip(names, tracked)), samples_per_rev * estimate.speed_hz, meta)

@@ -48,7 +48,7 @@ import numpy as np
 
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.io.units import si_factor
+from pydiag.io.units import is_voltage, sensitivity_factor, si_factor
 
 TIME_COLUMNS = ("time_s", "time", "t")
 META_PREFIX = "# meta:"
@@ -285,7 +285,7 @@ READERS = {".parquet": _read_parquet, ".mat": _read_mat, ".wav": _read_wav, ".td
 
 
 def _read_zipped(path: Path, sample_rate_hz: float | None, channels: list[str] | None,
-                 units) -> Measurement:
+                 units, sensitivities: dict[str, str] | None) -> Measurement:
     """The one record a zip holds (as data sets ship them), read as its own format."""
     import tempfile
     import zipfile
@@ -311,7 +311,7 @@ def _read_zipped(path: Path, sample_rate_hz: float | None, channels: list[str] |
                 inner = Path(tmp) / name
                 with archive.open(member) as src, open(inner, "wb") as dst:
                     shutil.copyfileobj(src, dst, 1 << 20)
-                m = read_measurement(inner, sample_rate_hz, channels, units)
+                m = read_measurement(inner, sample_rate_hz, channels, units, sensitivities)
     except (zipfile.BadZipFile, OSError) as err:
         raise _fail(path, f"cannot read the zip: {err}") from err
     return Measurement(m.channels, m.sample_rate_hz,
@@ -381,7 +381,8 @@ def parse_units(specs: list[str] | None) -> dict[str | None, str]:
 
 def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
                      channels: list[str] | None = None,
-                     units: list[str] | dict[str | None, str] | None = None) -> Measurement:
+                     units: list[str] | dict[str | None, str] | None = None,
+                     sensitivities: dict[str, str] | None = None) -> Measurement:
     """Read a measurement file (see the module docstring for the formats).
 
     Args:
@@ -389,7 +390,10 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
         sample_rate_hz: the rate, when the file has none (checked against it otherwise)
         channels: ``NAME`` or ``NAME=OUTPUT`` specs (default: every column but time)
         units: ``UNIT`` for every channel or ``NAME=UNIT`` (NAME as in the file or as
-            mapped); values are converted to SI
+            mapped); values are converted to SI. A voltage (V, mV) without a sensitivity
+            is kept in volts: the level is not known, and a fit takes it as a gain
+        sensitivities: NAME -> a sensor's sensitivity (``100 mV/g``): the channel, in
+            volts unless its unit says another voltage, is converted to SI through it
 
     Returns a Measurement whose channels carry the OUTPUT names, in SI units when a unit
     was given, and metadata: ``file``, ``sample_rate_source``, ``channel_map``, ``units``.
@@ -406,7 +410,7 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
         raise _fail(path, "cannot read: no such file" if not path.exists() else
                     "cannot read: not a regular file")
     if suffix == ".zip":
-        return _read_zipped(path, sample_rate_hz, channels, units)
+        return _read_zipped(path, sample_rate_hz, channels, units, sensitivities)
     try:
         table = (_read_text if suffix in TEXT_SUFFIXES else READERS[suffix])(path)
     except (OSError, EOFError, UnicodeDecodeError, gzip.BadGzipFile) as err:
@@ -449,6 +453,11 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     stray = [n for n in unit_of if n is not None and n not in known]
     if stray:
         raise UsageError(f"--unit names channel(s) {', '.join(stray)} that are not chosen")
+    sensitivities = sensitivities or {}
+    stray = [n for n in sensitivities if n not in known]
+    if stray:
+        raise UsageError(f"--sensitivity names channel(s) {', '.join(stray)} that are not "
+                         "chosen")
     selected, used_units = {}, {}
     for name, output in specs:
         values = columns[name]
@@ -457,7 +466,14 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
                               "disconnected sensor?")
         _check_spikes(path, name, values)
         unit = unit_of.get(name) or unit_of.get(output) or unit_of.get(None)
-        if unit:
+        sensitivity = sensitivities.get(name) or sensitivities.get(output)
+        if sensitivity:
+            factor, si = sensitivity_factor(unit or "V", sensitivity)
+            values = values * factor
+            used_units[output] = f"{unit or 'V'} at {sensitivity} -> {si}"
+        elif unit and is_voltage(unit):
+            used_units[output] = f"{unit} (no sensitivity: the level is not known)"
+        elif unit:
             factor, si = si_factor(unit)
             values = values * factor
             used_units[output] = f"{unit} -> {si}"

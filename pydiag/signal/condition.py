@@ -57,18 +57,24 @@ class TsaSignals:
     mesh_order: int
 
 
-def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDERS) -> TsaSignals:
+def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDERS,
+                other_meshes: tuple[int, ...] = ()) -> TsaSignals:
     """Regular, difference, residual and envelope signals of one revolution ``tsa`` of a
-    shaft carrying ``mesh_order`` teeth."""
+    shaft carrying ``mesh_order`` teeth; ``other_meshes``: the teeth of the shaft's other
+    gears (an intermediate shaft of a gearbox carries two), whose mesh harmonics and first
+    sidebands are regular too."""
     tsa = np.asarray(tsa, dtype=float)
     n = tsa.size
     if mesh_order < 2 or mesh_order >= n // 2:
         raise ValueError(f"mesh order {mesh_order} needs 2 <= order < {n // 2} (samples/2)")
     coeffs = np.fft.rfft(tsa - tsa.mean())
     orders = np.arange(coeffs.size)
-    mesh = (orders % mesh_order == 0) & (orders > 0)
-    sidebands = ((orders + 1) % mesh_order == 0) | ((orders - 1) % mesh_order == 0)
-    sidebands &= orders > 1
+    mesh = np.zeros(orders.size, dtype=bool)
+    sidebands = np.zeros(orders.size, dtype=bool)
+    for teeth in (mesh_order, *other_meshes):
+        mesh |= (orders % teeth == 0) & (orders > 0)
+        sidebands |= ((orders + 1) % teeth == 0) | ((orders - 1) % teeth == 0)
+    sidebands &= (orders > 1) & ~mesh
     shaft = (orders >= 1) & (orders <= shaft_orders)
 
     def part(keep: np.ndarray) -> np.ndarray:

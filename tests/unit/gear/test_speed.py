@@ -10,7 +10,8 @@ import pytest
 from pydiag.core.errors import MeasurementError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.speed import SpeedSettings, estimate_speed, order_track
+from pydiag.gear.speed import SpeedSettings, estimate_speed
+from pydiag.gear.tracking import order_track
 from pydiag.signal.angle import angular_resample
 from pydiag.signal.spectra import sync_spectrum
 

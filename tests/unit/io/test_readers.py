@@ -146,7 +146,25 @@ def test_channels_are_mapped_and_units_converted(tmp_path, signals):
     with pytest.raises(UsageError, match="unknown unit"):
         read_measurement(path, FS, units=["bananas"])
     with pytest.raises(UsageError, match="not an acceleration"):
-        read_measurement(path, FS, units=["V"])
+        read_measurement(path, FS, units=["N"])
+
+
+def test_volts_are_kept_without_a_sensitivity_and_converted_with_one(tmp_path, signals):
+    path = tmp_path / "r.csv"
+    pd.DataFrame(signals).to_csv(path, index=False)
+    m = read_measurement(path, FS, units=["V"])
+    np.testing.assert_array_equal(m.channels["a1"], signals["a1"])
+    assert "level is not known" in m.metadata["units"]["a1"]
+    m = read_measurement(path, FS, channels=["a1=acc", "a2"], units=["mV"],
+                         sensitivities={"acc": "100 mV/g", "a2": "10.2 mV/(m/s2)"})
+    np.testing.assert_allclose(m.channels["acc"], signals["a1"] * 1e-3 / 0.1 * 9.80665)
+    np.testing.assert_allclose(m.channels["a2"], signals["a2"] / 10.2)
+    with pytest.raises(UsageError, match="not a voltage"):
+        read_measurement(path, FS, units=["g"], sensitivities={"a1": "100 mV/g"})
+    with pytest.raises(UsageError, match="not a positive voltage per"):
+        read_measurement(path, FS, sensitivities={"a1": "100 mV"})
+    with pytest.raises(UsageError, match="--sensitivity names channel"):
+        read_measurement(path, FS, channels=["a1"], sensitivities={"a2": "100 mV/g"})
 
 
 @pytest.mark.parametrize("text,kwargs,message", [

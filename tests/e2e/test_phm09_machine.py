@@ -1,0 +1,70 @@
+"""The shared PHM 2009 two-stage records (../shared/data/phm09) through the machine file:
+the speed found from every mesh without the tacho, and every stage judged against a
+repeated healthy run. Skipped where the records are not present."""
+
+import json
+
+import pytest
+from conftest import ROOT, run_cli
+
+from pydiag.gear.machine import load_machine
+from pydiag.gear.speed import SpeedSettings, estimate_speed
+from pydiag.io.readers import read_measurement
+
+DATA = ROOT.parent / "shared" / "data" / "phm09"
+MACHINE = ROOT / "examples" / "phm09_spur.toml"
+RATE = "66666.67"
+RECORDS = ["spur 1_30hz_High_1", "spur 1_30hz_High_2", "spur 1_45hz_Low_1",
+           "spur 2_30hz_High_1", "spur 2_45hz_Low_1"]
+
+pytestmark = pytest.mark.skipif(not (DATA / f"{RECORDS[0]}.zip").exists(),
+                                reason="the shared PHM09 records are not here")
+
+
+@pytest.mark.parametrize("name", RECORDS)
+def test_the_speed_from_every_mesh_is_the_tachos_within_a_hundredth_percent(name):
+    machine = load_machine(MACHINE)
+    m = read_measurement(DATA / f"{name}.zip", float(RATE))
+    nominal = 30.0 if "30hz" in name else 45.0
+    kin = machine.stage_kinematics(0, nominal)
+    tacho = estimate_speed(m, kin, SpeedSettings("tacho", tacho="ch3", pulses_per_rev=10))
+    mesh = estimate_speed(m, kin, SpeedSettings("mesh", tacho="ch3"), machine=machine)
+    assert abs(mesh.speed_hz / tacho.speed_hz - 1) < 1e-4, (mesh.speed_hz, tacho.speed_hz)
+
+
+def indicators(tmp_path, name: str, *extra: str) -> tuple[dict, str]:
+    out = tmp_path / f"{name}{len(list(tmp_path.iterdir()))}.json"
+    res = run_cli("-m", "pydiag", "indicators", "--machine", str(MACHINE), "--measurement",
+                  str(DATA / f"{name}.zip"), "--sample-rate", RATE, "--json", str(out), *extra)
+    assert res.returncode == 0, res.stderr
+    return json.loads(out.read_text()), res.stderr
+
+
+def test_stages_judged_against_a_repeated_healthy_run(tmp_path):
+    baseline = ["--speed", "mesh", "--baseline", str(DATA / "spur 1_30hz_High_2.zip")]
+    healthy, _ = indicators(tmp_path, "spur 1_30hz_High_1", *baseline)
+    assert [s["verdict"] for s in healthy["stages"]] == ["healthy", "healthy"], healthy["stages"]
+    faulty, _ = indicators(tmp_path, "spur 2_30hz_High_1", *baseline)
+    first = faulty["stages"][0]
+    assert (first["name"], first["pinion_teeth"], first["gear_teeth"]) == ("input stage", 32, 96)
+    assert first["verdict"] == "changed" and first["suspect"] == "pinion", first
+    assert [s["name"] for s in faulty["shafts"]] == ["input", "idler", "output"]
+    assert faulty["speed_method"].startswith("mesh") and faulty["speed_confidence_db"] > 1
+    assert faulty["healthy_spread_db"] > 0 and faulty["baselines"]
+
+
+def test_the_machine_files_tacho_is_used_and_a_wrong_pulse_count_is_named(tmp_path):
+    data, stderr = indicators(tmp_path, "spur 1_30hz_High_1")
+    assert data["speed_method"] == "tacho" and abs(data["speed_hz"] - 29.905) < 0.01
+    assert data["stages"] == [] and "without a baseline" in data["severity_scale"]
+    assert "warning" not in stderr
+    data, stderr = indicators(tmp_path, "spur 1_30hz_High_1", "--pulses-per-rev", "5")
+    assert "from the tacho's" in stderr and "--pulses-per-rev" in stderr
+
+
+def test_a_pair_fit_refuses_a_two_stage_machine_and_says_what_works(gear_fmu):
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--machine", str(MACHINE),
+                  "--measurement", str(DATA / f"{RECORDS[0]}.zip"), "--sample-rate", RATE)
+    assert res.returncode == 2
+    assert "2 stages" in res.stderr and "indicators --machine" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
