@@ -4,7 +4,8 @@ inspect | demo.
 This module parses arguments (every number is checked here, before any work), calls the
 command, and maps errors to exit codes: a :class:`~pydiag.core.errors.PydiagError` is the
 user's to fix (one line on stderr, status 2); anything else is an internal error (one
-line, status 3; ``PYDIAG_DEBUG=1`` shows the traceback). A failed regression exits 1.
+line, status 3; ``PYDIAG_DEBUG=1`` shows the traceback). A failed regression exits 1,
+and so does a diagnosis the model cannot make (it explains none of the record).
 """
 
 from __future__ import annotations

@@ -232,7 +232,7 @@ def cmd_diagnose(args) -> int:
         out = {**result.to_dict(), "channels": list(problem.channels),
                "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
-    return 0
+    return 0 if result.explained else 1
 
 
 def record_kinematics(args, measurement: Measurement) -> GearKinematics:

@@ -19,7 +19,8 @@ from pydiag.loop import history
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, with_effect
-from pydiag.loop.discover import MODELICA_ROOT, as_dict, discover, effect_fmu
+from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root, discover,
+                                  effect_fmu)
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
 
@@ -34,6 +35,8 @@ def cmd_compare(args) -> int:
     args.history = str(history.resolve(args.history))
     history.check(args.history)
     effect = EFFECTS[args.effect] if args.effect else None
+    if not args.no_validate:
+        check_modelica_root(Path(args.modelica) if args.modelica else MODELICA_ROOT)
     m = read_input(args)
     # with an effect model, the base fit runs with the effect switched off (lower bounds)
     problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
@@ -55,25 +58,29 @@ def cmd_compare(args) -> int:
                      progress=None if args.quiet else
                      (lambda key: print(f"validating {key} held out ...", file=sys.stderr)))
     md, _ = read_model_description(args.fmu)
-    run_id = history.record(args.history, c, args.measurement, md.modelName, args.source)
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
     warnings = fit_warnings(problem, c.fit_error, c.gains) if c.fit_error is not None else []
-    print(format_comparison(c))
-    print(format_facts({**facts, "gains": c.gains}))
-    for warning in warnings:
-        print(f"pydiag compare: warning: {warning}", file=sys.stderr)
+    # the run is recorded when its outputs are written (history.recording)
+    with history.recording(args.history, c, args.measurement, md.modelName,
+                           args.source) as (run_id, runs):
+        print(format_comparison(c))
+        print(format_facts({**facts, "gains": c.gains}))
+        for warning in warnings:
+            print(f"pydiag compare: warning: {warning}", file=sys.stderr)
+        if args.report:
+            write_report(c, args.report, args.measurement, runs, args.force)
+            print(f"report     : {args.report}")
+        if args.json:
+            write_text(args.json, json.dumps({**c.to_dict(), **facts, "warnings": warnings},
+                                             indent=2) + "\n", args.force)
     print(f"recorded as run {run_id} in {args.history}")
-    if args.report:
-        write_report(c, args.report, args.measurement, history.runs(args.history), args.force)
-        print(f"report     : {args.report}")
-    if args.json:
-        write_text(args.json, json.dumps({**c.to_dict(), **facts, "warnings": warnings}, indent=2) + "\n", args.force)
     return 0
 
 
 def cmd_discover(args) -> int:
     check_outputs(args, "json")
+    check_modelica_root(Path(args.modelica) if args.modelica else MODELICA_ROOT)
     m = read_input(args)
     progress = None if args.quiet else (lambda d: print(f"{d.effect}: tried in {d.elapsed_s:.1f} s",
                                                         file=sys.stderr))
@@ -90,6 +97,8 @@ def cmd_discover(args) -> int:
 
 def cmd_history(args) -> int:
     check_outputs(args, "plot")
+    if args.plot:
+        history.check_plot(args.plot)
     args.history = str(args.history or history.default_path())
     rows = history.runs(args.history)
     if not rows:

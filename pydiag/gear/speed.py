@@ -275,7 +275,8 @@ def comb_speed(signals: list[np.ndarray], sample_rate_hz: float, comb: MeshComb,
         raise MeasurementError(
             f"no mesh line stands out near {comb.orders[0] * nominal_hz:.1f} Hz "
             f"(+-{100 * comb.search:g} %): the best is {ratio:.1f}x its band's median, chance "
-            f"reaches {needed:.1f}x; check the speed and the teeth, or give a tacho channel "
+            f"reaches {needed:.1f}x; check the nominal speed (--rpm) and the teeth (--teeth or "
+            "the machine file), or give a tacho channel "
             "(--tacho)")
     x = np.asarray(signals[c], dtype=float)
     order = h * comb.orders[m]

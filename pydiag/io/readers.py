@@ -333,6 +333,10 @@ def _check_spikes(path: Path, name: str, values: np.ndarray) -> None:
     deviation = np.abs(values - np.median(values))
     mad = float(np.median(deviation))
     worst = int(np.argmax(deviation))
+    if mad == 0 and deviation[worst] > 0:  # most samples one value: no signal
+        moving = int(np.count_nonzero(deviation))
+        raise _fail(path, f"channel '{name}' holds one value ({np.median(values):g}) in all but "
+                          f"{moving} of its {values.size} samples: a dead sensor with glitches?")
     if mad > 0 and deviation[worst] > MAX_SPIKE * mad:
         raise _fail(path, f"channel '{name}' sample {worst} is {values[worst]:g}, "
                           f"{deviation[worst] / mad:.2g} times the channel's median deviation: "

@@ -16,6 +16,8 @@ from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
 #: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
 #: not a diagnosis: a model with no lines at all scores about 1.
 UNEXPLAINED_ERROR = 1.0
+#: The fault mode of a fit that explains none of the record: its parameters say nothing.
+NO_DIAGNOSIS = "no_diagnosis"
 #: A fitted channel gain outside this range is a level mismatch (mm/s^2 read as m/s^2 is
 #: 1000), not a transfer path (a housing accelerometer sees the mesh attenuated by up to
 #: some hundred times).
@@ -28,7 +30,8 @@ class Diagnosis:
 
     ``fault_mode``, ``severity``, ``tooth_severity``, ``te_severity``: the paper's classes
     of the GearDiag fault parameters ("not_classified" / "unknown" for a model without
-    them); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated; ``facts``: what
+    them; :data:`NO_DIAGNOSIS` / "unknown" for a fit that explains none of the record,
+    :attr:`explained`); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated; ``facts``: what
     was analysed (speed, periods, gains); ``warnings``: why it may not be trusted."""
 
     fit: FitResult
@@ -39,6 +42,11 @@ class Diagnosis:
     tooth_contrast: float | None = None
     facts: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+
+    @property
+    def explained(self) -> bool:
+        """Whether the fit explains the record at all (else its classes say nothing)."""
+        return self.fault_mode != NO_DIAGNOSIS
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -61,7 +69,9 @@ def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -
     them (default: the record's alone, no gains)."""
     values = {**problem.fixed_values, **fit.parameters}
     facts = problem.record_facts() if facts is None else facts
-    if any(name in fit.parameters for name in CLASSIFIED_PARAMETERS):
+    if unexplained(problem, fit.error):
+        labels, contrast = (NO_DIAGNOSIS,) + ("unknown",) * 3, None
+    elif any(name in fit.parameters for name in CLASSIFIED_PARAMETERS):
         cls = classify(values)
         labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
         contrast = tooth_contrast(values) if "a_f" in fit.parameters else None
@@ -77,6 +87,11 @@ def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None) -> Di
     return classified(problem, fit, problem.facts(fit.parameters))
 
 
+def unexplained(problem: FitProblem, error: float) -> bool:
+    """Whether a fit of ``problem`` with this ``error`` explains none of the record."""
+    return error / np.sqrt(len(problem.channels)) >= UNEXPLAINED_ERROR
+
+
 def fit_warnings(problem: FitProblem, error: float,
                  gains: dict[str, float] | None = None) -> list[str]:
     """Why a fit of ``problem`` with this ``error`` (and these fitted ``gains``) is not to
@@ -84,7 +99,7 @@ def fit_warnings(problem: FitProblem, error: float,
     found = []
     check = "check the units (--unit), the channel mapping (--channel) and the sample rate"
     per_channel = error / np.sqrt(len(problem.channels))
-    if per_channel >= UNEXPLAINED_ERROR:
+    if unexplained(problem, error):
         found.append(f"the fit's error is {per_channel:.3g} per channel (1 = as large as the "
                      "measured lines): the model explains none of the record; "
                      f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "

@@ -66,6 +66,15 @@ def default_build_dir(modelica_root: Path) -> Path:
     return Path(base) / "pydiag" / "effects" / library
 
 
+def check_modelica_root(modelica_root: Path) -> None:
+    """UsageError unless ``modelica_root`` holds the GearDiag effects (before any work)."""
+    effects = Path(modelica_root) / "GearDiag" / "Effects"
+    if not (effects / "package.order").is_file():
+        raise UsageError(f"no Modelica library of effects at {modelica_root} (it needs "
+                         "GearDiag/Effects/package.order); give --modelica the folder that "
+                         "holds GearDiag")
+
+
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> Path:
     """The effect's FMU, built unless an up-to-date one exists (in ``build_dir``, default
     :func:`default_build_dir`). An ``in_base`` effect has none: its FMU is the base

@@ -2,20 +2,31 @@
 
 SQLite, one table. ``pydiag history`` lists the runs and can plot the error across
 model revisions, so the effect of adding physics to the Modelica model stays visible.
+
+The history is an input as much as an output: :func:`check` refuses, before any work, a
+file that is not SQLite, an SQLite file of another application (a table that is not
+ours) or of another version of pydiag (a ``runs`` table without our columns), and one that
+cannot be written. :func:`recording` adds a run and commits it only when what was written
+beside it (report, JSON) was written: a failed run is never recorded, and a history that
+fails to take the run is the user's problem (:class:`OutputError`), after the outputs.
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
 import json
+import os
 import sqlite3
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from pydiag.core.errors import OutputError
 from pydiag.io.outputs import atomic_output, check_output
 
+#: The formats ``history --plot`` writes, by the file's suffix.
+PLOT_FORMATS = (".png", ".svg", ".pdf")
 
 
 def default_path() -> Path:
@@ -59,11 +70,33 @@ def sha256_of(path: str | Path) -> str:
     return h.hexdigest()
 
 
+#: The columns of our ``runs`` table.
+COLUMNS = ("id", "time_utc", "measurement", "fmu", "fmu_sha256", "model_name",
+           "source_sha256", "parameters", "error", "n_peaks", "peaks", "suggested")
+
+
+def _check_schema(con: sqlite3.Connection, db: str | Path) -> None:
+    """OutputError unless the database holds nothing, or our ``runs`` table alone."""
+    tables = sorted(r[0] for r in con.execute(
+        "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"))
+    foreign = [t for t in tables if t != "runs"]
+    if foreign:
+        raise OutputError(f"{db} is not a pydiag run history (it holds table(s) "
+                          f"{', '.join(foreign)}); give --history another file")
+    if "runs" in tables:
+        columns = {r[1] for r in con.execute("PRAGMA table_info(runs)")}
+        missing = [c for c in COLUMNS if c not in columns]
+        if missing:
+            raise OutputError(f"{db} is a run history of another pydiag version (its runs have "
+                              f"no column {missing[0]}); give --history another file")
+
+
 def _connect(db: str | Path) -> sqlite3.Connection:
     if Path(db).is_dir():
         raise OutputError(f"history {db} is a folder, not an SQLite file")
     try:
         con = sqlite3.connect(str(db))
+        _check_schema(con, db)
         con.execute(SCHEMA)
     except sqlite3.Error as err:
         raise OutputError(f"cannot use {db} as the run history: {err}") from err
@@ -71,44 +104,85 @@ def _connect(db: str | Path) -> sqlite3.Connection:
 
 
 def check(db: str | Path) -> None:
-    """Raise OutputError unless ``db`` is a run history or can be created as one; call it
-    before the work whose result it will record (nothing is created here)."""
-    if Path(db).exists() or Path(db).is_symlink():
-        _connect(db).close()
-    else:
+    """Raise OutputError unless ``db`` is a run history (ours, and writable) or can be
+    created as one; call it before the work whose result it will record (nothing is
+    created here, nor changed in an existing history)."""
+    if not (Path(db).exists() or Path(db).is_symlink()):
         check_output(db)
+        return
+    con = _connect(db)
+    try:
+        con.execute("BEGIN IMMEDIATE")  # a write lock: fails on a read-only database
+        con.rollback()
+    except sqlite3.Error as err:
+        raise OutputError(f"cannot write the run history {db}: {err}") from err
+    finally:
+        con.close()
 
 
-def record(db: str | Path, comparison, measurement_path: str, model_name: str | None,
-           source_path: str | None = None) -> int:
-    """Append one compare run; returns its id."""
+@contextmanager
+def recording(db: str | Path, comparison, measurement_path: str, model_name: str | None,
+              source_path: str | None = None) -> Iterator[tuple[int, list[dict]]]:
+    """Add one compare run; yields (its id, every run with it) and commits when the block
+    ends without an error (module docstring)."""
     peaks = [{"channel": p.channel, "freq_hz": p.freq_hz, "family": p.family,
               "energy_fraction": p.energy_fraction} for p in comparison.peaks]
     suggested = [{"effect": s.effect, "score": s.score, "confident": s.confident}
                  for s in comparison.suggested_effects if s.shown]
-    with _connect(db) as con:
-        cur = con.execute(
-            "INSERT INTO runs (time_utc, measurement, fmu, fmu_sha256, model_name, source_sha256,"
-            " parameters, error, n_peaks, peaks, suggested) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
-            (time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), str(measurement_path),
-             str(comparison.fmu), sha256_of(comparison.fmu), model_name,
-             sha256_of(source_path) if source_path else None, json.dumps(comparison.parameters),
-             comparison.error, len(comparison.peaks), json.dumps(peaks), json.dumps(suggested)))
-        return int(cur.lastrowid)
+    con = _connect(db)
+    try:
+        try:
+            cur = con.execute(
+                "INSERT INTO runs (time_utc, measurement, fmu, fmu_sha256, model_name, "
+                "source_sha256, parameters, error, n_peaks, peaks, suggested) "
+                "VALUES (?,?,?,?,?,?,?,?,?,?,?)",
+                (time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), str(measurement_path),
+                 str(comparison.fmu), sha256_of(comparison.fmu), model_name,
+                 sha256_of(source_path) if source_path else None,
+                 json.dumps(comparison.parameters), comparison.error, len(comparison.peaks),
+                 json.dumps(peaks), json.dumps(suggested)))
+            con.row_factory = sqlite3.Row
+            rows = [dict(r) for r in con.execute("SELECT * FROM runs ORDER BY id")]
+        except sqlite3.Error as err:
+            raise OutputError(f"cannot record the run in {db}: {err}") from err
+        yield int(cur.lastrowid), rows
+        try:
+            con.commit()
+        except sqlite3.Error as err:
+            raise OutputError(f"the outputs are written, but the run could not be recorded in "
+                              f"{db}: {err}") from err
+    except BaseException:
+        con.rollback()
+        raise
+    finally:
+        con.close()
 
 
 def runs(db: str | Path) -> list[dict]:
     if not Path(db).exists():
         return []
-    with _connect(db) as con:
+    con = _connect(db)
+    try:
         con.row_factory = sqlite3.Row
         return [dict(r) for r in con.execute("SELECT * FROM runs ORDER BY id")]
+    except sqlite3.Error as err:
+        raise OutputError(f"cannot read the run history {db}: {err}") from err
+    finally:
+        con.close()
+
+
+def check_plot(out: str | Path) -> None:
+    """OutputError unless ``out`` names a format :func:`plot` writes (before any work)."""
+    if Path(out).suffix.lower() not in PLOT_FORMATS:
+        raise OutputError(f"--plot {out}: the plot is written as {', '.join(PLOT_FORMATS)} "
+                          "(by the file's suffix)")
 
 
 def plot(rows: list[dict], out: str | Path, force: bool = False) -> Path:
     """Error per run, labelled with the model name: the error falling as physics is added.
     Written under the output policy (:mod:`pydiag.io.outputs`); the format follows the
-    name's suffix (.png, .svg, .pdf)."""
+    name's suffix (:data:`PLOT_FORMATS`)."""
+    check_plot(out)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -127,7 +201,7 @@ def plot(rows: list[dict], out: str | Path, force: bool = False) -> Path:
     fig.tight_layout()
     try:
         with atomic_output(out, force) as tmp:
-            fig.savefig(tmp, format=Path(out).suffix.lstrip(".") or "png")
+            fig.savefig(tmp, format=Path(out).suffix.lower().lstrip("."))
     finally:
         plt.close(fig)
     return Path(out)

@@ -31,3 +31,59 @@ def test_history_plot_follows_the_output_policy(tmp_path):
     with pytest.raises(OutputError, match="exists"):
         history.plot(rows, out)
     assert history.plot(rows, tmp_path / "h.svg").read_text().lstrip().startswith("<?xml")
+
+
+class _Run:
+    """The fields of a comparison the history records."""
+
+    def __init__(self, fmu):
+        self.fmu, self.peaks, self.suggested_effects = fmu, [], []
+        self.parameters, self.error = {"a_f": 0.3}, 0.25
+
+
+def test_a_run_is_recorded_only_when_its_outputs_were_written(tmp_path):
+    db, fmu = tmp_path / "h.sqlite", tmp_path / "m.fmu"
+    fmu.write_bytes(b"not really an FMU")
+    with history.recording(db, _Run(fmu), "rec.csv", "GearPair") as (run_id, rows):
+        assert [r["id"] for r in rows] == [run_id]  # the report sees this run
+    with pytest.raises(OutputError, match="disk is full"):
+        with history.recording(db, _Run(fmu), "rec.csv", "GearPair"):
+            raise OutputError("disk is full")  # e.g. writing the report
+    assert [r["id"] for r in history.runs(db)] == [run_id]
+
+
+def test_a_history_that_cannot_take_the_run_is_the_users_problem(tmp_path, monkeypatch):
+    import sqlite3
+
+    db, fmu = tmp_path / "h.sqlite", tmp_path / "m.fmu"
+    fmu.write_bytes(b"x")
+    real = history._connect
+
+    class FullDisk:
+        def __init__(self, con):
+            self.con = con
+
+        def commit(self):
+            raise sqlite3.OperationalError("database or disk is full")
+
+        def __getattr__(self, name):
+            return getattr(self.con, name)
+
+        def __setattr__(self, name, value):
+            if name == "con":
+                object.__setattr__(self, name, value)
+            else:
+                setattr(self.con, name, value)
+
+    monkeypatch.setattr(history, "_connect", lambda path: FullDisk(real(path)))
+    with pytest.raises(OutputError, match="outputs are written, but the run could not be"):
+        with history.recording(db, _Run(fmu), "rec.csv", "GearPair"):
+            pass
+    monkeypatch.undo()
+    assert history.runs(db) == []
+
+
+def test_plot_formats_are_checked_by_suffix(tmp_path):
+    with pytest.raises(OutputError, match="written as .png"):
+        history.check_plot(tmp_path / "p.txt")
+    history.check_plot(tmp_path / "p.PDF")

@@ -1,0 +1,83 @@
+"""Hardening, second pass (issue 31): a history is an input checked before the fit, a fit
+that explains nothing is no diagnosis, a record without a signal or a library that is not
+there stop the run at once. Each fails on the code before the fix."""
+
+import json
+import sqlite3
+
+import numpy as np
+import pytest
+from conftest import run_cli, write_csv
+
+SMALL = ["--particles", "6", "--iterations", "3", "--polish", "10", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def record(tmp_path_factory, gear_fmu):
+    path = tmp_path_factory.mktemp("meas") / "m.csv"
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--set", "a_f=0.3",
+                  "--snr", "10", "--out", str(path), "--quiet")
+    assert res.returncode == 0, res.stderr
+    return path
+
+
+def one_line_error(res, *words):
+    assert res.returncode == 2, (res.returncode, res.stdout, res.stderr)
+    assert "Traceback" not in res.stderr and "internal error" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1, res.stderr
+    for w in words:
+        assert w in res.stderr, res.stderr
+
+
+@pytest.mark.parametrize("tables, words", [
+    ({"customers": "id, name"}, ("not a pydiag run history", "customers")),
+    ({"runs": "id INTEGER PRIMARY KEY, when_utc TEXT, err REAL"},
+     ("another pydiag version", "time_utc")),
+])
+def test_a_foreign_or_older_history_is_refused_before_the_fit_and_kept(gear_fmu, record,
+                                                                       tmp_path, tables,
+                                                                       words):
+    db = tmp_path / "other.sqlite"
+    with sqlite3.connect(db) as con:
+        for name, columns in tables.items():
+            con.execute(f"CREATE TABLE {name} ({columns})")
+    before = db.read_bytes()
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--measurement",
+                  str(record), "--history", str(db), "--json", str(tmp_path / "c.json"), *SMALL)
+    one_line_error(res, *words)
+    assert db.read_bytes() == before
+    assert not (tmp_path / "c.json").exists()
+
+
+def test_history_plot_refuses_a_format_it_cannot_write(tmp_path):
+    res = run_cli("-m", "pydiag", "history", "--history", str(tmp_path / "h.sqlite"),
+                  "--plot", str(tmp_path / "p.txt"))
+    one_line_error(res, "p.txt", ".png")
+
+
+def test_a_fit_that_explains_nothing_is_no_diagnosis(gear_fmu, record, tmp_path):
+    out = tmp_path / "d.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(record), "--rpm", "1000", "--speed", "nominal", "--json", str(out),
+                  *SMALL)
+    assert res.returncode == 1, res.stderr
+    data = json.loads(out.read_text())
+    assert data["fault_mode"] == "no_diagnosis" and data["severity"] == "unknown"
+    assert "explains none" in res.stderr
+
+
+def test_a_channel_of_one_value_with_a_glitch_is_no_signal(gear_fmu, tmp_path):
+    x = np.zeros(20000)
+    x[777] = 1.0
+    path = write_csv(tmp_path / "z.csv", ["time_s", "acc"], zip(np.arange(x.size) / 1e4, x))
+    for command in (["diagnose", "--fmu", str(gear_fmu), "--speed", "nominal", *SMALL],
+                    ["indicators", "--rpm", "1500", "--teeth", "14,21"]):
+        res = run_cli("-m", "pydiag", *command, "--measurement", str(path))
+        one_line_error(res, "one value", "all but 1 of its 20000")
+
+
+def test_discover_without_the_modelica_library_stops_before_any_work(gear_fmu, record,
+                                                                     tmp_path):
+    res = run_cli("-m", "pydiag", "discover", "--fmu", str(gear_fmu), "--measurement",
+                  str(record), "--modelica", str(tmp_path / "nonexistent"), *SMALL)
+    one_line_error(res, "no Modelica library of effects", "--modelica")
