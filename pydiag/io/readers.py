@@ -400,7 +400,8 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
             volts unless its unit says another voltage, is converted to SI through it
 
     Returns a Measurement whose channels carry the OUTPUT names, in SI units when a unit
-    was given, and metadata: ``file``, ``sample_rate_source``, ``channel_map``, ``units``.
+    was given, and metadata: ``file``, ``sample_rate_source``, ``channel_map``, ``units``
+    (as given, in words) and ``si_units`` (output -> the SI unit it is now in).
     Every problem with the file raises MeasurementError naming it; a bad spec UsageError.
     """
     path = Path(path)
@@ -462,7 +463,7 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     if stray:
         raise UsageError(f"--sensitivity names channel(s) {', '.join(stray)} that are not "
                          "chosen")
-    selected, used_units = {}, {}
+    selected, used_units, si_units = {}, {}, {}
     for name, output in specs:
         values = columns[name]
         if values.size >= 2 and np.ptp(values) == 0:
@@ -475,16 +476,20 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
             factor, si = sensitivity_factor(unit or "V", sensitivity)
             values = values * factor
             used_units[output] = f"{unit or 'V'} at {sensitivity} -> {si}"
+            si_units[output] = si
         elif unit and is_voltage(unit):
             used_units[output] = f"{unit} (no sensitivity: the level is not known)"
         elif unit:
             factor, si = si_factor(unit)
             values = values * factor
             used_units[output] = f"{unit} -> {si}"
+            si_units[output] = si
         selected[output] = np.ascontiguousarray(values, dtype=float)
     metadata = {**table.metadata, "file": str(path), "sample_rate_source": source}
     if any(n != o for n, o in specs):
         metadata["channel_map"] = {o: n for n, o in specs}
     if used_units:
         metadata["units"] = used_units
+    if si_units:
+        metadata["si_units"] = si_units
     return Measurement(selected, float(rate), metadata)

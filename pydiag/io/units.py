@@ -26,6 +26,16 @@ def _registry():
     return pint.UnitRegistry()
 
 
+def dimension(unit: str) -> str | None:
+    """The SI unit of what ``unit`` measures ("m/s2", "m/s", "m"), or None: not a vibration
+    unit pint knows (a force, a voltage, a unit it cannot read)."""
+    try:
+        quantity = _registry().Quantity(1.0, _expression(unit))
+    except Exception:  # noqa: BLE001
+        return None
+    return DIMENSIONS.get(str(quantity.dimensionality))
+
+
 def si_factor(unit: str) -> tuple[float, str]:
     """(factor, SI unit): a value in ``unit`` times factor is the value in the SI unit.
 

@@ -4,6 +4,7 @@ and severity), what was analysed, and why the result may not be trusted. ``diagn
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,6 +23,14 @@ NO_DIAGNOSIS = "no_diagnosis"
 #: 1000), not a transfer path (a housing accelerometer sees the mesh attenuated by up to
 #: some hundred times).
 PLAUSIBLE_GAINS = (1 / 300, 300.0)
+#: Level ratios (record / model) that a unit mistake makes: g read as m/s2 and back, a
+#: milli- or micro- prefix missed, inches for metres. A ratio within UNIT_FACTOR_TOLERANCE
+#: of one of these on a record whose level the model predicts is named as one.
+UNIT_FACTORS = {9.80665: "g read as m/s2", 1 / 9.80665: "m/s2 read as g",
+                1000.0: "a milli- prefix missed", 1e-3: "a milli- prefix too many",
+                1e6: "a micro- prefix missed", 1e-6: "a micro- prefix too many",
+                39.37: "metres read as inches", 1 / 39.37: "inches read as metres"}
+UNIT_FACTOR_TOLERANCE = 0.15
 
 
 @dataclass
@@ -82,9 +91,32 @@ def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -
 
 
 def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None) -> Diagnosis:
-    """Fit ``problem`` and classify the estimate; the facts include the channel gains."""
-    fit = (estimator or FaultEstimator()).fit(problem)
-    return classified(problem, fit, problem.facts(fit.parameters))
+    """Fit ``problem`` and classify the estimate; the facts include the channel gains.
+
+    A record whose level the model is held to (no gain fitted) that the fit cannot explain
+    is fitted again with its level free: a gain that is a unit factor names the likely
+    unit mistake (:data:`UNIT_FACTORS`)."""
+    estimator = estimator or FaultEstimator()
+    fit = estimator.fit(problem)
+    result = classified(problem, fit, problem.facts(fit.parameters))
+    if not problem.fit_gain and not result.explained:
+        free = dataclasses.replace(problem, fit_gain=True)
+        refit = estimator.fit(free)
+        if not unexplained(free, refit.error):
+            result.warnings += unit_warnings(free.facts(refit.parameters)["gains"])
+    return result
+
+
+def unit_warnings(gains: dict[str, float]) -> list[str]:
+    """A warning for each channel whose fitted gain (model -> record) is a unit factor."""
+    found = []
+    for channel, gain in gains.items():
+        for factor, why in UNIT_FACTORS.items():
+            if gain > 0 and abs(np.log(gain / factor)) < np.log1p(UNIT_FACTOR_TOLERANCE):
+                found.append(f"channel {channel}: with its level free the model fits at "
+                             f"{gain:.3g}x the level it predicts, a unit factor ({why}?): "
+                             "check --unit, or fit the gain (--gain fit)")
+    return found
 
 
 def unexplained(problem: FitProblem, error: float) -> bool:

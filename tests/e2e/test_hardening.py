@@ -81,3 +81,22 @@ def test_discover_without_the_modelica_library_stops_before_any_work(gear_fmu, r
     res = run_cli("-m", "pydiag", "discover", "--fmu", str(gear_fmu), "--measurement",
                   str(record), "--modelica", str(tmp_path / "nonexistent"), *SMALL)
     one_line_error(res, "no Modelica library of effects", "--modelica")
+
+
+@pytest.mark.parametrize("unit, words", [("acc=furlong", ("displacement unit", "acceleration")),
+                                         ("disp=g", ("acceleration unit", "displacement"))])
+def test_a_unit_of_another_quantity_than_the_output_is_refused(gear_fmu, record, unit, words):
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(record), "--unit", unit, *SMALL)
+    one_line_error(res, *words, "--unit")
+
+
+def test_a_level_off_by_a_unit_factor_is_named(gear_fmu, record, tmp_path):
+    # a record pydiag simulate made is in m/s2 and its level is the model's: read as g, it
+    # is 9.81x too high, and no gain is fitted on such records
+    out = tmp_path / "d.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
+                  str(record), "--channel", "acc", "--unit", "acc=g", "--json", str(out),
+                  "--quiet")
+    assert "g read as m/s2" in res.stderr, res.stderr
+    assert json.loads(out.read_text())["fault_mode"] == "no_diagnosis"
