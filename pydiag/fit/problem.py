@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pydiag.core.errors import AdapterError, EstimationError, PlantError, UsageError
+from pydiag.core.errors import AdapterError, EstimationError, PlantError
 from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import Parameter, fmu_values
 from pydiag.fit.objective import spectral_residuals
@@ -41,8 +41,7 @@ from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.features import KinematicFeaturizer
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings
-from pydiag.io.units import dimension
-from pydiag.model.adapter import Adapter, check_against_fmu, gear_default
+from pydiag.model.adapter import Adapter, check_against_fmu, check_units, gear_default
 from pydiag.model.simulate import SIMULATED_SOURCE
 from pydiag.signal.features import Featurizer, SpectrumFeaturizer
 from pydiag.signal.spectra import Spectrum, whole_periods
@@ -225,22 +224,6 @@ def _check_variables(fmu_path: str, names: list[str]) -> None:
                               f"not in {Path(fmu_path).name}")
 
 
-def _check_units(measurement: Measurement, maps, variables: dict) -> None:
-    """UsageError where a channel's unit (converted with --unit) measures another quantity
-    than the model output it is compared with (a length read onto an acceleration)."""
-    given = measurement.metadata.get("si_units", {})
-    for s in maps:
-        si = given.get(s.channel)
-        model_unit = getattr(variables.get(s.variable), "unit", None)
-        expected = dimension(model_unit) if model_unit else None
-        if si and expected and si != expected:
-            words = {"m/s2": "an acceleration", "m/s": "a velocity", "m": "a displacement"}
-            raise UsageError(f"channel {s.channel} was given in {words[si]} unit ("
-                             f"{measurement.metadata.get('units', {}).get(s.channel, si)}), but "
-                             f"the model's output {s.variable} is {words[expected]} "
-                             f"({model_unit}): check --unit")
-
-
 def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: float,
                       warmup_s: float, period_s: float | None) -> np.ndarray:
     """``plant.simulate(values, duration_s, warmup_s)``, from one period when the model is
@@ -378,7 +361,7 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
                     raise EstimationError(f"fault parameter '{p.fmu_variable}' is not in "
                                           f"{plant.fmu_path.name}")
             fmu_kin = adapter.resolve_kinematics({**plant.parameters(), **plant.fixed_values})
-            _check_units(measurement, maps, plant.variables)
+            check_units(measurement, maps, plant.variables)
     except (PlantError, AdapterError) as err:
         raise EstimationError(str(err)) from err
     kin = resolve_operating_point(measurement, fmu_kin, kinematics, operating_point)

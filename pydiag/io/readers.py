@@ -333,8 +333,8 @@ def _check_spikes(path: Path, name: str, values: np.ndarray) -> None:
     deviation = np.abs(values - np.median(values))
     mad = float(np.median(deviation))
     worst = int(np.argmax(deviation))
-    if mad == 0 and deviation[worst] > 0:  # most samples one value: no signal
-        moving = int(np.count_nonzero(deviation))
+    moving = int(np.count_nonzero(deviation)) if mad == 0 else values.size
+    if 0 < moving < 3:  # one value but for a glitch or two: no signal, and no tacho either
         raise _fail(path, f"channel '{name}' holds one value ({np.median(values):g}) in all but "
                           f"{moving} of its {values.size} samples: a dead sensor with glitches?")
     if mad > 0 and deviation[worst] > MAX_SPIKE * mad:

@@ -47,11 +47,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from pydiag.core.errors import AdapterError, UsageError
+from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import Parameter
 from pydiag.fmu.description import FmuVariable, require_settable
 from pydiag.fmu.plant import DEFAULT_WARMUP_S, ENGINES, PlantSpec
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, KINEMATIC_PARAMETERS
 from pydiag.gear.kinematics import GearKinematics
+from pydiag.io.units import dimension
 
 #: Longest start-up an adapter may ask for, simulated seconds: it is simulated before every
 #: evaluation (a warm-up of 1e6 s made each evaluation run until its timeout).
@@ -306,3 +308,20 @@ def check_against_fmu(adapter: Adapter, variables: dict[str, FmuVariable]) -> No
         require_settable(variables, p.fmu_variable, f"{src}: fault parameter", AdapterError)
     for name in adapter.start_values:
         require_settable(variables, name, f"{src}: start value", AdapterError)
+
+
+def check_units(measurement: Measurement, maps: tuple[SensorMap, ...],
+                variables: dict[str, FmuVariable]) -> None:
+    """UsageError where a channel's unit (converted with --unit) measures another quantity
+    than the model output it is compared with (a length read onto an acceleration)."""
+    given = measurement.metadata.get("si_units", {})
+    for s in maps:
+        si = given.get(s.channel)
+        model_unit = getattr(variables.get(s.variable), "unit", None)
+        expected = dimension(model_unit) if model_unit else None
+        if si and expected and si != expected:
+            words = {"m/s2": "an acceleration", "m/s": "a velocity", "m": "a displacement"}
+            raise UsageError(f"channel {s.channel} was given in {words[si]} unit ("
+                             f"{measurement.metadata.get('units', {}).get(s.channel, si)}), but "
+                             f"the model's output {s.variable} is {words[expected]} "
+                             f"({model_unit}): check --unit")
