@@ -48,6 +48,7 @@ class BatchTask:
     problem: dict = field(default_factory=dict)  # build_problem settings (feature_mode, ...)
     units: tuple[str, ...] | None = None  # UNIT or NAME=UNIT specs
     indicators: str | None = None  # the shaft whose condition indicators are columns too
+    sensitivities: tuple[tuple[str, str], ...] = ()  # (NAME, sensitivity such as 100mV/g)
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -70,7 +71,8 @@ def diagnose_task(task: BatchTask) -> dict:
     try:
         m = read_measurement(task.measurement, task.sample_rate_hz,
                              list(task.channels) if task.channels else None,
-                             list(task.units) if task.units else None)
+                             list(task.units) if task.units else None,
+                             dict(task.sensitivities))
         adapter = load_adapter(task.adapter) if task.adapter else None
         problem = build_problem(task.fmu, m, adapter, **task.problem)
         result = diagnose(problem, FaultEstimator(n_workers=1, **task.estimator))
@@ -109,9 +111,15 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
         workers = n_workers or os.cpu_count() or 1
         if workers == 1:
             return _collect(tasks, diagnose_task, progress)
-        with ProcessPoolExecutor(workers) as pool:
-            futures = [pool.submit(diagnose_task, t) for t in tasks]
-            return _collect(futures, lambda f: f.result(), progress)
+        pool = ProcessPoolExecutor(workers, initializer=_die_with_parent)
+        try:
+            futures = [pool.submit(_task_in_worker, t) for t in tasks]
+            rows = _collect(futures, lambda f: f.result(), progress)
+        except BaseException:  # Ctrl-C, SIGTERM: stop the workers now, not after their tasks
+            _stop_workers(pool)
+            raise
+        pool.shutdown()
+        return rows
     client, owned = _dask_client(scheduler)
     try:
         futures = client.map(diagnose_task, tasks, pure=False)
@@ -119,6 +127,48 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
     finally:
         if owned:
             client.close()
+
+
+class _WorkerTerminated(BaseException):
+    """SIGTERM in a local worker: unwinds the task (its cleanup runs), then the worker ends."""
+
+
+def _worker_terminated(signum, frame) -> None:
+    raise _WorkerTerminated
+
+
+def _task_in_worker(task: BatchTask) -> dict:
+    """:func:`diagnose_task` in a local worker, which ends on SIGTERM once the task's own
+    cleanup has run (the executor would otherwise wait for its next task forever)."""
+    try:
+        return diagnose_task(task)
+    except _WorkerTerminated:
+        os._exit(143)
+
+
+def _die_with_parent() -> None:
+    """A local worker ends on SIGTERM, and is sent one when the batch's main process dies,
+    whatever killed it (Linux prctl PR_SET_PDEATHSIG; elsewhere nothing): its task's own
+    workers and run folder go with it (:mod:`pydiag.fmu.isolation`)."""
+    import ctypes
+    import signal
+    signal.signal(signal.SIGTERM, _worker_terminated)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        return
+    if os.getppid() == 1:  # the parent died before the call: follow it
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's workers (a SIGTERM each runs their cleanup), drop the queue."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _collect(items, result, progress) -> list[dict]:

@@ -295,7 +295,8 @@ def cmd_batch(args) -> int:
     channels = channels_to_read(args)
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem_settings(args),
-                             tuple(args.unit) if args.unit else None, args.indicators)
+                             tuple(args.unit) if args.unit else None, args.indicators,
+                             tuple(args.sensitivity or ()))
              for p in paths]
     bar = None
     if not args.quiet:

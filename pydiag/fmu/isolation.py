@@ -14,7 +14,9 @@ its pipe (not the parent's end, nor other workers' pipes). If the main process d
 without closing the pool (``kill -TERM`` with no handler, ``kill -KILL``, a crash), a
 janitor process forked first, which holds nothing but the read end of a pipe from the
 parent, sees that pipe close: it kills the workers the parent reported and removes the run
-folder, so no worker is left under PID 1 and no extracted FMU is left on disk.
+folder, so no worker is left under PID 1 and no extracted FMU is left on disk. Where the
+janitor dies too (SIGKILL of the whole process group), the folder, which names its owner,
+is removed by the next pool that starts (:func:`pydiag.core.leftovers.reclaim`).
 
 A pool whose first evaluations all time out (a hanging FMU, or a warm-up far too long)
 stops after one timeout per worker instead of after ``max_consecutive_failures`` of them.
@@ -36,6 +38,10 @@ from typing import Any
 import numpy as np
 
 from pydiag.core.errors import TooManyFailures
+from pydiag.core.leftovers import owner_tag, reclaim
+
+#: The run folders' names begin with this, then their owner (:mod:`pydiag.core.leftovers`).
+RUN_PREFIX = "pydiag_run_"
 
 
 @dataclass
@@ -162,7 +168,8 @@ class IsolatedPool:
         self.failures = FailureLog()
         self.successes = 0
         self.timeouts = 0
-        self.folder = tempfile.mkdtemp(prefix="pydiag_run_")
+        reclaim(tempfile.gettempdir(), RUN_PREFIX)  # folders of runs killed outright
+        self.folder = tempfile.mkdtemp(prefix=f"{RUN_PREFIX}{owner_tag()}_")
         self.workers: list[tuple[Any, Any]] = []
         self._janitor_fd = -1
         self._janitor = None

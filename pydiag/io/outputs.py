@@ -5,7 +5,8 @@
 - Nothing but the asked-for name is written in the user's folder: the content goes to a
   uniquely named temporary file beside the target (``tempfile``), which is renamed over
   the target when complete and removed on every failure, so an interrupted write leaves
-  neither a partial file nor a stray temporary one.
+  neither a partial file nor a stray temporary one. One left by a writer killed outright
+  (SIGKILL) names its owner and is removed by the next write of the same file.
 - :func:`check_output` can be called before a long computation, so that a result is never
   computed only to find that it cannot be written.
 """
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Iterator
 
 from pydiag.core.errors import OutputError
+from pydiag.core.leftovers import owner_tag, reclaim
 
 
 def check_output(path: str | Path, force: bool = False) -> Path:
@@ -54,8 +56,10 @@ def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
     """
     path = check_output(path, force)
     folder = path.parent if str(path.parent) else Path(".")
+    reclaim(folder, f".{path.name}.", ".tmp")  # left by a writer killed outright
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{owner_tag()}.", suffix=".tmp",
+                                   dir=folder)
     except OSError as err:
         raise OutputError(f"cannot write {path}: {err.strerror or err}") from err
     os.close(fd)

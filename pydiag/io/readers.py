@@ -58,6 +58,10 @@ TIME_TOLERANCE = 0.01
 RATE_TOLERANCE = 1e-3
 #: A sample this many times the channel's median absolute deviation from its median is refused.
 MAX_SPIKE = 1e6
+#: The most samples a channel may hold: order tracking upsamples a record eightfold, so
+#: this keeps one channel's analysis within about 2 GB (a record of 4 minutes at 66.7 kHz).
+#: A longer record is refused before it is read whole, with the bound named: cut it.
+MAX_SAMPLES = 16_000_000
 RATE_VARIABLES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "sampling_rate", "sr")
 TEXT_SUFFIXES = (".csv", ".tsv", ".txt", ".dat")
 SUFFIXES = TEXT_SUFFIXES + (".parquet", ".mat", ".wav", ".tdms", ".zip")
@@ -88,6 +92,23 @@ def _gzipped(path: Path) -> bool:
 def _open_text(path: Path):
     raw = gzip.open(path, "rb") if _gzipped(path) else open(path, "rb")
     return io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
+
+
+def _too_long(path: Path, n_samples: int) -> MeasurementError:
+    return _fail(path, f"{n_samples:,} samples a channel or more: pydiag reads at most "
+                       f"{MAX_SAMPLES:,} (a record of {MAX_SAMPLES / 66_667 / 60:.0f} minutes at "
+                       "66.7 kHz); cut the record into shorter ones")
+
+
+def _check_text_rows(path: Path) -> None:
+    """Count the lines without holding them (gzip streamed): refuse past MAX_SAMPLES."""
+    lines = 0
+    opener = gzip.open if _gzipped(path) else open
+    with opener(path, "rb") as fh:
+        while chunk := fh.read(1 << 22):
+            lines += chunk.count(b"\n")
+            if lines > MAX_SAMPLES + 100:  # a header and comments are not samples
+                raise _too_long(path, lines)
 
 
 def _head(path: Path, n_lines: int = 50) -> list[str]:
@@ -148,6 +169,7 @@ def _read_text(path: Path) -> _Table:
     else:
         names = [f"ch{i + 1}" for i in range(len(first))]
     fast = decimal == "." and delimiter != " " and not trailing
+    _check_text_rows(path)
     try:
         frame = pd.read_csv(path, sep=r"\s+" if delimiter == " " else delimiter,
                             skiprows=n_comments + (1 if has_header else 0), header=None,
@@ -201,6 +223,12 @@ def _read_parquet(path: Path) -> _Table:
     import pyarrow.parquet as pq
 
     try:
+        rows = pq.ParquetFile(path).metadata.num_rows
+    except Exception as err:  # noqa: BLE001
+        raise _fail(path, f"cannot read as Parquet: {err}") from err
+    if rows > MAX_SAMPLES:
+        raise _too_long(path, rows)
+    try:
         frame = pd.read_parquet(path, engine="pyarrow")
         kv = pq.read_schema(path).metadata or {}
     except Exception as err:  # pyarrow raises its own kinds on a damaged file  # noqa: BLE001
@@ -222,22 +250,47 @@ def _matrix_columns(name: str, value: np.ndarray, out: dict[str, np.ndarray]) ->
             out[f"{name}_{i + 1}"] = cols[:, i].astype(float)
 
 
+def _hdf5_datasets(path: Path) -> dict[str, np.ndarray]:
+    """Every dataset of a v7.3 MAT file (HDF5), a struct's fields named ``struct.field``
+    (MATLAB's ``#refs#`` group of cell contents is not data of its own)."""
+    import h5py
+
+    items: dict[str, np.ndarray] = {}
+
+    def visit(name: str, obj) -> None:
+        if isinstance(obj, h5py.Dataset) and not name.startswith("#refs#"):
+            if max(obj.shape, default=1) > MAX_SAMPLES:
+                raise _too_long(path, max(obj.shape))
+            items[name.replace("/", ".")] = np.asarray(obj)
+
+    try:
+        with h5py.File(path, "r") as f:
+            f.visititems(visit)
+    except OSError as err:
+        raise _fail(path, f"cannot read as a MATLAB v7.3 file: {err}") from err
+    return items
+
+
 def _read_mat(path: Path) -> _Table:
     import scipy.io
 
     variables: dict[str, np.ndarray] = {}
     try:
+        longest = max((max(shape, default=1) for _, shape, _ in scipy.io.whosmat(path)),
+                      default=0)
+        if longest > MAX_SAMPLES:
+            raise _too_long(path, longest)
         raw = scipy.io.loadmat(path)
         items = {k: v for k, v in raw.items() if not k.startswith("__")}
     except NotImplementedError:  # v7.3 is HDF5
-        import h5py
-        with h5py.File(path, "r") as f:
-            items = {k: np.asarray(v) for k, v in f.items() if isinstance(v, h5py.Dataset)}
+        items = _hdf5_datasets(path)
+    except MeasurementError:
+        raise
     except Exception as err:  # scipy raises several kinds on a non-MAT file  # noqa: BLE001
         raise _fail(path, f"cannot read as a MATLAB file: {err}") from err
     rate = None
-    for key in RATE_VARIABLES:
-        if key in items and np.asarray(items[key]).size == 1:
+    for key in list(items):  # a struct's rate field (rec.fs) is the rate too
+        if key.rsplit(".", 1)[-1] in RATE_VARIABLES and np.asarray(items[key]).size == 1:
             rate = float(np.asarray(items.pop(key)).ravel()[0])
             break
     for key, value in items.items():
@@ -246,12 +299,26 @@ def _read_mat(path: Path) -> _Table:
 
 
 def _read_wav(path: Path) -> _Table:
+    import warnings
+
     import scipy.io.wavfile
 
     try:
-        rate, data = scipy.io.wavfile.read(path)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", scipy.io.wavfile.WavFileWarning)
+            rate, data = scipy.io.wavfile.read(path, mmap=True)
+            if len(data) > MAX_SAMPLES:
+                raise _too_long(path, len(data))
+            data = np.array(data)
     except (ValueError, OSError, EOFError) as err:
+        if "mmap length is greater than file size" in str(err):
+            raise _fail(path, "the WAV file is truncated: its header promises more samples "
+                              "than it holds") from err
         raise _fail(path, f"cannot read as WAV: {err}") from err
+    for w in caught:
+        if "EOF" in str(w.message):  # the header promises more than the file holds
+            raise _fail(path, f"the WAV file is truncated ({w.message}): its header promises "
+                              "more samples than it holds")
     if data.dtype.kind in "iu":
         info = np.iinfo(data.dtype)
         data = (data.astype(float) - (info.max + 1 if data.dtype.kind == "u" else 0)) / (info.max + 1)
@@ -263,6 +330,13 @@ def _read_wav(path: Path) -> _Table:
 def _read_tdms(path: Path) -> _Table:
     from nptdms import TdmsFile
 
+    try:
+        longest = max((len(c) for g in TdmsFile.read_metadata(path).groups()
+                       for c in g.channels()), default=0)
+    except Exception as err:  # noqa: BLE001
+        raise _fail(path, f"cannot read as TDMS: {err}") from err
+    if longest > MAX_SAMPLES:
+        raise _too_long(path, longest)
     try:
         tdms = TdmsFile.read(path)
     except Exception as err:  # npTDMS raises several kinds on a damaged file  # noqa: BLE001

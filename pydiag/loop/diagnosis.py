@@ -114,7 +114,7 @@ def unit_warnings(gains: dict[str, float]) -> list[str]:
         for factor, why in UNIT_FACTORS.items():
             if gain > 0 and abs(np.log(gain / factor)) < np.log1p(UNIT_FACTOR_TOLERANCE):
                 found.append(f"channel {channel}: with its level free the model fits at "
-                             f"{gain:.3g}x the level it predicts, a unit factor ({why}?): "
+                             f"{gain:.4g}x the level it predicts, a unit factor ({why}?): "
                              "check --unit, or fit the gain (--gain fit)")
     return found
 

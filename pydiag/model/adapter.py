@@ -126,6 +126,12 @@ class Adapter:
             return {}
         wanted = {"n_pinion": kinematics.n_pinion, "n_gear": kinematics.n_gear,
                   "f_pinion_hz": kinematics.f_pinion_hz}
+        for name in ("n_pinion", "n_gear"):
+            fixed = self.kinematics[name]
+            if fixed.parameter is None and round(fixed.value) != wanted[name]:
+                raise UsageError(f"{self.source}: [kinematics] fixes {name} = {fixed.value:g} "
+                                 "(the FMU's teeth cannot be set), but the operating point "
+                                 f"asks for {wanted[name]} (--teeth, or the record's own)")
         return {q.parameter: float(wanted[name]) / q.scale
                 for name, q in self.kinematics.items() if q.parameter is not None}
 

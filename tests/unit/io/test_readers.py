@@ -116,6 +116,31 @@ def test_mat_v73_through_h5py(tmp_path, signals):
     assert m.sample_rate_hz == FS
 
 
+def test_mat_v73_struct_fields_are_channels(tmp_path, signals):
+    """A v7.3 struct is an HDF5 group: its fields were not read ('no signal column')."""
+    import h5py
+    path = tmp_path / "s73.mat"
+    with h5py.File(path, "w", userblock_size=512) as f:
+        f["rec/a1"] = signals["a1"][None, :]
+        f["rec/fs"] = np.array([[FS]])
+        f["#refs#/x"] = np.zeros((1, 3))  # MATLAB's cell contents: not a channel
+    with open(path, "r+b") as fh:
+        fh.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64".ljust(116) + b"\x00" * 8
+                 + b"\x00\x02IM")
+    m = read_measurement(path)
+    assert list(m.channels) == ["rec.a1"] and m.sample_rate_hz == FS
+    np.testing.assert_array_equal(m.channels["rec.a1"], signals["a1"])
+
+
+def test_a_truncated_wav_is_refused_in_one_line(tmp_path, signals):
+    path = tmp_path / "r.wav"
+    scipy.io.wavfile.write(path, int(FS), np.round(signals["a2"] * 16000).astype(np.int16))
+    path.write_bytes(path.read_bytes()[:-1000])
+    with pytest.raises(MeasurementError, match="truncated.*promises more samples") as err:
+        read_measurement(path)
+    assert "\n" not in str(err.value)
+
+
 def test_wav_int16_is_scaled_to_full_scale(tmp_path, signals):
     data = np.column_stack([np.round(signals["a2"] * 16000), np.zeros(N)]).astype(np.int16)
     data[0, 1] = 5
@@ -266,3 +291,49 @@ def test_an_empty_unit_and_a_column_chosen_twice_are_refused(tmp_path, signals):
         read_measurement(path, FS, ["a1=acc", "a1=disp"])
     with pytest.raises(UsageError, match="same output"):
         read_measurement(path, FS, ["a1=acc", "a2=acc"])
+
+
+@pytest.mark.parametrize("fmt", ["csv", "csv.gz", "parquet", "mat", "wav", "tdms"])
+def test_a_record_past_the_bound_is_refused_before_it_is_read(tmp_path, monkeypatch, fmt):
+    from pydiag.io import readers
+    monkeypatch.setattr(readers, "MAX_SAMPLES", 1000)
+    x = np.sin(np.arange(1500) / 7.0)
+    path = tmp_path / f"long.{fmt}"
+    if fmt.startswith("csv"):
+        pd.DataFrame({"acc": x}).to_csv(path, index=False)
+    elif fmt == "parquet":
+        pd.DataFrame({"acc": x}).to_parquet(path)
+    elif fmt == "mat":
+        scipy.io.savemat(path, {"acc": x, "fs": FS})
+    elif fmt == "wav":
+        scipy.io.wavfile.write(path, int(FS), (x * 1000).astype(np.int16))
+    else:
+        from nptdms import ChannelObject, TdmsWriter
+        with TdmsWriter(path) as w:
+            w.write_segment([ChannelObject("g", "acc", x, properties={"wf_increment": 1 / FS})])
+    with pytest.raises(MeasurementError, match="pydiag reads at most 1,000"):
+        read_measurement(path, FS)
+    monkeypatch.setattr(readers, "MAX_SAMPLES", 2000)
+    assert read_measurement(path, FS).n_samples == 1500
+
+
+def test_fifty_million_rows_are_refused_in_little_memory(tmp_path):
+    """A 50-million-row gzip (a few MB) took 11 GB: counted streamed, it is refused."""
+    import gzip
+    import resource
+    import subprocess
+    import sys
+    path = tmp_path / "huge.csv.gz"
+    with gzip.open(path, "wb", compresslevel=1) as fh:
+        fh.write(b"acc\n")
+        chunk = b"0.5\n" * 1_000_000
+        for _ in range(50):
+            fh.write(chunk)
+    code = ("import sys\nfrom pydiag.io.readers import read_measurement\n"
+            "try:\n    read_measurement(sys.argv[1], 10000.0)\n"
+            "except Exception as e:\n    print(type(e).__name__, e)\n")
+    res = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True,
+                         text=True)
+    assert "MeasurementError" in res.stdout and "at most" in res.stdout, res
+    peak_kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    assert peak_kb < 2 * 1024 * 1024, peak_kb

@@ -66,3 +66,16 @@ def test_the_adapter_sets_the_evaluation_timeout():
     adapter = parse_adapter({**MINIMAL, "simulation": {"eval_timeout_s": 2.5}}, "a.toml")
     assert adapter.eval_timeout_s == 2.5
     assert parse_adapter(MINIMAL, "a.toml").eval_timeout_s is None
+
+
+def test_fixed_teeth_that_contradict_the_operating_point_are_refused():
+    """An adapter's fixed teeth overrode --teeth without a word."""
+    from pydiag.core.errors import UsageError
+    from pydiag.gear.kinematics import GearKinematics
+    data = {**MINIMAL, "spectrum": None,
+            "kinematics": {"n_pinion": 14, "n_gear": 21, "f_pinion_hz": {"parameter": "n"}}}
+    adapter = parse_adapter({k: v for k, v in data.items() if v is not None}, "a.toml")
+    assert adapter.kinematic_values(GearKinematics(14, 21, 30.0)) == {"n": 30.0}
+    with pytest.raises(UsageError, match=r"a.toml: \[kinematics\] fixes n_pinion = 14 .* "
+                                         "asks for 32"):
+        adapter.kinematic_values(GearKinematics(32, 21, 30.0))
