@@ -31,6 +31,21 @@ def gear_fmu(tmp_path_factory) -> Path:
     return build_fmu(GEARPAIR_MO, "GearDiag.GearPair", out)
 
 
+@pytest.fixture(scope="session")
+def effects_dir(tmp_path_factory) -> Path:
+    """Where the catalogue's effect FMUs are built on first use: `make fmu`'s build/effects
+    when every one there is up to date with the Modelica sources (make test builds them
+    first), else a folder of this test session. A test that is about building gives its
+    own folder."""
+    effects = ROOT / "modelica" / "GearDiag" / "Effects"
+    newest = max(p.stat().st_mtime for p in (ROOT / "modelica").rglob("*.mo"))
+    built = [ROOT / "build" / "effects" / f"{name}.fmu"
+             for name in (effects / "package.order").read_text().split()]
+    if all(f.exists() and f.stat().st_mtime >= newest for f in built):
+        return built[0].parent
+    return tmp_path_factory.mktemp("effects")
+
+
 @pytest.fixture
 def modelica_copy(tmp_path) -> Path:
     """A scratch copy of the GearDiag package, safe to edit."""
@@ -113,3 +128,13 @@ def alive(pid: int) -> bool:
     except OSError:
         return False
     return state not in ("Z", "X")
+
+
+#: Test files whose tests take the longest (the loop on the independent simulator):
+#: collected first, so that under xdist no long test starts last and runs alone.
+LONGEST_FIRST = ("test_truth_loop.py", "test_compare_loop.py")
+
+
+def pytest_collection_modifyitems(session, config, items):
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))

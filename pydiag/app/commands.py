@@ -98,9 +98,6 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
-#: The mesh lines' speed may differ from a tacho's by this much (%) before a warning: ten
-#: times what the mesh search measures on real records, far below a wrong pulse count.
-TACHO_TOLERANCE_PCT = 0.1
 #: The commands that fit a pair model: a machine of several stages is not theirs yet.
 PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
 
@@ -273,12 +270,9 @@ def _machine_indicators(args, machine: Machine, m: Measurement, speed: SpeedSett
     baselines = [read_input(args, path) for path in args.baseline or []]
     report = machine_report(m, machine, speed, args.rpm / 60.0, baselines)
     print(format_machine_report(report))
-    s = report.record.speed
-    disagree = s.tacho_disagreement_pct
-    if disagree is not None and abs(disagree) > TACHO_TOLERANCE_PCT:
-        print(f"pydiag indicators: warning: the mesh lines give {s.mesh_speed_hz:.5f} Hz, "
-              f"{disagree:+.3f} % from the tacho's {s.speed_hz:.5f} Hz: check the tacho "
-              "channel and --pulses-per-rev", file=sys.stderr)
+    warning = report.record.speed.tacho_warning()
+    if warning:
+        print(f"pydiag indicators: warning: {warning}", file=sys.stderr)
     if args.json:
         out = {**report.to_dict(), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)

@@ -136,6 +136,9 @@ def fit_warnings(problem: FitProblem, error: float,
                      "measured lines): the model explains none of the record; "
                      f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "
                      "a larger budget")
+    speed = problem.speed.tacho_warning() if problem.speed is not None else None
+    if speed:
+        found.append(speed)
     low, high = PLAUSIBLE_GAINS
     for channel, gain in (gains or {}).items():
         if not low <= gain <= high:

@@ -39,11 +39,10 @@ def problem_of(fmu, m: Measurement):
 
 
 @pytest.fixture(scope="module")
-def effect_fmu_of(tmp_path_factory):
+def effect_fmu_of(effects_dir):
     """Effect -> its FMU, built on first use (what compare's validation asks for)."""
     from pydiag.loop.discover import effect_fmu
-    folder = tmp_path_factory.mktemp("catalogue")
-    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", folder))
+    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", effects_dir))
 
 
 @pytest.fixture(scope="module")
@@ -96,14 +95,14 @@ def test_adding_the_effect_recovers_it_and_explains_the_peaks(gear_fmu, effect_f
     assert not [s for s in with_effect.suggested_effects if s.score >= 0.5]
 
 
-def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path):
+def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path, effects_dir):
     meas = tmp_path / "m.csv"
     write_measurement(meas, record(effect_fmus["gear_eccentricity"], periods=10))
     out, db = tmp_path / "c.json", tmp_path / "h.sqlite"
     args = ["-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--measurement", str(meas),
             "--json", str(out), "--history", str(db), "--source", str(GEARPAIR_MO),
             "--particles", "8", "--iterations", "6", "--polish", "60", "--quiet",
-            "--build-dir", str(tmp_path / "fmus")]
+            "--build-dir", str(effects_dir)]
     res = run_cli(*args)
     assert res.returncode == 0, res.stderr
     data = json.loads(out.read_text())
@@ -180,7 +179,7 @@ def test_cli_discover_ranks_the_hidden_effect_first(gear_fmu, effect_fmus, tmp_p
 
 
 def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, effect_fmus,
-                                                                       tmp_path):
+                                                                       tmp_path, effects_dir):
     """discover fits effects side by side, one per core, the ones that are not synchronous
     first; the same rows come out of one effect at a time."""
     from pydiag.loop.discover import discover
@@ -190,7 +189,8 @@ def test_discover_rows_do_not_depend_on_how_many_effects_run_at_once(gear_fmu, e
     for workers in (1, 2):
         seen = []
         _, found = discover(problem, FaultEstimator(**FAST),
-                            effects=["gear_eccentricity", "load_fluctuation"], build_dir=tmp_path,
+                            effects=["gear_eccentricity", "load_fluctuation"],
+                            build_dir=effects_dir,
                             progress=seen.append,
                             effect_estimator=FaultEstimator(**EFFECT_REFIT, n_workers=workers))
         assert sorted(d.effect for d in seen) == ["gear_eccentricity", "load_fluctuation"]
@@ -251,11 +251,11 @@ def test_an_effect_none_of_whose_lines_is_scored_is_not_fitted(gear_fmu, effect_
 
 @pytest.mark.slow
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
-def test_discover_picks_the_hidden_effect(gear_fmu, effect_fmus, effect, tmp_path):
+def test_discover_picks_the_hidden_effect(gear_fmu, effect_fmus, effect, tmp_path, effects_dir):
     from pydiag.loop.discover import discover
     base, found = discover(problem_of(gear_fmu, record(effect_fmus[effect], periods=10)),
                            FaultEstimator(**FAST),
-                           build_dir=tmp_path)
+                           build_dir=effects_dir)
     assert found[0].effect == effect, [(d.effect, d.message) for d in found]
     assert found[0].held_out.delta_bic < 0
 
@@ -351,7 +351,7 @@ high = {high}
 
 
 def test_cli_compare_effect_through_an_adapter_whose_roles_are_not_variables(effect_fmus,
-                                                                            tmp_path):
+                                                                            tmp_path, effects_dir):
     """The refit holds the base fit's parameters, named by role, at their FMU variables."""
     meas, adapter, out = tmp_path / "m.csv", tmp_path / "roles.toml", tmp_path / "c.json"
     write_measurement(meas, record(effect_fmus["gear_eccentricity"], periods=10))
@@ -360,7 +360,7 @@ def test_cli_compare_effect_through_an_adapter_whose_roles_are_not_variables(eff
                   "--effect", "gear_eccentricity", "--adapter", str(adapter),
                   "--measurement", str(meas), "--json", str(out), "--history",
                   str(tmp_path / "h.sqlite"), "--particles", "8", "--iterations", "6",
-                  "--polish", "60", "--quiet", "--build-dir", str(tmp_path / "fmus"))
+                  "--polish", "60", "--quiet", "--build-dir", str(effects_dir))
     assert res.returncode == 0, res.stderr
     data = json.loads(out.read_text())
     assert data["parameters"]["ecc_gear"] == pytest.approx(10e-6, rel=0.1)

@@ -87,9 +87,8 @@ def resonance_records():
 
 
 @pytest.fixture(scope="module")
-def effect_fmu_of(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("catalogue")
-    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", folder))
+def effect_fmu_of(effects_dir):
+    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", effects_dir))
 
 
 def validated(gear_fmu, clean, seed, effect_fmu_of, operating_point=OPERATING_POINT):
@@ -123,14 +122,17 @@ def test_hidden_lines_stand_above_the_noise(truth_records, effect):
     assert max(margins) > 20
 
 
-def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effect_fmu_of):
+@pytest.mark.parametrize("seeds", [(5, 6), pytest.param((7,), marks=pytest.mark.slow)])
+def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effect_fmu_of,
+                                                  seeds):
+    """Seeds 5 and 6 in make test, 7 in make test-slow."""
     tried = []
-    for seed in (5, 6, 7):
+    for seed in seeds:
         c = validated(gear_fmu, truth_records["none"], seed, effect_fmu_of)
         tried += [s for s in c.suggested_effects if s.held_out]
         assert not [s for s in c.suggested_effects if s.confident], \
             [(s.effect, s.message) for s in c.suggested_effects]
-    assert tried  # on some seed the base model's misfit pointed somewhere, and was checked
+    assert tried or seeds == (7,)  # the base model's misfit pointed somewhere, and was checked
 
 
 #: The effects discover tries on the simulator's records (the base has the others).
@@ -156,7 +158,7 @@ def assert_discovered_first(found, effect):
 
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, effect_fmu_of,
-                                                     tmp_path, effect):
+                                                     tmp_path, effect, effects_dir):
     """Seed 5: discover ranks the hidden effect first and alone, and compare's validation,
     given discover's held-out verdicts on the same comparison (the same fits it would
     make), makes it the one confident suggestion."""
@@ -165,7 +167,7 @@ def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, ef
                             operating_point=OPERATING_POINT)
     c = compare(problem, FaultEstimator(**FAST))
     base, found = discover(problem, effects=DISCOVERED, modelica_root=ROOT / "modelica",
-                           build_dir=tmp_path, base=c)
+                           build_dir=effects_dir, base=c)
     assert base is c
     assert_discovered_first(found, effect)
     tried = {d.effect: d.held_out for d in found if d.held_out is not None}
@@ -209,14 +211,14 @@ def test_backlash_at_the_mesh_resonance_is_the_one_confident_suggestion(
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [5, 6, 7])
 def test_discover_ranks_backlash_first_at_the_mesh_resonance(gear_fmu, resonance_records,
-                                                             tmp_path, seed):
+                                                             tmp_path, seed, effects_dir):
     """Among backlash and the effects whose lines it shares."""
     problem = resonance_problem(gear_fmu, resonance_records["backlash"], seed)
     _, found = discover(problem, FaultEstimator(**FAST),
                         effects=["backlash", "gear_eccentricity", "gear_tooth_fault",
                                  "second_pinion_tooth_fault", "housing_sensor",
                                  "load_fluctuation", "speed_fluctuation"],
-                        modelica_root=ROOT / "modelica", build_dir=tmp_path)
+                        modelica_root=ROOT / "modelica", build_dir=effects_dir)
     assert found[0].effect == "backlash" and found[0].confident, found
     assert all(not d.confident for d in found[1:]), found
 
@@ -225,13 +227,13 @@ def test_discover_ranks_backlash_first_at_the_mesh_resonance(gear_fmu, resonance
 @pytest.mark.parametrize("seed", [6, 7])
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_discover_ranks_the_hidden_effect_first(gear_fmu, truth_records, tmp_path, effect,
-                                                seed):
+                                                seed, effects_dir):
     """Seeds 6 and 7 in `make test-slow` (seed 5 in `make test`, with compare, above)."""
     m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=truth_records[effect])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point=OPERATING_POINT)
     _, found = discover(problem, FaultEstimator(**FAST), effects=DISCOVERED,
-                        modelica_root=ROOT / "modelica", build_dir=tmp_path)
+                        modelica_root=ROOT / "modelica", build_dir=effects_dir)
     assert_discovered_first(found, effect)
 
 
@@ -307,7 +309,7 @@ def test_an_affine_strike_amplitude_is_fitted_from_two_simulations(gear_fmu, tru
 
 
 def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_records,
-                                                              tmp_path):
+                                                              tmp_path, effects_dir):
     """The command line, whose base fit is GearPair's paper parameters with a channel gain
     (bent here: the gain is 0.09): the outer race is confirmed on the envelope, with that
     gain held, and says so in the text, the JSON and the report; its strike, at the
@@ -320,7 +322,7 @@ def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_r
                   "--bearing", "9,7.94,39.04", "--json", str(out), "--report", str(page),
                   "--history", str(tmp_path / "h.sqlite"), "--particles", "10",
                   "--iterations", "8", "--polish", "100", "--quiet",
-                  "--build-dir", str(tmp_path / "fmus"))
+                  "--build-dir", str(effects_dir))
     assert res.returncode == 0, res.stderr
     line = next(ln for ln in res.stdout.splitlines() if "bearing_outer_race" in ln)
     assert "CONFIDENT, confirmed held out" in line and "envelope" in line, line
@@ -335,7 +337,7 @@ def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_r
 
 
 def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_records,
-                                                           effect_fmu_of, tmp_path):
+                                                           effect_fmu_of, tmp_path, effects_dir):
     """The loop on the command line, on the motor shaft's record: compare, told the motor
     shaft's ratio (--other-shaft 29/17), names its lines and makes other_shaft_orders the
     one confident suggestion; compare of its model (--effect) fits its orders at the
@@ -345,7 +347,7 @@ def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_recor
                                    clean=truth_records["other_shaft_orders"]))
     common = ["--measurement", str(meas), "--other-shaft", "29/17", "--history", str(db),
               "--particles", "10", "--iterations", "8", "--polish", "100", "--quiet",
-              "--build-dir", str(tmp_path / "fmus")]
+              "--build-dir", str(effects_dir)]
     res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--json",
                   str(tmp_path / "base.json"), *common)
     assert res.returncode == 0, res.stderr

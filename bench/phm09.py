@@ -1,0 +1,87 @@
+"""Records in the PHM 2009 challenge's naming (``spur N_XXhz_Load_R``, zipped or not), seen
+through the machine file: the speed from every mesh against the tacho's, and every stage
+judged against the healthy records (case ``spur 1``) of the same speed and load, each
+record leaving itself out. Prints a table a record and the time each took. Usage:
+
+    .venv/bin/python bench/phm09.py [DIR]     # default ../shared/data/phm09
+
+Labels: ``spur 1`` all good; ``spur 2`` the 32-tooth input pinion chipped and the
+48-tooth idler pinion eccentric (both stages); other cases are shown without a label.
+Cite the PHM Society 2009 Data Challenge where you report results.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import re
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pydiag.gear.machine import load_machine  # noqa: E402
+from pydiag.gear.machine_indicators import judge_stages, machine_record  # noqa: E402
+from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
+from pydiag.io.readers import read_measurement  # noqa: E402
+
+NAME = re.compile(r"spur (\d+)_(\d+)hz_(High|Low)_(\d+)")
+RATE_HZ = 200_000 / 3
+LABELS = {1: ("healthy", "healthy"), 2: ("changed", "changed")}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folder", nargs="?", default=str(ROOT.parent / "shared" / "data" / "phm09"))
+    args = ap.parse_args()
+    machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
+    files = sorted(p for p in Path(args.folder).iterdir() if NAME.search(p.name)
+                   and p.suffix in (".zip", ".txt"))
+    if not files:
+        print(f"no record named like 'spur 1_30hz_High_1' in {args.folder}", file=sys.stderr)
+        return 2
+    print(f"# {platform.machine()}, {platform.python_version()}, {len(files)} records")
+    seen = {}
+    for path in files:
+        case, hz, load, run = NAME.search(path.name).groups()
+        started = time.perf_counter()
+        m = read_measurement(path, RATE_HZ)
+        kin = machine.stage_kinematics(0, float(hz))
+        tacho = estimate_speed(m, kin, SpeedSettings("tacho", tacho="ch3", pulses_per_rev=10))
+        record = machine_record(m, machine, SpeedSettings("mesh", tacho="ch3"), float(hz))
+        seen[path.name] = (int(case), hz, load, record, time.perf_counter() - started,
+                           tacho.speed_hz)
+    print(f"{'record':<24}{'tacho Hz':>10}{'mesh Hz':>10}{'err %':>9}{'conf dB':>8}  "
+          f"{'stage 1':<22}{'stage 2':<22}{'label':<18}{'s':>5}")
+    right = total = 0
+    for name, (case, hz, load, record, took, tacho_hz) in seen.items():
+        baselines = [r for n, (c, h, ld, r, _, _) in seen.items()
+                     if c == 1 and h == hz and ld == load and n != name]
+        speed = record.speed
+        cells = []
+        if baselines:
+            verdicts, _ = judge_stages(machine, record, baselines)
+            cells = [f"{'changed' if v.changed else 'healthy'}"
+                     f"{', ' + v.suspect if v.suspect else ''} "
+                     f"{max(abs(v.pinion.change_db), abs(v.gear.change_db)):.1f}dB"
+                     for v in verdicts]
+            label = LABELS.get(case)
+            if label:
+                total += 2
+                right += sum(v == lab for v, lab in
+                             zip(("changed" if v.changed else "healthy" for v in verdicts),
+                                 label))
+        label_text = "/".join(LABELS.get(case, ("?", "?")))
+        cells = cells or ["no baseline", ""]
+        print(f"{name[:23]:<24}{tacho_hz:>10.4f}{speed.speed_hz:>10.4f}"
+              f"{100 * (speed.speed_hz / tacho_hz - 1):>+9.4f}{speed.confidence_db:>8.1f}  "
+              f"{cells[0]:<22}{cells[1]:<22}{label_text:<18}{took:>5.1f}")
+    if total:
+        print(f"stage verdicts as labelled: {right} of {total}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
