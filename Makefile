@@ -2,6 +2,8 @@
 # The venv is created and the pinned dependencies installed on first use.
 
 PYTHON_BOOT ?= python3
+# the FMUs build side by side, one per core
+MAKEFLAGS += --jobs=$(shell nproc 2>/dev/null || echo 2)
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed

@@ -122,17 +122,17 @@ def test_hidden_lines_stand_above_the_noise(truth_records, effect):
     assert max(margins) > 20
 
 
-@pytest.mark.parametrize("seeds", [(5, 6), pytest.param((7,), marks=pytest.mark.slow)])
+@pytest.mark.parametrize("seeds", [(5,), pytest.param((6, 7), marks=pytest.mark.slow)])
 def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effect_fmu_of,
                                                   seeds):
-    """Seeds 5 and 6 in make test, 7 in make test-slow."""
+    """Seed 5 in make test (as for every hidden effect), 6 and 7 in make test-slow."""
     tried = []
     for seed in seeds:
         c = validated(gear_fmu, truth_records["none"], seed, effect_fmu_of)
         tried += [s for s in c.suggested_effects if s.held_out]
         assert not [s for s in c.suggested_effects if s.confident], \
             [(s.effect, s.message) for s in c.suggested_effects]
-    assert tried or seeds == (7,)  # the base model's misfit pointed somewhere, and was checked
+    assert tried  # the base model's misfit pointed somewhere, and was checked
 
 
 #: The effects discover tries on the simulator's records (the base has the others).
