@@ -234,6 +234,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("diagnose", help="estimate fault parameters from a measurement")
     p.add_argument("--fmu", required=True)
     _measurement_args(p)
+    p.add_argument("--baseline", metavar="FILE", action="append",
+                   help="with --machine: a record of the machine in a known healthy state, "
+                   "every stage judged against it (repeat for more)")
     p.add_argument("--json", help="write the result as JSON here")
     _force(p)
     _optimiser_args(p)

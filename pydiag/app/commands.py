@@ -10,7 +10,8 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.formatting import (format_facts, format_indicators, format_machine_report,
+from pydiag.app.formatting import (format_facts, format_indicators,
+                                   format_machine_diagnosis, format_machine_report,
                                    format_regression, format_result)
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
@@ -30,6 +31,7 @@ from pydiag.io.readers import parse_units, read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
 from pydiag.loop.diagnosis import Diagnosis, diagnose
+from pydiag.loop.stages import diagnose_machine
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement
 
@@ -98,7 +100,8 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
-#: The commands that fit a pair model: a machine of several stages is not theirs yet.
+#: The commands that fit a pair model; of these, diagnose fits every stage of a machine,
+#: the others one pair (a machine of several stages is not theirs yet).
 PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
 
 
@@ -115,10 +118,12 @@ def apply_machine(args) -> Machine | None:
         raise UsageError("--teeth and --machine both give the gears' teeth: give one")
     machine = load_machine(args.machine)
     fits = args.command in PAIR_COMMANDS
-    if fits and len(machine.stages) > 1:
+    staged = len(machine.stages) > 1
+    if fits and staged and args.command != "diagnose":
         raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
-                         "one gear pair (per-stage fits are not built yet): `pydiag indicators "
-                         "--machine` judges every stage against a baseline")
+                         "one gear pair (per-stage comparisons are not built yet): `pydiag "
+                         "diagnose --machine` fits every stage, `pydiag indicators --machine` "
+                         "judges every stage against a baseline")
     if args.rpm is None:
         if machine.input_hz is None:
             raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
@@ -134,8 +139,8 @@ def apply_machine(args) -> Machine | None:
             args.pulses_per_rev = tacho.pulses_per_rev
     if args.pulses_per_rev is None:
         args.pulses_per_rev = 1
-    if not args.channel and machine.sensors:
-        args.channel = [f"{s.channel}={s.output}" if fits else s.channel
+    if not args.channel and machine.sensors:  # a staged fit picks each stage's own
+        args.channel = [f"{s.channel}={s.output}" if fits and not staged else s.channel
                         for s in machine.sensors]
     given_units = parse_units(args.unit)
     if None not in given_units:
@@ -145,7 +150,7 @@ def apply_machine(args) -> Machine | None:
     args.sensitivity = list(args.sensitivity or []) + [
         (s.channel, s.sensitivity) for s in machine.sensors
         if s.sensitivity and s.channel not in given]
-    if fits:
+    if fits and not staged:
         stage = machine.stages[0]
         args.teeth = (stage.pinion_teeth, stage.gear_teeth)
         bearing = next((b.bearing for b in machine.bearings if b.shaft == 0), None)
@@ -219,6 +224,12 @@ def cmd_simulate(args) -> int:
 def cmd_diagnose(args) -> int:
     check_outputs(args, "json")
     m = read_input(args)
+    machine = args.machine_description
+    if machine is not None and len(machine.stages) > 1:
+        return _diagnose_stages(args, machine, m)
+    if args.baseline:
+        raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
+                         "with its stages")
     problem = problem_of(args, m)
     result = fit(args, problem)
     print(format_result(result))
@@ -230,6 +241,28 @@ def cmd_diagnose(args) -> int:
                "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0 if result.explained else 1
+
+
+def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
+    """diagnose --machine with several stages: every stage fitted, judged against the
+    baselines when there are some."""
+    settings = problem_settings(args)
+    baselines = [read_input(args, path) for path in args.baseline or []]
+    update, close = progress_bar(args.quiet)
+    try:
+        result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
+                                  FaultEstimator(**estimator_settings(args), progress=update),
+                                  baselines, adapter_of(args), settings["feature_mode"],
+                                  settings["fit_gain"])
+    finally:
+        close()
+    print(format_machine_diagnosis(result))
+    for warning in result.warnings:
+        print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
+    if args.json:
+        out = {**result.to_dict(), "measurement": str(args.measurement)}
+        write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
+    return 0 if all(s.fit.explained for s in result.stages) else 1
 
 
 def record_kinematics(args, measurement: Measurement) -> GearKinematics:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.machine_indicators import MachineReport
 from pydiag.loop.diagnosis import Diagnosis
+from pydiag.loop.stages import MachineDiagnosis
 from pydiag.loop.results import Comparison, Discovery, Status
 from pydiag.loop.regress import RegressionReport
 
@@ -159,4 +160,31 @@ def format_machine_report(report: MachineReport) -> str:
         lines.append(f"{v.stage:<16}{f'{v.pinion_teeth}/{v.gear_teeth}':>7}{v.mesh_hz:>10.2f}"
                      f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}  {verdict}")
     lines.append(f"baselines  : {', '.join(report.baselines)}")
+    return "\n".join(lines)
+
+
+def format_machine_diagnosis(result: MachineDiagnosis) -> str:
+    """The speed, then a row per stage: teeth, mesh, the fit's tooth contrast and TE levels,
+    error, and the verdict."""
+    s = result.speed
+    confidence = ("" if s.confidence_db is None
+                  else f"; stands {s.confidence_db:.1f} dB over the next candidate")
+    lines = [f"machine    : {result.machine.name}, {len(result.stages)} stages",
+             f"speed      : {s.speed_hz:.5f} Hz input ({60 * s.speed_hz:.2f} rpm; nominal "
+             f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}{confidence}",
+             "", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'contrast':>10}{'f_ate':>7}"
+             f"{'f_dte':>7}{'error':>8}  {'fault mode':<20}{'severity':<10}suspect"]
+    for st in result.stages:
+        p = st.fit.parameters
+        contrast = st.fit.tooth_contrast
+        lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"
+                     f"{contrast if contrast is not None else float('nan'):>10.3f}"
+                     f"{p.get('f_ate', float('nan')):>7.3f}{p.get('f_dte', float('nan')):>7.3f}"
+                     f"{st.fit.error:>8.3f}  {st.fault_mode:<20}{st.severity:<10}"
+                     f"{st.suspect or '-'}")
+    scale = result.to_dict()["severity_scale"]
+    lines += ["", f"severity   : {scale}"]
+    if result.baselines:
+        lines.append(f"baselines  : {', '.join(result.baselines)} (healthy spread "
+                     f"{result.spread_db:.2f} dB)")
     return "\n".join(lines)

@@ -59,7 +59,11 @@ def _check_mode(mode: str) -> None:
         raise UsageError(f"feature mode must be one of {FEATURE_MODES}, got {mode!r}")
 
 
-def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = "lines") -> Spectrum:
+def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = "lines",
+                           exclude_hz: tuple[float, ...] = ()) -> Spectrum:
+    """The features of ``spec``: every line in the bands (or each band's largest), without
+    the lines within half a line spacing of ``exclude_hz`` (another stage's lines) that are
+    none of the pair's own (:func:`own_lines`)."""
     _check_mode(mode)
     bands = paper_bands(kin)
     top = max(b.high_hz for b in bands)
@@ -68,27 +72,62 @@ def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = 
         raise MeasurementError(f"the spectrum stops at {spec.freq_hz[-1]:.1f} Hz but the bands "
                                f"reach {top:.1f} Hz: raise the sample rate")
     masks = [(spec.freq_hz >= b.low_hz) & (spec.freq_hz < b.high_hz) for b in bands]
+    if len(exclude_hz):
+        others = _near(spec.freq_hz, np.asarray(exclude_hz), 0.5 * kin.f_hunting_hz)
+        own = _near(spec.freq_hz, own_lines(kin, top), 0.5 * kin.f_hunting_hz)
+        masks = [m & ~(others & ~own) for m in masks]
     if mode == "lines":
         keep = np.any(masks, axis=0)
         return Spectrum(spec.freq_hz[keep], spec.amplitude[keep], spec.noise_power)
-    idx = [np.flatnonzero(m)[np.argmax(spec.amplitude[m])] for m in masks]
+    idx = [np.flatnonzero(m)[np.argmax(spec.amplitude[m])] for m in masks if np.any(m)]
     return Spectrum(spec.freq_hz[idx], spec.amplitude[idx], spec.noise_power)
 
 
+#: The shaft-order sidebands of a mesh harmonic that are the pair's own lines.
+OWN_SIDEBANDS = 6
+
+
+def own_lines(kin: GearKinematics, max_freq_hz: float) -> np.ndarray:
+    """The pair's own lines up to ``max_freq_hz``: the mesh harmonics and their sidebands
+    1 to :data:`OWN_SIDEBANDS` at both shafts' orders, the shafts' first
+    :data:`N_SHAFT_HARMONICS` orders and the assembly phase's harmonics below the mesh (the
+    paper's bands; a high order of a shaft is another stage's mesh as often as not)."""
+    fp, fg, fm, fa = kin.f_pinion_hz, kin.f_gear_hz, kin.f_mesh_hz, kin.f_assembly_hz
+    orders = np.arange(1, N_SHAFT_HARMONICS + 1)
+    lines = [orders * fp, orders * fg, np.arange(1, fm / fa) * fa]
+    k = np.arange(-OWN_SIDEBANDS, OWN_SIDEBANDS + 1)
+    for h in range(1, int(max_freq_hz / fm) + 2):
+        lines += [h * fm + k * fp, h * fm + k * fg]
+    out = np.concatenate(lines)
+    return out[(out > 0) & (out <= max_freq_hz)]
+
+
+def _near(freqs: np.ndarray, lines: np.ndarray, tolerance_hz: float) -> np.ndarray:
+    """Which of ``freqs`` lie within ``tolerance_hz`` of one of ``lines``."""
+    if lines.size == 0:
+        return np.zeros(freqs.size, dtype=bool)
+    lines = np.sort(lines)
+    i = np.clip(np.searchsorted(lines, freqs), 1, lines.size - 1)
+    return np.minimum(np.abs(freqs - lines[i - 1]), np.abs(freqs - lines[i])) < tolerance_hz
+
+
 def signal_features(signal: np.ndarray, sample_rate_hz: float, kin: GearKinematics,
-                    mode: str = "lines") -> Spectrum:
+                    mode: str = "lines", exclude_hz: tuple[float, ...] = ()) -> Spectrum:
     """Features of a time signal sampled at ``sample_rate_hz``."""
     spec = sync_spectrum(signal, sample_rate_hz, kin.period_s, max_freq_hz=max_band_freq_hz(kin))
-    return features_from_spectrum(spec, kin, mode)
+    return features_from_spectrum(spec, kin, mode, exclude_hz)
 
 
 class KinematicFeaturizer:
-    """Gear models: features at the kinematic lines of one fundamental period."""
+    """Gear models: features at the kinematic lines of one fundamental period; a stage of a
+    machine leaves out the lines of the other stages (``exclude_hz``) that are not its own."""
 
-    def __init__(self, kinematics: GearKinematics, mode: str = "lines") -> None:
+    def __init__(self, kinematics: GearKinematics, mode: str = "lines",
+                 exclude_hz: tuple[float, ...] = ()) -> None:
         _check_mode(mode)
         self.kinematics = kinematics
         self.mode = mode
+        self.exclude_hz = tuple(exclude_hz)
         self.duration_s = kinematics.period_s
 
     @property
@@ -101,7 +140,8 @@ class KinematicFeaturizer:
                 "turns)")
 
     def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
-        return signal_features(signal, sample_rate_hz, self.kinematics, self.mode)
+        return signal_features(signal, sample_rate_hz, self.kinematics, self.mode,
+                               self.exclude_hz)
 
 
 def _whole_samples_per_period(x: np.ndarray, sample_rate_hz: float, period_s: float

@@ -3,7 +3,9 @@ machine's own healthy state.
 
 Every shaft's time-synchronous average (TSA) is taken from the record order-tracked at that
 shaft (:mod:`pydiag.gear.speed`), in every channel, with the harmonics of every mesh on it
-and their first sidebands taken as regular (an intermediate shaft carries two gears). The
+and their first sidebands taken as regular (an intermediate shaft carries two gears), and
+so are another stage's mesh harmonics that fall on the shaft's orders (they survive its
+TSA). The
 measure of change is the **residual energy** of a shaft's TSA (what is left when the
 shaft's first two orders and its meshes are removed: a local tooth fault, an eccentric
 gear's sidebands): its level in dB against the baseline's, averaged over the channels.
@@ -79,6 +81,19 @@ def _teeth_on(machine: Machine, shaft: int) -> tuple[int, ...]:
     return tuple(teeth)
 
 
+def _synchronous_meshes(machine: Machine, shaft: int) -> tuple[int, ...]:
+    """The orders of shaft ``shaft`` at which the other stages' mesh harmonics fall on its
+    orders: a mesh at p/q orders (lowest terms) has every q-th harmonic there, at the
+    multiples of p. They survive its TSA, so they are regular too, not residual."""
+    own = set(_teeth_on(machine, shaft))
+    found = []
+    for k in range(len(machine.stages)):
+        order = machine.mesh_order(k) / machine.shaft_ratio(shaft)
+        if order.numerator not in own and order.numerator not in found:
+            found.append(order.numerator)
+    return tuple(found)
+
+
 def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEstimate,
                   drop: tuple[str, ...] = ()) -> list[ShaftRecord]:
     """Every shaft's TSA of every channel but ``drop`` (module docstring), from the input
@@ -88,6 +103,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         ratio = float(machine.shaft_ratio(index))
         speed_hz = estimate.speed_hz * ratio
         teeth = _teeth_on(machine, index)
+        others = _synchronous_meshes(machine, index)
         samples_per_rev = int(math.ceil(measurement.sample_rate_hz / speed_hz))
         if 1.5 * max(teeth) >= samples_per_rev / 2:
             raise MeasurementError(
@@ -103,7 +119,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         half = (n_revs // 2) * samples_per_rev
         for channel, x in zip(names, tracked):
             parts = [tsa_signals(synchronous_average(y, samples_per_rev), teeth[-1],
-                                 other_meshes=teeth[:-1])
+                                 other_meshes=teeth[:-1] + others)
                      for y in (x, x[:half], x[half:2 * half])]
             energy[channel] = float(np.var(parts[0].residual))
             halves[channel] = (float(np.var(parts[1].residual)),

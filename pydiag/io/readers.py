@@ -475,7 +475,8 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
 
     Returns a Measurement whose channels carry the OUTPUT names, in SI units when a unit
     was given, and metadata: ``file``, ``sample_rate_source``, ``channel_map``, ``units``
-    (as given, in words) and ``si_units`` (output -> the SI unit it is now in).
+    (as given, in words), ``si_units`` (output -> the SI unit it is now in) and
+    ``unknown_level`` (the outputs kept in volts: their level is not known).
     Every problem with the file raises MeasurementError naming it; a bad spec UsageError.
     """
     path = Path(path)
@@ -537,7 +538,7 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
     if stray:
         raise UsageError(f"--sensitivity names channel(s) {', '.join(stray)} that are not "
                          "chosen")
-    selected, used_units, si_units = {}, {}, {}
+    selected, used_units, si_units, unknown_level = {}, {}, {}, []
     for name, output in specs:
         values = columns[name]
         if values.size >= 2 and np.ptp(values) == 0:
@@ -553,6 +554,7 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
             si_units[output] = si
         elif unit and is_voltage(unit):
             used_units[output] = f"{unit} (no sensitivity: the level is not known)"
+            unknown_level.append(output)
         elif unit:
             factor, si = si_factor(unit)
             values = values * factor
@@ -566,4 +568,6 @@ def read_measurement(path: str | Path, sample_rate_hz: float | None = None,
         metadata["units"] = used_units
     if si_units:
         metadata["si_units"] = si_units
+    if unknown_level:
+        metadata["unknown_level"] = unknown_level
     return Measurement(selected, float(rate), metadata)

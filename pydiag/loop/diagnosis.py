@@ -140,8 +140,9 @@ def fit_warnings(problem: FitProblem, error: float,
     if speed:
         found.append(speed)
     low, high = PLAUSIBLE_GAINS
+    volts = problem.measurement.metadata.get("unknown_level", [])
     for channel, gain in (gains or {}).items():
-        if not low <= gain <= high:
+        if not low <= gain <= high and channel not in volts:  # volts: any level is right
             found.append(f"channel {channel}: the model had to be scaled by {gain:.3g} to "
                          f"match the record's level; {check}")
     return found

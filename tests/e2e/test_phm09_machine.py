@@ -45,9 +45,12 @@ def test_stages_judged_against_a_repeated_healthy_run(tmp_path):
     healthy, _ = indicators(tmp_path, "spur 1_30hz_High_1", *baseline)
     assert [s["verdict"] for s in healthy["stages"]] == ["healthy", "healthy"], healthy["stages"]
     faulty, _ = indicators(tmp_path, "spur 2_30hz_High_1", *baseline)
-    first = faulty["stages"][0]
+    first, second = faulty["stages"]
     assert (first["name"], first["pinion_teeth"], first["gear_teeth"]) == ("input stage", 32, 96)
-    assert first["verdict"] == "changed" and first["suspect"] == "pinion", first
+    # the chipped input pinion and the eccentric idler pinion: both of stage 1's shafts
+    # changed, and stage 2's pinion (the idler) more than its gear
+    assert first["verdict"] == "changed", first
+    assert second["verdict"] == "changed" and second["suspect"] == "pinion", second
     assert [s["name"] for s in faulty["shafts"]] == ["input", "idler", "output"]
     assert faulty["speed_method"].startswith("mesh") and faulty["speed_confidence_db"] > 1
     assert faulty["healthy_spread_db"] > 0 and faulty["baselines"]
@@ -68,3 +71,23 @@ def test_a_pair_fit_refuses_a_two_stage_machine_and_says_what_works(gear_fmu):
     assert res.returncode == 2
     assert "2 stages" in res.stderr and "indicators --machine" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, tmp_path):
+    out = tmp_path / "d.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--machine", str(MACHINE),
+                  "--measurement", str(DATA / "spur 2_30hz_High_1.zip"), "--sample-rate", RATE,
+                  "--baseline", str(DATA / "spur 1_30hz_High_2.zip"), "--json", str(out),
+                  "--particles", "8", "--iterations", "6", "--polish", "60", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "scaled by" not in res.stderr  # volts without a sensitivity: no unit warning
+    data = json.loads(out.read_text())
+    assert data["speed_method"] == "tacho" and "mesh_speed_hz" in data
+    stages = data["stages"]
+    assert [(s["pinion_teeth"], s["gear_teeth"]) for s in stages] == [(32, 96), (48, 80)]
+    assert stages[0]["mesh_hz"] == pytest.approx(32 * data["speed_hz"])
+    assert stages[1]["pinion_shaft_hz"] == pytest.approx(data["speed_hz"] / 3)
+    assert stages[0]["fault_mode"] not in ("healthy", "no_diagnosis")
+    assert stages[0]["baseline"]["verdict"] == "changed"
+    assert stages[1]["suspect"] == "pinion" and stages[1]["baseline"]["verdict"] == "changed"
+    assert {"tooth_contrast", "transmission_error", "severity", "model"} <= set(stages[0])

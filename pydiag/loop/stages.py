@@ -1,0 +1,202 @@
+"""A diagnosis per stage of a machine: each stage is a gear pair, fitted on its own lines at
+its own shafts, the other stages' lines named and left out, and judged against the
+machine's own healthy state where baselines are given.
+
+For stage k: the record order-tracked at the stage's pinion shaft (the input shaft's angle,
+found from every mesh or from the tacho, times the shaft's speed ratio); the pair model at
+the stage's teeth and speed fitted on the stage's kinematic bands, without the other
+stages' mesh harmonics and sidebands that are none of its own lines
+(:class:`~pydiag.gear.features.KinematicFeaturizer`); the fit classified on the paper's
+simulated scale (:mod:`pydiag.loop.diagnosis`).
+
+With baselines, each stage is also judged by the change of its shafts' residual energy
+against them (:mod:`pydiag.gear.machine_indicators`): a stage that did not change is
+``healthy`` whatever the paper's scale says of it; one that changed keeps the model's
+fault mode and severity (``changed`` where the model finds nothing it can classify), and
+its suspect is the shaft that changed clearly more. Without baselines the classes are
+the paper's scale, and the suspect is the shaft whose orders modulate the stage's mesh
+twice as strongly as the other's (the sidebands 1 to 3 orders either side of each mesh
+harmonic in the measured lines), for a stage the model finds faulty.
+
+A stage is fitted on the sensors the machine file places near it (``near_stage``), else
+on every sensor it describes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from pydiag.core.measurement import Measurement
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_indicators import (MachineRecord, StageVerdict, judge_stages,
+                                            machine_record, shaft_records)
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
+from pydiag.gear.tracking import order_track
+from pydiag.loop.diagnosis import Diagnosis, diagnose
+from pydiag.model.adapter import Adapter
+
+#: Without baselines, a shaft is the suspect when its sidebands carry this many times the
+#: other shaft's energy.
+SUSPECT_RATIO = 2.0
+#: Sideband orders either side of a mesh harmonic that the suspect is judged by.
+SUSPECT_SIDEBANDS = 3
+
+
+@dataclass
+class StageDiagnosis:
+    """One stage: its pair's fit (:class:`~pydiag.loop.diagnosis.Diagnosis`), and what the
+    machine's baselines say of it (``verdict``, None without baselines)."""
+
+    name: str
+    pinion_teeth: int
+    gear_teeth: int
+    pinion_shaft_hz: float
+    gear_shaft_hz: float
+    mesh_hz: float
+    fit: Diagnosis
+    verdict: StageVerdict | None
+    fault_mode: str
+    severity: str
+    suspect: str | None
+
+    def to_dict(self) -> dict:
+        params = self.fit.parameters
+        return {"name": self.name, "pinion_teeth": self.pinion_teeth,
+                "gear_teeth": self.gear_teeth, "pinion_shaft_hz": self.pinion_shaft_hz,
+                "gear_shaft_hz": self.gear_shaft_hz, "mesh_hz": self.mesh_hz,
+                "tooth_contrast": self.fit.tooth_contrast,
+                "transmission_error": {k: params[k] for k in ("f_ate", "f_dte") if k in params},
+                "fault_mode": self.fault_mode, "severity": self.severity,
+                "suspect": self.suspect, "model": self.fit.to_dict(),
+                "baseline": None if self.verdict is None else self.verdict.to_dict()}
+
+
+@dataclass
+class MachineDiagnosis:
+    """Every stage of a record, in the machine's order, and the input speed found."""
+
+    machine: Machine
+    speed: SpeedEstimate
+    stages: list[StageDiagnosis]
+    baselines: tuple[str, ...]
+    spread_db: float | None
+
+    def to_dict(self) -> dict:
+        return {"machine": self.machine.name, **self.speed.to_dict(),
+                "stages": [s.to_dict() for s in self.stages],
+                "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
+                "severity_scale": ("change against the baselines, classified on the paper's "
+                                   "simulated scale" if self.baselines else
+                                   "the paper's simulated scale (no baseline)")}
+
+    @property
+    def warnings(self) -> list[str]:
+        return [f"{s.name}: {w}" for s in self.stages for w in s.fit.warnings]
+
+
+def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, stage: int,
+                  speed: SpeedEstimate, adapter: Adapter | None = None,
+                  feature_mode: str = "lines", fit_gain: bool | None = None,
+                  drop: tuple[str, ...] = ()) -> FitProblem:
+    """The fit problem of stage ``stage``: the record tracked at its pinion shaft, the
+    other stages' lines left out (module docstring)."""
+    ratio = float(machine.shaft_ratio(stage))
+    estimate = dataclasses.replace(
+        speed, speed_hz=speed.speed_hz * ratio, nominal_hz=speed.nominal_hz * ratio,
+        revolutions=speed.revolutions * ratio,
+        mesh_speed_hz=None if speed.mesh_speed_hz is None else speed.mesh_speed_hz * ratio)
+    kin = machine.stage_kinematics(stage, speed.speed_hz)
+    top = max_band_freq_hz(kin)
+    others = tuple(f for j in range(len(machine.stages)) if j != stage
+                   for f in machine.stage_lines(j, speed.speed_hz, top))
+    tracked = _stage_channels(order_track(measurement, estimate, drop=drop), machine, stage)
+    return build_problem(fmu_path, tracked, adapter, kinematics=kin,
+                         featurizer=KinematicFeaturizer(kin, feature_mode, others),
+                         fit_gain=fit_gain, speed_estimate=estimate)
+
+
+def _stage_channels(measurement: Measurement, machine: Machine, stage: int) -> Measurement:
+    """The channels a stage is fitted on, named as the model outputs they measure: the
+    sensors the machine places near the stage, else every sensor it describes (the first
+    of those that measure one output), else every channel as it is named."""
+    sensors = [s for s in machine.sensors if s.channel in measurement.channels]
+    near = [s for s in sensors if s.near_stage == stage] or sensors
+    if not near:
+        return measurement
+    chosen: dict[str, str] = {}
+    for s in near:
+        chosen.setdefault(s.output, s.channel)
+    meta = dict(measurement.metadata)
+    volts = meta.get("unknown_level", [])
+    meta["unknown_level"] = [out for out, c in chosen.items() if c in volts]
+    return dataclasses.replace(measurement, channels={out: measurement.channels[c]
+                                                      for out, c in chosen.items()},
+                               metadata=meta)
+
+
+def _sideband_suspect(problem: FitProblem) -> str | None:
+    """The shaft whose orders modulate the mesh :data:`SUSPECT_RATIO` times more, from
+    the measured lines of the problem's first channel."""
+    kin, ref = problem.kinematics, problem.reference[problem.channels[0]]
+    tolerance = 0.25 * kin.f_hunting_hz
+    energy = {}
+    for shaft, f in (("pinion", kin.f_pinion_hz), ("gear", kin.f_gear_hz)):
+        total = 0.0
+        for h in range(1, 5):
+            for k in range(1, SUSPECT_SIDEBANDS + 1):
+                for line in (h * kin.f_mesh_hz - k * f, h * kin.f_mesh_hz + k * f):
+                    near = np.abs(ref.freq_hz - line) < tolerance
+                    total += float(np.sum(ref.amplitude[near] ** 2))
+        energy[shaft] = total
+    if energy["pinion"] >= SUSPECT_RATIO * energy["gear"]:
+        return "pinion"
+    if energy["gear"] >= SUSPECT_RATIO * energy["pinion"]:
+        return "gear"
+    return None
+
+
+def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
+                     input_hz: float, speed: SpeedSettings = SpeedSettings(),
+                     estimator: FaultEstimator | None = None,
+                     baselines: list[Measurement] = (), adapter: Adapter | None = None,
+                     feature_mode: str = "lines", fit_gain: bool | None = None
+                     ) -> MachineDiagnosis:
+    """Every stage of ``measurement`` diagnosed (module docstring), around the nominal input
+    speed ``input_hz``; ``baselines``: records of the machine in a known healthy state."""
+    estimator = estimator or FaultEstimator()
+    drop = (speed.tacho,) if speed.tacho else ()
+    found = estimate_speed(measurement, machine.stage_kinematics(0, input_hz), speed,
+                           machine=machine)
+    verdicts, spread, names = [None] * len(machine.stages), None, ()
+    if baselines:
+        record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop)),
+                               str(measurement.metadata.get("file", "(in memory)")))
+        base = [machine_record(b, machine, speed, input_hz) for b in baselines]
+        verdicts, spread = judge_stages(machine, record, base)
+        names = tuple(b.file for b in base)
+    stages = []
+    for k, stage in enumerate(machine.stages):
+        problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
+                                feature_mode, fit_gain, drop)
+        fit = diagnose(problem, estimator)
+        verdict = verdicts[k]
+        fault_mode, severity, suspect = fit.fault_mode, fit.severity, None
+        if verdict is not None:
+            suspect = verdict.suspect
+            if not verdict.changed:
+                fault_mode, severity = "healthy", "none"
+            elif fault_mode == "healthy":
+                fault_mode, severity = "changed", "unknown"
+        elif fit.explained and fault_mode != "healthy":
+            suspect = _sideband_suspect(problem)
+        kin = problem.kinematics
+        stages.append(StageDiagnosis(stage.name, stage.pinion_teeth, stage.gear_teeth,
+                                     kin.f_pinion_hz, kin.f_gear_hz, kin.f_mesh_hz, fit,
+                                     verdict, fault_mode, severity, suspect))
+    return MachineDiagnosis(machine, found, stages, names, spread)

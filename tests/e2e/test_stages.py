@@ -1,0 +1,48 @@
+"""diagnose of a two-stage machine, stage by stage (:mod:`pydiag.loop.stages`), on records
+of :mod:`truth.gearbox` (written from the shafts' angles, not by the pair model fitted):
+each stage fitted at its own shafts on its own lines, and judged against a healthy
+baseline."""
+
+import numpy as np
+import pytest
+from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record
+
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.gear.features import KinematicFeaturizer
+from pydiag.gear.speed import SpeedSettings
+from pydiag.loop.stages import diagnose_machine, stage_problem
+
+SMALL = dict(n_particles=8, iterations=6, polish_evaluations=60)
+
+
+def test_a_stage_is_fitted_at_its_own_shafts_without_the_other_stages_lines(gear_fmu):
+    from pydiag.gear.speed import estimate_speed
+    m = gearbox_record(2)
+    speed = estimate_speed(m, MACHINE.stage_kinematics(0, INPUT_HZ), SpeedSettings("mesh"),
+                           machine=MACHINE)
+    problem = stage_problem(str(gear_fmu), m, MACHINE, 1, speed)
+    kin = problem.kinematics
+    assert (kin.n_pinion, kin.n_gear) == (24, 54)
+    assert kin.f_pinion_hz == pytest.approx(speed.speed_hz * 20 / 64)
+    lines = problem.reference["acc"].freq_hz
+    first_mesh = 20 * speed.speed_hz  # stage 1's mesh lies in stage 2's third mesh band
+    assert 2.5 * kin.f_mesh_hz < first_mesh < 3.5 * kin.f_mesh_hz
+    assert np.min(np.abs(lines - first_mesh)) > 0.4 * kin.f_hunting_hz
+    whole = KinematicFeaturizer(kin)(problem.measurement.channels["acc"],
+                                     problem.measurement.sample_rate_hz).freq_hz
+    assert np.min(np.abs(whole - first_mesh)) < 1e-6 * first_mesh  # there without exclusion
+
+
+def test_every_stage_diagnosed_and_the_broken_one_judged_changed(gear_fmu):
+    result = diagnose_machine(str(gear_fmu), gearbox_record(3, faulty_shaft=2, stage=1),
+                              MACHINE, INPUT_HZ, SpeedSettings("mesh"),
+                              FaultEstimator(**SMALL), baselines=[gearbox_record(1)])
+    first, second = result.stages
+    assert first.fault_mode == "healthy" and first.severity == "none"
+    assert second.verdict.changed and second.suspect == "gear"
+    assert second.fault_mode != "healthy"
+    data = result.to_dict()
+    assert [s["mesh_hz"] for s in data["stages"]] == pytest.approx(
+        [20 * result.speed.speed_hz, 20 / 64 * 24 * result.speed.speed_hz])
+    assert data["speed_hz"] == pytest.approx(INPUT_HZ * 0.99, rel=1e-3)
+    assert "baselines" in data["severity_scale"] and data["healthy_spread_db"] > 0

@@ -1,0 +1,39 @@
+"""A two-stage gearbox's vibration, written from the shafts' angles (not by any model the
+tests fit): each stage's mesh harmonics amplitude-modulated by its two shafts, a local
+tooth defect as a short dip of its mesh's amplitude once per turn of the shaft carrying
+it, white noise, and an input speed that wanders by 0.05 %."""
+
+import numpy as np
+
+from pydiag.core.measurement import Measurement
+from pydiag.gear.machine import machine_from_dict
+
+FS, DURATION, INPUT_HZ = 20_000.0, 6.0, 25.0
+#: 20/64 then 24/54 teeth (whole periods of 16 and 9 pinion turns: a pair model needs one,
+#: and a hunting-tooth pair's lasts as many turns as its gear has teeth); no sensor or
+#: tacho described: the record's channel is "acc".
+MACHINE = machine_from_dict({"name": "two-stage test box",
+                             "stages": [{"pinion_teeth": 20, "gear_teeth": 64},
+                                        {"pinion_teeth": 24, "gear_teeth": 54}]})
+
+
+def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
+                   depth: float = 0.8, noise: float = 0.3) -> Measurement:
+    """A record at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2 output) carries a
+    broken tooth of ``depth`` on stage ``stage``'s mesh."""
+    rng = np.random.default_rng(seed)
+    n = int(FS * DURATION)
+    t = np.arange(n) / FS
+    speed = INPUT_HZ * 0.99 * (1 + 0.0005 * np.sin(2 * np.pi * 0.2 * t + seed))
+    revs = np.cumsum(speed) / FS
+    x = np.zeros(n)
+    for k in range(len(MACHINE.stages)):
+        order = float(MACHINE.mesh_order(k))
+        gain = np.ones(n)
+        for shaft in (k, k + 1):
+            gain += 0.1 * np.cos(2 * np.pi * float(MACHINE.shaft_ratio(shaft)) * revs + shaft)
+        if faulty_shaft is not None and k == stage:
+            angle = np.mod(float(MACHINE.shaft_ratio(faulty_shaft)) * revs, 1.0)
+            gain -= depth * np.exp(-0.5 * ((angle - 0.3) / 0.01) ** 2)
+        x += gain * sum(np.cos(2 * np.pi * h * order * revs + h) / h for h in (1, 2, 3))
+    return Measurement({"acc": x + noise * rng.standard_normal(n)}, FS)
