@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.machine_indicators import MachineReport
+from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.stages import MachineDiagnosis
 from pydiag.loop.results import Comparison, Discovery, Status
@@ -130,16 +131,21 @@ def format_indicators(report: IndicatorReport) -> str:
     return "\n".join(lines)
 
 
+def _machine_head(name: str, n_stages: int, s: SpeedEstimate) -> list[str]:
+    """The machine and the input speed found, how, and how surely."""
+    confidence = ("" if s.confidence_db is None
+                  else f"; stands {s.confidence_db:.1f} dB over the next candidate")
+    return [f"machine    : {name}, {n_stages} stage(s)",
+            f"speed      : {s.speed_hz:.5f} Hz input ({60 * s.speed_hz:.2f} rpm; nominal "
+            f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}{confidence}"]
+
+
 def format_machine_report(report: MachineReport) -> str:
     """The speed, a row per shaft (residual energy and indicators, first channel's), then a
     row per stage when it was judged."""
-    s = report.record.speed
-    confidence = ("" if s.confidence_db is None
-                  else f"; stands {s.confidence_db:.1f} dB over the next candidate")
-    lines = [f"machine    : {report.machine.name}, {len(report.machine.stages)} stage(s)",
-             f"speed      : {s.speed_hz:.5f} Hz input ({60 * s.speed_hz:.2f} rpm; nominal "
-             f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}{confidence}",
-             "", f"{'shaft':<14}{'speed Hz':>10}{'turns':>7}{'teeth':>9}  "
+    lines = _machine_head(report.machine.name, len(report.machine.stages),
+                          report.record.speed)
+    lines += ["", f"{'shaft':<14}{'speed Hz':>10}{'turns':>7}{'teeth':>9}  "
              + "  ".join(f"{'resid ' + c:>14}" for c in report.record.shafts[0].residual_energy)]
     for shaft in report.record.shafts:
         lines.append(f"{shaft.shaft:<14}{shaft.speed_hz:>10.4f}{shaft.revolutions:>7d}"
@@ -166,13 +172,8 @@ def format_machine_report(report: MachineReport) -> str:
 def format_machine_diagnosis(result: MachineDiagnosis) -> str:
     """The speed, then a row per stage: teeth, mesh, the fit's tooth contrast and TE levels,
     error, and the verdict."""
-    s = result.speed
-    confidence = ("" if s.confidence_db is None
-                  else f"; stands {s.confidence_db:.1f} dB over the next candidate")
-    lines = [f"machine    : {result.machine.name}, {len(result.stages)} stages",
-             f"speed      : {s.speed_hz:.5f} Hz input ({60 * s.speed_hz:.2f} rpm; nominal "
-             f"{s.nominal_hz:.4g} Hz), varies {s.variation_pct:.3f} %; {s.method}{confidence}",
-             "", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'contrast':>10}{'f_ate':>7}"
+    lines = _machine_head(result.machine.name, len(result.stages), result.speed)
+    lines += ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'contrast':>10}{'f_ate':>7}"
              f"{'f_dte':>7}{'error':>8}  {'fault mode':<20}{'severity':<10}suspect"]
     for st in result.stages:
         p = st.fit.parameters
