@@ -64,11 +64,10 @@ def estimator_settings(args) -> dict:
 def check_outputs(args, *names: str) -> None:
     """Before any work: every output option can be written, none is an input, and no two
     name the same file."""
-    inputs = [Path(p).resolve() for p in (getattr(args, "measurement", None),
-                                          getattr(args, "fmu", None),
-                                          getattr(args, "adapter", None),
-                                          getattr(args, "history", None),
-                                          getattr(args, "baseline", None)) if isinstance(p, str)]
+    given = [getattr(args, name, None) for name in ("measurement", "fmu", "adapter",
+                                                     "history", "machine")]
+    given += list(getattr(args, "baseline", None) or [])
+    inputs = [Path(p).resolve() for p in given if isinstance(p, str)]
     seen: dict[Path, str] = {}
     for name in names:
         out = getattr(args, name, None)
@@ -130,7 +129,7 @@ def apply_machine(args) -> Machine | None:
                              "input_rpm")
         args.rpm = 60 * machine.input_hz
     tacho = machine.tacho
-    if tacho is not None and args.tacho is None and args.speed != "mesh":
+    if tacho is not None and args.tacho is None:  # never a sensor, even with --speed mesh
         if tacho.shaft != 0:
             raise UsageError(f"{args.machine}: a tacho on the {machine.shafts[tacho.shaft]} "
                              "shaft is not supported yet (only on the input shaft)")

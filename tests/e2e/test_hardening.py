@@ -100,3 +100,14 @@ def test_a_level_off_by_a_unit_factor_is_named(gear_fmu, record, tmp_path):
                   "--quiet")
     assert "g read as m/s2" in res.stderr, res.stderr
     assert json.loads(out.read_text())["fault_mode"] == "no_diagnosis"
+
+
+def test_an_output_may_not_replace_a_baseline_or_the_machine_file(record, tmp_path):
+    machine = tmp_path / "box.toml"
+    machine.write_text("input_rpm = 1500\n[[stages]]\npinion_teeth = 14\ngear_teeth = 21\n")
+    for target in (record, machine):
+        before = target.read_bytes()
+        res = run_cli("-m", "pydiag", "indicators", "--machine", str(machine), "--measurement",
+                      str(record), "--baseline", str(record), "--json", str(target), "--force")
+        one_line_error(res, "would overwrite an input file")
+        assert target.read_bytes() == before
