@@ -4,6 +4,10 @@ With ``indicators`` set to a shaft, each row also holds the condition indicators
 :mod:`pydiag.gear.indicators` (one column each, ``channel:name`` for several channels), so
 a fleet's records can be trended in one table.
 
+With a machine file of several stages (``batch --machine``), every stage of every record
+is diagnosed (:mod:`pydiag.loop.stages`), against the ``--baseline`` records when given:
+a column group a stage.
+
 Every measurement is one task; inside a task the estimator runs in a single process
 (the parallelism is across measurements). A measurement that fails becomes a row with
 ``status = "error"`` and its message, never a crashed batch. Rows come back in input
@@ -21,14 +25,17 @@ from pathlib import Path
 from typing import Callable, Iterable
 
 from pydiag.core.errors import MeasurementError, PydiagError, UsageError
+from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
+from pydiag.gear.machine import load_machine
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
 from pydiag.loop.diagnosis import diagnose
+from pydiag.loop.stages import diagnose_machine
 from pydiag.model.adapter import load_adapter
 
 ROW_COLUMNS = ("measurement", "status", "message", "fault_mode", "severity", "error",
@@ -49,6 +56,9 @@ class BatchTask:
     units: tuple[str, ...] | None = None  # UNIT or NAME=UNIT specs
     indicators: str | None = None  # the shaft whose condition indicators are columns too
     sensitivities: tuple[tuple[str, str], ...] = ()  # (NAME, sensitivity such as 100mV/g)
+    machine: str | None = None  # a machine file of several stages: every stage diagnosed
+    baselines: tuple[str, ...] = ()  # its healthy records
+    input_hz: float | None = None  # its nominal input speed
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -69,11 +79,12 @@ def diagnose_task(task: BatchTask) -> dict:
     started = time.perf_counter()
     row: dict = {"measurement": task.measurement}
     try:
-        m = read_measurement(task.measurement, task.sample_rate_hz,
-                             list(task.channels) if task.channels else None,
-                             list(task.units) if task.units else None,
-                             dict(task.sensitivities))
+        m = _read(task, task.measurement)
         adapter = load_adapter(task.adapter) if task.adapter else None
+        if task.machine:
+            row.update(_machine_row(task, m, adapter))
+            row["elapsed_s"] = time.perf_counter() - started
+            return row
         problem = build_problem(task.fmu, m, adapter, **task.problem)
         result = diagnose(problem, FaultEstimator(n_workers=1, **task.estimator))
         facts = {k: v for k, v in result.facts.items()
@@ -96,6 +107,45 @@ def diagnose_task(task: BatchTask) -> dict:
         row.update(status="error", message=f"{type(err).__name__}: {err}")
     row["elapsed_s"] = time.perf_counter() - started
     return row
+
+
+def _read(task: BatchTask, path: str) -> Measurement:
+    return read_measurement(path, task.sample_rate_hz,
+                            list(task.channels) if task.channels else None,
+                            list(task.units) if task.units else None, dict(task.sensitivities))
+
+
+def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
+    """Every stage of a machine's record (:func:`pydiag.loop.stages.diagnose_machine`): a
+    column group a stage (``<stage>:fault_mode``, ...); the row's own fault mode is the
+    first stage's that is not healthy, its severity and error the highest."""
+    settings = task.problem
+    result = diagnose_machine(task.fmu, m, load_machine(task.machine), task.input_hz,
+                              settings.get("speed") or SpeedSettings(),
+                              FaultEstimator(n_workers=1, **task.estimator),
+                              [_read(task, b) for b in task.baselines], adapter,
+                              settings.get("feature_mode", "lines"), settings.get("fit_gain"))
+    row: dict = {"status": "ok", "message": "; ".join(result.warnings),
+                 **{k: v for k, v in result.speed.to_dict().items()
+                    if k != "nominal_speed_hz"}}
+    modes = [st.fault_mode for st in result.stages]
+    row["fault_mode"] = next((f for f in modes if f != "healthy"), "healthy")
+    row["severity"] = max((st.severity for st in result.stages), key=_severity_rank)
+    row["error"] = max(st.fit.error for st in result.stages)
+    row["evaluations"] = sum(st.fit.fit.evaluations for st in result.stages)
+    for st in result.stages:
+        row.update({f"{st.name}:fault_mode": st.fault_mode, f"{st.name}:severity": st.severity,
+                    f"{st.name}:suspect": st.suspect, f"{st.name}:error": st.fit.error,
+                    f"{st.name}:tooth_contrast": st.fit.tooth_contrast})
+        if st.verdict is not None:
+            row[f"{st.name}:change_db"] = max(abs(st.verdict.pinion.change_db),
+                                              abs(st.verdict.gear.change_db))
+    return row
+
+
+def _severity_rank(severity: str) -> int:
+    order = ("none", "early", "medium", "advanced")
+    return order.index(severity) if severity in order else -1
 
 
 def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",

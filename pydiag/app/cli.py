@@ -266,6 +266,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
     p.add_argument("--indicators", nargs="?", const="pinion", choices=SHAFTS,
                    help="add the condition indicators of this shaft as columns (default pinion)")
+    p.add_argument("--baseline", metavar="FILE", action="append",
+                   help="with --machine: a record of the machine in a known healthy state, "
+                   "every stage of every record judged against it (repeat for more)")
     _record_args(p)
     _force(p)
     _optimiser_args(p)

@@ -99,8 +99,8 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
-#: The commands that fit a pair model; of these, diagnose fits every stage of a machine,
-#: the others one pair (a machine of several stages is not theirs yet).
+#: The commands that fit a pair model; of these, diagnose and batch fit every stage of a
+#: machine, compare and discover one pair (a machine of several stages is not theirs yet).
 PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
 
 
@@ -118,7 +118,7 @@ def apply_machine(args) -> Machine | None:
     machine = load_machine(args.machine)
     fits = args.command in PAIR_COMMANDS
     staged = len(machine.stages) > 1
-    if fits and staged and args.command != "diagnose":
+    if fits and staged and args.command not in ("diagnose", "batch"):
         raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
                          "one gear pair (per-stage comparisons are not built yet): `pydiag "
                          "diagnose --machine` fits every stage, `pydiag indicators --machine` "
@@ -319,10 +319,16 @@ def cmd_batch(args) -> int:
         load_adapter(args.adapter)  # fail early, once, on a bad adapter
     settings = {k: v for k, v in estimator_settings(args).items() if k != "n_workers"}
     channels = channels_to_read(args)
+    machine = args.machine_description
+    staged = machine is not None and len(machine.stages) > 1
+    if args.baseline and not staged:
+        raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
+                         "with its stages")
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem_settings(args),
                              tuple(args.unit) if args.unit else None, args.indicators,
-                             tuple(args.sensitivity or ()))
+                             tuple(args.sensitivity or ()), args.machine if staged else None,
+                             tuple(args.baseline or ()), args.rpm / 60.0 if staged else None)
              for p in paths]
     bar = None
     if not args.quiet:

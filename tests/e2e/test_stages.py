@@ -46,3 +46,35 @@ def test_every_stage_diagnosed_and_the_broken_one_judged_changed(gear_fmu):
         [20 * result.speed.speed_hz, 20 / 64 * 24 * result.speed.speed_hz])
     assert data["speed_hz"] == pytest.approx(INPUT_HZ * 0.99, rel=1e-3)
     assert "baselines" in data["severity_scale"] and data["healthy_spread_db"] > 0
+
+
+def test_batch_diagnoses_every_stage_of_every_record(gear_fmu, tmp_path):
+    import pandas as pd
+    from conftest import run_cli
+
+    from pydiag.io.measurements import write_measurement
+    folder = tmp_path / "records"
+    folder.mkdir()
+    write_measurement(folder / "healthy.csv", gearbox_record(2))
+    write_measurement(folder / "broken.csv", gearbox_record(3, faulty_shaft=0, stage=0))
+    write_measurement(tmp_path / "baseline.csv", gearbox_record(1))
+    machine = tmp_path / "box.toml"
+    machine.write_text(f'name = "{MACHINE.name}"\ninput_rpm = {60 * INPUT_HZ}\n'
+                       + "".join(f"[[stages]]\npinion_teeth = {s.pinion_teeth}\n"
+                                 f"gear_teeth = {s.gear_teeth}\n" for s in MACHINE.stages))
+    out = tmp_path / "rows.csv"
+    res = run_cli("-m", "pydiag", "batch", "--fmu", str(gear_fmu), "--machine", str(machine),
+                  "--measurements", str(folder), "--baseline", str(tmp_path / "baseline.csv"),
+                  "--out", str(out), "--speed", "mesh", "--particles", "4", "--iterations",
+                  "2", "--polish", "0", "--workers", "2", "--quiet")  # the verdicts are the
+    # baseline's: the smallest fit will do
+    assert res.returncode == 0, res.stderr
+    rows = pd.read_csv(out).set_index("measurement")
+    broken = rows.loc[str(folder / "broken.csv")]
+    healthy = rows.loc[str(folder / "healthy.csv")]
+    assert (broken["status"], healthy["status"]) == ("ok", "ok"), rows["message"]
+    assert broken["stage 1:suspect"] == "pinion" and broken["fault_mode"] != "healthy"
+    assert (healthy["stage 1:fault_mode"], healthy["stage 2:fault_mode"]) == ("healthy",
+                                                                              "healthy")
+    assert healthy["fault_mode"] == "healthy" and healthy["severity"] == "none"
+    assert broken["stage 1:change_db"] > healthy["stage 1:change_db"]
