@@ -63,11 +63,11 @@ def test_batch_diagnoses_every_stage_of_every_record(gear_fmu, tmp_path):
                        + "".join(f"[[stages]]\npinion_teeth = {s.pinion_teeth}\n"
                                  f"gear_teeth = {s.gear_teeth}\n" for s in MACHINE.stages))
     out = tmp_path / "rows.csv"
+    # the verdicts are the baseline's: the smallest fit will do
     res = run_cli("-m", "pydiag", "batch", "--fmu", str(gear_fmu), "--machine", str(machine),
                   "--measurements", str(folder), "--baseline", str(tmp_path / "baseline.csv"),
                   "--out", str(out), "--speed", "mesh", "--particles", "4", "--iterations",
-                  "2", "--polish", "0", "--workers", "2", "--quiet")  # the verdicts are the
-    # baseline's: the smallest fit will do
+                  "2", "--polish", "0", "--workers", "2", "--quiet")
     assert res.returncode == 0, res.stderr
     rows = pd.read_csv(out).set_index("measurement")
     broken = rows.loc[str(folder / "broken.csv")]
