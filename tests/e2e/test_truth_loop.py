@@ -64,10 +64,14 @@ BACKLASH_M = 5e-6
 def truth_records(tmp_path_factory):
     """The simulator's noise-free records, made once a test run: under pytest-xdist the
     workers share them through a file of this run (the first makes it, the others wait)."""
-    def make():
+    def make():  # one record a core (the other workers wait for them, idle)
+        from concurrent.futures import ProcessPoolExecutor
         g = TruthGear()
-        return {key: simulate(g.with_effects(**magnitudes), PERIODS * g.period_s, RATE_HZ)
-                for key, magnitudes in {"none": {}, **HIDDEN}.items()}
+        with ProcessPoolExecutor(os.cpu_count() or 1) as pool:
+            made = {key: pool.submit(simulate, g.with_effects(**magnitudes),
+                                     PERIODS * g.period_s, RATE_HZ)
+                    for key, magnitudes in {"none": {}, **HIDDEN}.items()}
+            return {key: future.result() for key, future in made.items()}
     run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
     if run is None:
         return make()
