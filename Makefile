@@ -40,7 +40,7 @@ lint: $(STAMP)
 
 # every test but the slow tier, on every core (pytest-xdist), after the linter
 test: fmu lint
-	$(PY) -m pytest -q -n auto --dist load --durations=10
+	$(PY) -m pytest -q -n auto --dist worksteal --durations=10
 
 # the edit-test loop: the linter and the unit tests (a handful of FMU simulations)
 test-fast: lint build/GearPair.fmu

@@ -131,8 +131,8 @@ def alive(pid: int) -> bool:
 
 
 #: The tests that take the longest (the loop on the independent simulator, a minute each on
-#: 2 cores), by name, and then their files: collected first, so that under xdist's load
-#: scheduling, which hands tests out in order, none of them starts last and runs alone.
+#: 2 cores), by name, and then their files: collected first, so that under xdist none of
+#: them starts last and runs alone.
 LONGEST_FIRST = ("test_cli_loop_adds", "test_compare_and_discover_find", "test_cli_compare_shows",
                  "test_compare_with_a_speed_fluctuation", "test_no_hidden_effect",
                  "test_truth_loop.py", "test_compare_loop.py", "test_phm09_machine.py",
