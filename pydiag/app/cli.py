@@ -17,8 +17,9 @@ import signal
 import sys
 import threading
 
-from pydiag.app.commands import (apply_machine, cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators, cmd_inspect,
-                                 cmd_regress, cmd_simulate, warn_validation)
+from pydiag.app.commands import (apply_machine, cmd_batch, cmd_demo, cmd_diagnose,
+                                 cmd_indicators, cmd_inspect, cmd_regress, cmd_simulate,
+                                 warn_validation)
 from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
 from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
@@ -266,9 +267,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
     p.add_argument("--indicators", nargs="?", const="pinion", choices=SHAFTS,
                    help="add the condition indicators of this shaft as columns (default pinion)")
-    p.add_argument("--baseline", metavar="FILE", action="append",
-                   help="with --machine: a record of the machine in a known healthy state, "
-                   "every stage of every record judged against it (repeat for more)")
+    p.add_argument("--baseline", metavar="FILE", action="append", help="with --machine: a "
+                   "healthy record of the machine, every stage judged against it (repeat)")
     _record_args(p)
     _force(p)
     _optimiser_args(p)

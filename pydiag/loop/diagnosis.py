@@ -40,8 +40,9 @@ class Diagnosis:
     ``fault_mode``, ``severity``, ``tooth_severity``, ``te_severity``: the paper's classes
     of the GearDiag fault parameters ("not_classified" / "unknown" for a model without
     them; :data:`NO_DIAGNOSIS` / "unknown" for a fit that explains none of the record,
-    :attr:`explained`); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated; ``facts``: what
-    was analysed (speed, periods, gains); ``warnings``: why it may not be trusted."""
+    :attr:`explained`); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated;
+    ``facts``: what was analysed (speed, periods, gains); ``warnings``: why it may not be
+    trusted."""
 
     fit: FitResult
     fault_mode: str
