@@ -4,6 +4,11 @@ judged against the healthy records (case ``spur 1``) of the same speed and load,
 record leaving itself out. Prints a table a record and the time each took. Usage:
 
     .venv/bin/python bench/phm09.py [DIR]     # default ../shared/data/phm09
+    .venv/bin/python bench/phm09.py --model   # and every stage fitted without a baseline
+
+With ``--model`` each record's stages are also fitted (``diagnose --machine`` without a
+baseline: the pair model's classes on the paper's simulated scale), side by side with the
+baseline's verdicts: the model must earn its place against the indicators.
 
 Labels: ``spur 1`` all good; ``spur 2`` the 32-tooth input pinion chipped and the
 48-tooth idler pinion eccentric (both stages); other cases are shown without a label.
@@ -26,6 +31,7 @@ from pydiag.gear.machine import load_machine  # noqa: E402
 from pydiag.gear.machine_indicators import judge_stages, machine_record  # noqa: E402
 from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
+from pydiag.loop.stages import diagnose_machine  # noqa: E402
 
 NAME = re.compile(r"spur (\d+)_(\d+)hz_(High|Low)_(\d+)")
 RATE_HZ = 200_000 / 3
@@ -35,6 +41,7 @@ LABELS = {1: ("healthy", "healthy"), 2: ("changed", "changed")}
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default=str(ROOT.parent / "shared" / "data" / "phm09"))
+    ap.add_argument("--model", action="store_true", help="also fit every stage (no baseline)")
     args = ap.parse_args()
     machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
     files = sorted(p for p in Path(args.folder).iterdir() if NAME.search(p.name)
@@ -51,14 +58,27 @@ def main() -> int:
         kin = machine.stage_kinematics(0, float(hz))
         tacho = estimate_speed(m, kin, SpeedSettings("tacho", tacho="ch3", pulses_per_rev=10))
         record = machine_record(m, machine, SpeedSettings("mesh", tacho="ch3"), float(hz))
+        model = None
+        if args.model:
+            fitted = diagnose_machine(str(ROOT / "build" / "GearPair.fmu"), m, machine,
+                                      float(hz), SpeedSettings("mesh", tacho="ch3"))
+            model = [st.fault_mode for st in fitted.stages]
         seen[path.name] = (int(case), hz, load, record, time.perf_counter() - started,
-                           tacho.speed_hz)
+                           tacho.speed_hz, model)
     print(f"{'record':<24}{'tacho Hz':>10}{'mesh Hz':>10}{'err %':>9}{'conf dB':>8}  "
           f"{'stage 1':<22}{'stage 2':<22}{'label':<18}{'s':>5}")
-    right = total = 0
-    for name, (case, hz, load, record, took, tacho_hz) in seen.items():
-        baselines = [r for n, (c, h, ld, r, _, _) in seen.items()
+    right = total = model_right = model_total = 0
+    models = []
+    for name, (case, hz, load, record, took, tacho_hz, model) in seen.items():
+        baselines = [r for n, (c, h, ld, r, _, _, _) in seen.items()
                      if c == 1 and h == hz and ld == load and n != name]
+        if model is not None:
+            models.append(f"{name[:23]:<24}{model[0]:<22}{model[1]:<22}"
+                          f"{'/'.join(LABELS.get(case, ('?', '?')))}")
+            if case in LABELS:
+                model_total += 2
+                model_right += sum((m == "healthy") == (lab == "healthy")
+                                   for m, lab in zip(model, LABELS[case]))
         speed = record.speed
         cells = []
         if baselines:
@@ -80,6 +100,11 @@ def main() -> int:
               f"{cells[0]:<22}{cells[1]:<22}{label_text:<18}{took:>5.1f}")
     if total:
         print(f"stage verdicts as labelled: {right} of {total}")
+    if models:
+        print(f"\nthe pair model per stage, no baseline (paper's scale):\n"
+              f"{'record':<24}{'stage 1':<22}{'stage 2':<22}label")
+        print("\n".join(models))
+        print(f"healthy or not as labelled: {model_right} of {model_total}")
     return 0
 
 
