@@ -122,12 +122,6 @@ class Machine:
             raise MachineError(f"{self.source}: shafts: {len(self.stages)} stage(s) make "
                                f"{len(self.stages) + 1} shafts, {len(self.shafts)} named")
 
-    @classmethod
-    def pair(cls, n_pinion: int, n_gear: int, input_hz: float | None = None) -> "Machine":
-        """The one-stage shorthand (``--teeth NP,NG --rpm``): shafts "pinion" and "gear"."""
-        return cls("gear pair", (Stage(n_pinion, n_gear, "stage 1"),), ("pinion", "gear"),
-                   input_hz)
-
     def shaft_ratio(self, shaft: int) -> Fraction:
         """Speed of shaft ``shaft`` over the input shaft's (exact)."""
         ratio = Fraction(1)
@@ -138,13 +132,6 @@ class Machine:
     def mesh_order(self, stage: int) -> Fraction:
         """Stage ``stage``'s mesh frequency in orders of the input shaft."""
         return self.stages[stage].pinion_teeth * self.shaft_ratio(stage)
-
-    def shaft_index(self, name: str) -> int:
-        """The index of the shaft called ``name`` (MachineError if none is)."""
-        if name not in self.shafts:
-            raise MachineError(f"{self.source}: no shaft called '{name}'; the shafts are "
-                               f"{', '.join(self.shafts)}")
-        return self.shafts.index(name)
 
     def stage_kinematics(self, stage: int, input_hz: float) -> GearKinematics:
         """Stage ``stage`` as a gear pair at ``input_hz`` on the input shaft; the pair's
@@ -167,21 +154,6 @@ class Machine:
             lines += [h * mesh + k * f for f in shafts
                       for k in range(-n_sidebands, n_sidebands + 1)]
         return tuple(sorted({f for f in lines if 0 < f <= max_freq_hz}))
-
-    @property
-    def fundamental_order(self) -> Fraction:
-        """The slowest line every shaft and stage of the machine repeats at, in input
-        orders: the greatest common divisor of the shafts' hunting-tooth orders."""
-        orders = []
-        for k, s in enumerate(self.stages):
-            ratio = self.shaft_ratio(k)
-            orders.append(ratio * s.pinion_teeth / math.lcm(s.pinion_teeth, s.gear_teeth))
-        common = orders[0]
-        for o in orders[1:]:
-            common = Fraction(math.gcd(common.numerator * o.denominator,
-                                       o.numerator * common.denominator),
-                              common.denominator * o.denominator)
-        return common
 
 
 # ---------------------------------------------------------------------- reading

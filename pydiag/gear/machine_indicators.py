@@ -32,7 +32,7 @@ from pydiag.core.measurement import Measurement
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.tracking import track_revolutions
-from pydiag.signal.condition import (TrendReference, raw_indicators, synchronous_average,
+from pydiag.signal.condition import (TrendReference, synchronous_average,
                                      tsa_indicators, tsa_signals)
 
 #: A stage is changed when a shaft's residual energy moved by more than this many times
@@ -124,8 +124,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             energy[channel] = float(np.var(parts[0].residual))
             halves[channel] = (float(np.var(parts[1].residual)),
                                float(np.var(parts[2].residual)))
-            values = {**raw_indicators(measurement.channels[channel]),
-                      **tsa_indicators(parts[0], TrendReference())}
+            values = tsa_indicators(parts[0], TrendReference())
             table[channel] = {k: float(values[k]) for k in SHAFT_INDICATORS}
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
                                halves, table))

@@ -205,9 +205,9 @@ class MeshComb:
 
     @classmethod
     def of_machine(cls, machine: Machine, search: float = MACHINE_SEARCH) -> "MeshComb":
-        """Every stage's mesh; one stage is a pair. With two or more stages the window is
-        ``search`` whole: one speed must put every stage's mesh on a line, and no shaft
-        order moves all of them onto sidebands at once as it moves one."""
+        """Every stage's mesh and the sideband families at both of its shafts; one stage is
+        a pair. With two or more stages the window is ``search`` whole: a speed that puts
+        every stage's mesh on a sideband (module docstring) spaces every family wrong."""
         if len(machine.stages) == 1:
             s = machine.stages[0]
             return cls.of_pair(GearKinematics(s.pinion_teeth, s.gear_teeth, 1.0), search)
@@ -217,11 +217,6 @@ class MeshComb:
         sidebands = tuple((float(machine.shaft_ratio(k)), float(machine.shaft_ratio(k + 1)))
                           for k in range(len(machine.stages)))
         return cls(orders, bands, search, sidebands)
-
-
-def _demodulation_band_hz(kinematics: GearKinematics) -> float:
-    """Half-width of the band around a pair's mesh harmonic (:class:`MeshComb`)."""
-    return 0.5 * min(kinematics.f_pinion_hz, kinematics.f_gear_hz)
 
 
 def comb_speed(signals: list[np.ndarray], sample_rate_hz: float, comb: MeshComb,
@@ -289,8 +284,7 @@ def comb_speed(signals: list[np.ndarray], sample_rate_hz: float, comb: MeshComb,
             f"no mesh line stands out near {comb.orders[0] * nominal_hz:.1f} Hz "
             f"(+-{100 * comb.search:g} %): the best is {ratio:.1f}x its band's median, chance "
             f"reaches {needed:.1f}x; check the nominal speed (--rpm) and the teeth (--teeth or "
-            "the machine file), or give a tacho channel "
-            "(--tacho)")
+            "the machine file), or give a tacho channel (--tacho)")
     x = np.asarray(signals[c], dtype=float)
     order = h * comb.orders[m]
     index, cycles = tone_phase(x, sample_rate_hz, order * coarse, comb.bands[m] * coarse)
@@ -314,14 +308,6 @@ def _purity(spectrum: tuple[np.ndarray, np.ndarray], freq_hz: float, band_hz: fl
     if not np.any(rest):
         return math.inf
     return float(np.interp(freq_hz, freqs, amp) / max(float(np.max(amp[rest])), 1e-300))
-
-
-def mesh_speed(signal: np.ndarray, sample_rate_hz: float, kinematics: GearKinematics,
-               search: float = SPEED_SEARCH) -> SpeedEstimate:
-    """Pinion speed from the mesh harmonics of ``signal`` around the nominal
-    ``kinematics.f_pinion_hz`` (see the module docstring)."""
-    return comb_speed([signal], sample_rate_hz, MeshComb.of_pair(kinematics, search),
-                      kinematics.f_pinion_hz)
 
 
 def estimate_speed(measurement: Measurement, kinematics: GearKinematics,

@@ -89,9 +89,13 @@ def _gzipped(path: Path) -> bool:
     return path.suffix.lower() == ".gz"
 
 
+def _open_raw(path: Path):
+    """The file's bytes, decompressed when it is gzipped."""
+    return gzip.open(path, "rb") if _gzipped(path) else open(path, "rb")
+
+
 def _open_text(path: Path):
-    raw = gzip.open(path, "rb") if _gzipped(path) else open(path, "rb")
-    return io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
+    return io.TextIOWrapper(_open_raw(path), encoding="utf-8-sig", newline="")
 
 
 def _too_long(path: Path, n_samples: int) -> MeasurementError:
@@ -103,8 +107,7 @@ def _too_long(path: Path, n_samples: int) -> MeasurementError:
 def _check_text_rows(path: Path) -> None:
     """Count the lines without holding them (gzip streamed): refuse past MAX_SAMPLES."""
     lines = 0
-    opener = gzip.open if _gzipped(path) else open
-    with opener(path, "rb") as fh:
+    with _open_raw(path) as fh:
         while chunk := fh.read(1 << 22):
             lines += chunk.count(b"\n")
             if lines > MAX_SAMPLES + 100:  # a header and comments are not samples

@@ -14,7 +14,7 @@ import pytest
 
 from pydiag.core.errors import MachineError, MeasurementError
 from pydiag.core.measurement import Measurement
-from pydiag.gear.machine import Machine, load_machine, machine_from_dict
+from pydiag.gear.machine import load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedSettings, estimate_speed
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
@@ -54,8 +54,6 @@ def test_example_files_read_and_their_shafts_turn_as_the_teeth_say():
     assert phm.shaft_ratio(1) == Fraction(1, 3) and phm.shaft_ratio(2) == Fraction(1, 5)
     assert phm.mesh_order(0) == 32 and phm.mesh_order(1) == 16
     assert phm.tacho.channel == "ch3" and phm.tacho.pulses_per_rev == 10
-    # stage 2's hunting tooth repeats every 15 input turns, stage 1's every 3
-    assert phm.fundamental_order == Fraction(1, 15)
     kin = phm.stage_kinematics(1, 30.0)
     assert (kin.n_pinion, kin.n_gear, kin.f_pinion_hz) == (48, 80, pytest.approx(10.0))
     gfd = load_machine(EXAMPLES / "gfd_spectraquest.toml")
@@ -157,9 +155,3 @@ def test_a_tacho_estimate_carries_the_mesh_speed_to_check_it_by():
     assert found.speed_hz == pytest.approx(2 * mean_hz(revs), rel=1e-3)
     assert found.mesh_speed_hz == pytest.approx(mean_hz(revs), rel=1e-3)
     assert found.tacho_disagreement_pct == pytest.approx(-50, abs=0.1)
-
-
-def test_the_pair_shorthand_is_a_one_stage_machine():
-    pair = Machine.pair(14, 21, 25.0)
-    assert pair.shafts == ("pinion", "gear") and pair.mesh_order(0) == 14
-    assert pair.stage_kinematics(0, 25.0).f_gear_hz == pytest.approx(25.0 * 14 / 21)
