@@ -45,7 +45,7 @@ OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README 
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
 
 
-def real_records(data: Path, fmu: str, housing_fmu: str) -> list[tuple]:
+def real_records(data: Path, fmu: str) -> list[tuple]:
     rows = []
     for path in sorted(data.glob("*.csv.gz")):
         m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
@@ -56,11 +56,10 @@ def real_records(data: Path, fmu: str, housing_fmu: str) -> list[tuple]:
         wall = time.perf_counter() - t0
         fixed = FaultEstimator(seed=0).fit(build_problem(fmu, m, fit_gain=False, **common))
         effect = EFFECTS["housing_sensor"]
-        base_problem = build_problem(housing_fmu, m, fit_gain=True,
-                                     fixed_values=effect.neutral_values(), **common)
+        base_problem = build_problem(fmu, m, fit_gain=True, **common)
         estimator = FaultEstimator(n_particles=8, iterations=6, polish_evaluations=60, seed=0)
         base = compare(base_problem, FaultEstimator(seed=0))
-        housed = refit_with_effect(base_problem, base, effect, housing_fmu, estimator)
+        housed = refit_with_effect(base_problem, base, effect, fmu, estimator)
         s = problem.speed
         p = result.parameters
         rows.append((path.name.split(".")[0], f"{s.speed_hz:.4f}", f"{s.variation_pct:.3f}",
@@ -129,7 +128,6 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "gfd"))
     ap.add_argument("--fmu", default=str(ROOT / "build" / "GearPair.fmu"))
-    ap.add_argument("--housing-fmu", default=str(ROOT / "build" / "effects" / "HousingSensor.fmu"))
     ap.add_argument("--skip-throughput", action="store_true")
     ap.add_argument("--markdown")
     ap.add_argument("--child", help=argparse.SUPPRESS)
@@ -143,7 +141,7 @@ def main() -> int:
           "E compare", "E + housing", "f_housing/zeta", "a_f/f_f/f_ate/f_dte",
           "mode/severity", "diagnose s")
     print(" | ".join(h1), flush=True)
-    lines += [""] + table(h1, real_records(Path(args.data), args.fmu, args.housing_fmu))
+    lines += [""] + table(h1, real_records(Path(args.data), args.fmu))
     if not args.skip_throughput:
         h2 = ("format", "MB", "read s", "speed s", "read+speed+tracking s", "peak MB",
               "speed Hz (true mean 29.9)")

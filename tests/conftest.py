@@ -46,6 +46,18 @@ def effects_dir(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("effects")
 
 
+@pytest.fixture(scope="session")
+def housing_fmu(effects_dir) -> Path:
+    """GearDiag.Effects.HousingSensor's FMU: the housing mode in Modelica, which no fit uses
+    (the effect is a transfer path: pydiag.signal.transfer) but tests hold it to."""
+    fmu = effects_dir / "HousingSensor.fmu"
+    if not fmu.exists():
+        from fmu_build import build_fmu
+        build_fmu(ROOT / "modelica" / "GearDiag" / "Effects" / "HousingSensor.mo",
+                  "GearDiag.Effects.HousingSensor", fmu)
+    return fmu
+
+
 @pytest.fixture
 def modelica_copy(tmp_path) -> Path:
     """A scratch copy of the GearDiag package, safe to edit."""

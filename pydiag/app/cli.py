@@ -301,8 +301,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--history", help="SQLite run history (default: the per-user "
                    "~/.local/share/pydiag/history.sqlite, or under $XDG_DATA_HOME)")
     p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
-    p.add_argument("--effect", choices=list(EFFECTS), help="the FMU is this catalogue effect's "
-                   "model (e.g. bearing_outer_race): also fit the effect's parameters")
+    p.add_argument("--effect", choices=list(EFFECTS), help="also fit this catalogue effect: "
+                   "the FMU is its model (or the base, for housing_sensor's transfer path)")
     p.add_argument("--no-validate", action="store_true", help="do not try the suggested "
                    "effects held out (then none is confident)")
     p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")

@@ -18,7 +18,7 @@ from pydiag.io.outputs import write_text
 from pydiag.loop import history
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
-from pydiag.loop.effect_fit import EFFECT_REFIT, with_effect
+from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root, discover,
                                   effect_fmu)
 from pydiag.loop.validate import validate
@@ -35,6 +35,8 @@ def cmd_compare(args) -> int:
     args.history = str(history.resolve(args.history))
     history.check(args.history)
     effect = EFFECTS[args.effect] if args.effect else None
+    if effect is not None and effect.transfer is not None:
+        check_transfer_base(args.fmu, effect)
     if not args.no_validate:
         check_modelica_root(Path(args.modelica) if args.modelica else MODELICA_ROOT)
     m = read_input(args)

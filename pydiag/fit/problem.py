@@ -36,6 +36,7 @@ from pydiag.core.parameters import Parameter, fmu_values
 from pydiag.fit.objective import spectral_residuals
 from pydiag.fit.operating_point import at_model_speed, prepare_record, resolve_operating_point
 from pydiag.fmu.description import read_model_description
+from pydiag.fmu.periodic import simulate_periodic
 from pydiag.fmu.plant import FmuPlant, PlantSpec
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.features import KinematicFeaturizer
@@ -45,15 +46,11 @@ from pydiag.model.adapter import Adapter, check_against_fmu, check_units, gear_d
 from pydiag.model.simulate import SIMULATED_SOURCE
 from pydiag.signal.features import Featurizer, SpectrumFeaturizer
 from pydiag.signal.spectra import Spectrum, whole_periods
+from pydiag.signal.transfer import HousingMode
 
 #: Co-Simulation: communication steps per period of the highest analysed frequency,
 #: unless the adapter says otherwise.
 CS_STEPS_PER_PERIOD = 20.0
-#: Two consecutive simulated fundamental periods that differ by no more than this share of
-#: the channel's peak make the model periodic (:func:`simulate_periodic`). Measured on
-#: GearPair and the effect models at rest: 2e-5 to 4e-5 (the integrator's tolerance); a
-#: component that is not periodic and stays below this lies 60 dB under the peak.
-PERIODIC_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -76,6 +73,9 @@ class FitProblem:
         speed: the speed found in the record and how (None: the record was taken as it is)
         fixed_gains: channel -> gain (model -> measurement) held instead of fitted, e.g. a
             fit's gains carried to features that cannot tell a gain from a parameter
+        transfer: paths between the model's outputs and the sensors, applied to the
+            simulated outputs (:mod:`pydiag.signal.transfer`); their variables are among
+            the parameters and fixed values, never set in the FMU
     """
 
     spec: PlantSpec
@@ -92,6 +92,7 @@ class FitProblem:
     fit_gain: bool = False
     speed: SpeedEstimate | None = None
     fixed_gains: dict[str, float] = field(default_factory=dict)
+    transfer: tuple[HousingMode, ...] = ()
 
     @property
     def lows(self) -> np.ndarray:
@@ -134,9 +135,17 @@ class FitProblem:
 
     def _simulate(self, plant: FmuPlant, x: np.ndarray, duration_s: float) -> np.ndarray:
         values = {p.fmu_variable: p.fmu_value(v) for p, v in zip(self.parameters, x)}
-        return np.asarray(self.scales)[:, None] * simulate_periodic(
-            plant, values, duration_s, self.warmup_s,
-            None if self.kinematics is None else self.kinematics.period_s)
+        paths = {v for path in self.transfer for v in path.variables}
+        y = simulate_periodic(plant, {k: v for k, v in values.items() if k not in paths},
+                              duration_s, self.warmup_s,
+                              None if self.kinematics is None else self.kinematics.period_s)
+        if self.transfer:
+            y = np.array(y, dtype=float)
+            at = {**self.fixed_values, **values}
+            for path in self.transfer:
+                i = self.spec.sensors.index(path.output)
+                y[i] = path.apply(y[i], self.spec.sample_rate_hz, at)
+        return np.asarray(self.scales)[:, None] * y
 
     def _gain(self, model: np.ndarray, channel: str) -> float:
         if channel in self.fixed_gains:
@@ -186,21 +195,31 @@ class FitProblem:
     def derive(self, fmu_path: str | None = None, parameters: tuple[Parameter, ...] | None = None,
                fixed_values: dict[str, float] | None = None,
                featurizer: Featurizer | None = None,
-               fixed_gains: dict[str, float] | None = None) -> "FitProblem":
+               fixed_gains: dict[str, float] | None = None,
+               transfer: tuple[HousingMode, ...] | None = None) -> "FitProblem":
         """The same record, adapter and settings with another FMU (an effect's model, which
         has every variable of this one), other parameters, more fixed values (in FMU
         variable names), another featurizer (the record's features computed again) or
-        more channel gains held (:attr:`fixed_gains`). Nothing is simulated, and the FMU
+        more channel gains held (:attr:`fixed_gains`), other transfer paths (to the
+        sensors: their variables are not the FMU's). Nothing is simulated, and the FMU
         is not opened: its model description is read (once a file) to check that it has
         the variables set."""
         spec = self.spec if fmu_path is None else dataclasses.replace(self.spec,
                                                                       fmu_path=str(fmu_path))
         parameters = parameters or self.parameters
+        transfer = self.transfer if transfer is None else tuple(transfer)
+        paths = {v for path in transfer for v in path.variables}
         fixed = {**self.fixed_values, **(fixed_values or {})}
-        spec = dataclasses.replace(spec, fixed_values={**spec.fixed_values, **(fixed_values or {})})
+        spec = dataclasses.replace(spec, fixed_values={
+            **spec.fixed_values, **{k: v for k, v in (fixed_values or {}).items()
+                                    if k not in paths}})
         if fmu_path is not None or parameters is not self.parameters or fixed_values:
-            _check_variables(spec.fmu_path, [p.fmu_variable for p in parameters]
-                             + list(fixed_values or {}))
+            _check_variables(spec.fmu_path, [name for name in [p.fmu_variable for p in parameters]
+                                             + list(fixed_values or {}) if name not in paths])
+        missing = [path.output for path in transfer if path.output not in spec.sensors]
+        if missing:
+            raise EstimationError(f"no model output {', '.join(missing)} to pass through a "
+                                  "housing (the channels compared do not use it)")
         reference = self.reference
         if featurizer is not None and featurizer is not self.featurizer:
             m = self.measurement
@@ -208,7 +227,8 @@ class FitProblem:
         return dataclasses.replace(self, spec=spec, parameters=tuple(parameters),
                                    fixed_values=fixed, featurizer=featurizer or self.featurizer,
                                    reference=reference,
-                                   fixed_gains={**self.fixed_gains, **(fixed_gains or {})})
+                                   fixed_gains={**self.fixed_gains, **(fixed_gains or {})},
+                                   transfer=transfer)
 
 
 def _check_variables(fmu_path: str, names: list[str]) -> None:
@@ -222,34 +242,6 @@ def _check_variables(fmu_path: str, names: list[str]) -> None:
     if missing:
         raise EstimationError(f"{', '.join(missing)} {'is' if len(missing) == 1 else 'are'} "
                               f"not in {Path(fmu_path).name}")
-
-
-def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: float,
-                      warmup_s: float, period_s: float | None) -> np.ndarray:
-    """``plant.simulate(values, duration_s, warmup_s)``, from one period when the model is
-    periodic.
-
-    A gear model whose inputs are all synchronous with the fundamental period settles to a
-    response of that period: then two periods after the warm-up are simulated and, when
-    they agree (:data:`PERIODIC_TOLERANCE`), the second one is repeated over the duration.
-    A record of 33 periods then costs 2 simulated periods instead of 33 (measured on
-    GearPair, 2 cores x86_64: 10 ms instead of 134 ms). Anything that is not periodic
-    in ``period_s`` (a bearing's strikes, a ripple at a free frequency, a subharmonic, a
-    transient still decaying) makes the two periods differ, and the whole duration is
-    simulated as before.
-    """
-    fs = plant.sample_rate_hz
-    total = int(round(duration_s * fs))
-    if period_s is not None:
-        per = period_s * fs
-        n = int(round(per))
-        if n > 0 and abs(per - n) <= 1e-6 * per and total > 3 * n:
-            y = plant.simulate(values, 2 * n / fs, warmup_s)
-            first, last = y[:, :n], y[:, n:2 * n]
-            peak = np.max(np.abs(last), axis=1)
-            if np.all(np.max(np.abs(last - first), axis=1) <= PERIODIC_TOLERANCE * peak):
-                return np.tile(last, (1, -(-total // n)))[:, :total]
-    return plant.simulate(values, duration_s, warmup_s)
 
 
 class ProblemObjective:

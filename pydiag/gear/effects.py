@@ -29,6 +29,7 @@ from pydiag.gear.kinematic_map import (BEARING_FAMILIES, SHAFT_ORDERS, Kinematic
                                       kinematic_map, match)
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.peaks import Peak
+from pydiag.signal.transfer import HousingMode
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,11 @@ class Effect:
             bearing's geometry, another shaft's ratio) rather than fits
         missing: (kinematics) -> what the machine's description must say for it to have
             lines at all, "" when nothing is missing
+        transfer: it is a path between the model's output and the sensor, applied to the
+            base model's simulated output (:mod:`pydiag.signal.transfer`) rather than
+            built into an FMU of its own: it adds to any model, and costs no integration
+            of a stiff or slowly settling mode (its ``model`` is the Modelica model that
+            says the same, which a test holds it to)
     """
 
     key: str
@@ -87,6 +93,13 @@ class Effect:
     envelope: bool = False
     machine_values: Callable[[GearKinematics | None], dict[str, float]] | None = None
     missing: Callable[[GearKinematics | None], str] | None = None
+    transfer: HousingMode | None = None
+
+    @property
+    def own_fmu(self) -> bool:
+        """Whether it is fitted on an FMU of its own (else on the base model's FMU: its
+        parameters are the base's, ``in_base``, or a ``transfer`` path's)."""
+        return not self.in_base and self.transfer is None
 
     def changes(self, output: str) -> bool:
         """Whether the effect changes the model output ``output`` (an FMU variable)."""
@@ -112,7 +125,10 @@ class Effect:
         return f"its lines are not known without {missing}" if missing else ""
 
     def neutral_values(self) -> dict[str, float]:
-        """FMU values that switch the effect off (its lower bounds)."""
+        """FMU values that switch the effect off (its lower bounds; none for a transfer
+        path, which is off when it is not applied)."""
+        if self.transfer is not None:
+            return {}
         return {p.fmu_variable: p.fmu_value(p.low) for p in self.parameters}
 
 
@@ -437,7 +453,7 @@ EFFECTS = {e.key: e for e in (
            "accelerometer on the housing, behind one housing mode",
            (Parameter("f_housing", 20.0, MAX_HOUSING_HZ), Parameter("zeta_housing", 0.005, 0.5)),
            _family(GEAR_PAIR_FAMILIES), _housing_hint, outputs=("acc",), reshapes_base=True,
-           free_start=_housing_start),
+           free_start=_housing_start, transfer=HousingMode("acc")),
 )}
 
 

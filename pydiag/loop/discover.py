@@ -77,11 +77,11 @@ def check_modelica_root(modelica_root: Path) -> None:
 
 def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> Path:
     """The effect's FMU, built unless an up-to-date one exists (in ``build_dir``, default
-    :func:`default_build_dir`). An ``in_base`` effect has none: its FMU is the base
-    model's."""
+    :func:`default_build_dir`). An effect without ``Effect.own_fmu`` has none: it is
+    fitted on the base model's FMU."""
     effect = EFFECTS[key]
-    if effect.in_base:
-        raise ValueError(f"{key} frees parameters of the base model: it has no FMU of its own")
+    if not effect.own_fmu:
+        raise ValueError(f"{key} is fitted on the base model's FMU: it has no FMU of its own")
     out = Path(build_dir or default_build_dir(modelica_root)) / \
         f"{effect.model.rsplit('.', 1)[1]}.fmu"
     sources = list(Path(modelica_root).rglob("*.mo"))
@@ -157,8 +157,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     for key in keys:  # built in this process: two workers must not build one FMU at once
         started = time.perf_counter()
         try:
-            fmus[key] = (problem.spec.fmu_path if EFFECTS[key].in_base
-                         else str(effect_fmu(key, modelica_root, build_dir)))
+            fmus[key] = (str(effect_fmu(key, modelica_root, build_dir))
+                         if EFFECTS[key].own_fmu else problem.spec.fmu_path)
         except (PydiagError, BuildError) as err:  # its row, not built again
             found.append(_failed(key, err, started))
             if progress:

@@ -4,10 +4,12 @@ evidence, its parameters' bounds from the residual's peaks, and its fit with the
 
 from __future__ import annotations
 
+from pydiag.core.errors import UsageError
 from pydiag.core.parameters import Parameter
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
+from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.peaks import Peak
@@ -81,7 +83,13 @@ def with_effect(problem: FitProblem, base: Comparison, effect: Effect,
     names = {p.name for p in problem.parameters}
     own = tuple(p for p in effect_parameters(problem, base, effect) if p.name not in names)
     return problem.derive(fmu_path=effect_fmu, parameters=problem.parameters + own,
-                          fixed_values=effect.values_from(problem.kinematics))
+                          fixed_values=effect.values_from(problem.kinematics),
+                          transfer=_transfer(problem, effect))
+
+
+def _transfer(problem: FitProblem, effect: Effect):
+    """The transfer paths of ``problem``'s model with ``effect``."""
+    return problem.transfer + ((effect.transfer,) if effect.transfer is not None else ())
 
 
 def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,
@@ -102,14 +110,17 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     own = effect_parameters(problem, base, effect)
     machine = effect.values_from(problem.kinematics)
+    transfer = _transfer(problem, effect)
     held = problem.derive(fmu_path=effect_fmu, parameters=own, featurizer=featurizer,
-                          fixed_values={**problem.fmu_values(base.parameters), **machine})
+                          fixed_values={**problem.fmu_values(base.parameters), **machine},
+                          transfer=transfer)
     if not effect.reshapes_base:
         return held, (fit_affine(held)[0] if effect.affine else estimator.fit(held).parameters)
     fitted = estimator.replace(polish_starts=RESHAPE_STARTS, polish_evaluations=max(
         1, estimator.polish_evaluations // (2 * RESHAPE_STARTS))).fit(held).parameters
     names = {p.name for p in own}
     free = problem.derive(fmu_path=effect_fmu, featurizer=featurizer, fixed_values=machine,
+                          transfer=transfer,
                           parameters=tuple(p for p in problem.parameters
                                            if p.name not in names) + own)
     polish = free_polish(estimator, len(free.parameters))
@@ -119,6 +130,18 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
                                    **effect.free_start(featurizer.max_freq_hz)})
         best = far if far.error < best.error else best
     return free, best.parameters
+
+
+def check_transfer_base(fmu_path: str, effect: Effect) -> None:
+    """UsageError when ``fmu_path`` already has the transfer path ``effect`` is (a
+    HousingSensor FMU given for housing_sensor): pydiag applies it to the base model's
+    outputs, and would pass the signal through the mode twice."""
+    md, _ = read_model_description(fmu_path)
+    has = sorted({v.name for v in md.modelVariables} & set(effect.transfer.variables))
+    if has:
+        raise UsageError(f"{effect.key} is a transfer path pydiag applies to the base model's "
+                         f"outputs, and {md.modelName} has it already ({', '.join(has)}): "
+                         "give --fmu the base model (GearPair.fmu)")
 
 
 def in_model(problem: FitProblem, effect: Effect) -> bool:

@@ -45,8 +45,8 @@ def validate(problem: FitProblem, comparison: Comparison,
              tried: dict[str, HeldOut] | None = None) -> Comparison:
     """The comparison with its suggestions tried held out (module docstring).
 
-    ``effect_fmu``: the FMU of an effect, called only for an effect that is fitted (an
-    ``in_base`` one is fitted on the base FMU); it raises a :class:`PydiagError` (or a
+    ``effect_fmu``: the FMU of an effect, called only for an effect that is fitted (one
+    without ``Effect.own_fmu`` is fitted on the base FMU); it raises a :class:`PydiagError` (or a
     build error) when there is none. ``present``: effect keys the model already has
     (compare of an effect's model); ``tried``: held-out verdicts already made on this
     comparison (by :func:`pydiag.loop.discover.discover`), used instead of fitting the
@@ -76,7 +76,7 @@ def validate(problem: FitProblem, comparison: Comparison,
         if unknown:
             mark(s, Status.NOT_TRIED, unknown)
             continue
-        beside = [k for k in present if not (effect.in_base or EFFECTS[k].in_base)]
+        beside = [k for k in present if effect.own_fmu and EFFECTS[k].own_fmu]
         if beside:  # its model extends GearPair, not the model that has them
             mark(s, Status.NOT_VALIDATED, f"the model has {', '.join(beside)}, which "
                                           f"{effect.model} lacks: trying {s.effect} too "
@@ -87,8 +87,8 @@ def validate(problem: FitProblem, comparison: Comparison,
             if progress:
                 progress(s.effect)
             try:
-                fmu = (problem.spec.fmu_path if effect.in_base
-                       else functools.partial(effect_fmu, effect))  # built if it is fitted
+                fmu = (functools.partial(effect_fmu, effect) if effect.own_fmu
+                       else problem.spec.fmu_path)  # built if it is fitted
                 h = held_out(problem, comparison, effect, fmu, estimator, false_alarm_rate,
                              memo)
             except (PydiagError, BuildError) as err:

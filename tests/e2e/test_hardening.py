@@ -111,3 +111,14 @@ def test_an_output_may_not_replace_a_baseline_or_the_machine_file(record, tmp_pa
                       str(record), "--baseline", str(record), "--json", str(target), "--force")
         one_line_error(res, "would overwrite an input file")
         assert target.read_bytes() == before
+
+
+def test_the_housing_is_not_applied_to_a_model_that_has_it(record, housing_fmu, tmp_path):
+    """housing_sensor is a transfer path applied to the base model's output: given the
+    Modelica model that has the mode already, compare refuses before the fit, where it
+    would pass the signal through the mode twice."""
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(housing_fmu),
+                  "--effect", "housing_sensor", "--measurement", str(record), "--history",
+                  str(tmp_path / "h.sqlite"), *SMALL)
+    one_line_error(res, "housing_sensor is a transfer path", "give --fmu the base model")
+    assert not (tmp_path / "h.sqlite").exists()

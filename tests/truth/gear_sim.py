@@ -210,10 +210,38 @@ def _resonance(x: np.ndarray, fs: float, f_hz: float, zeta: float, acceleration:
     return signal.lfilter(b, a, x)
 
 
+#: The effects only the sensor sees: the mesh's dynamics are the same without them.
+SENSOR_ONLY = ("outer_race_acc", "inner_race_acc", "housing_hz", "housing_zeta", "coupling_acc",
+               "other_shaft_acc", "other_shaft_ratio")
+
+
+def dynamics_of(g: TruthGear) -> TruthGear:
+    """``g`` without the effects only the sensor sees: gears with one ``dynamics_of`` share
+    one integration (:func:`simulate_many`)."""
+    return replace(g, effects=replace(g.effects, **{name: getattr(Effects(), name)
+                                                     for name in SENSOR_ONLY}))
+
+
 def simulate(g: TruthGear, duration_s: float, sample_rate_hz: float,
              warmup_s: float = 0.3, effect_seed: int = 0) -> dict[str, np.ndarray]:
     """The noise-free channels ``acc`` (m/s2) and ``disp`` (m) over ``duration_s`` after
     ``warmup_s``; ``effect_seed`` draws the bearing's slip."""
+    return simulate_many([g], duration_s, sample_rate_hz, warmup_s, effect_seed)[0]
+
+
+def simulate_many(gears: list[TruthGear], duration_s: float, sample_rate_hz: float,
+                  warmup_s: float = 0.3, effect_seed: int = 0) -> list[dict[str, np.ndarray]]:
+    """:func:`simulate` of each of ``gears``, which differ only in what the sensor sees
+    (one :func:`dynamics_of`): the mesh is integrated once."""
+    if len({dynamics_of(g) for g in gears}) != 1:
+        raise ValueError("the gears differ in more than what the sensor sees")
+    t, y, out = _integrate(gears[0], duration_s, sample_rate_hz, warmup_s)
+    return [_observe(g, t, y, out, duration_s, sample_rate_hz, warmup_s, effect_seed)
+            for g in gears]
+
+
+def _integrate(g: TruthGear, duration_s: float, sample_rate_hz: float, warmup_s: float):
+    """(times, states, each sample's (derivatives, mesh force)) of the mesh's dynamics."""
     mesh = _Mesh(g)
     r_p, r_g = g.r_pinion_m, g.r_gear_m
     inertia_p = 2 * g.mass_kg * r_p ** 2  # each body contributes 1/(2 m) of 1/m_eq
@@ -229,7 +257,12 @@ def simulate(g: TruthGear, duration_s: float, sample_rate_hz: float,
     y = integrate.odeint(_rhs, [0.0, omega_p0, d0, 0.0], t, args=args, rtol=1e-9,
                          atol=[1e-9, 1e-6, 1e-13, 1e-9], hmax=0.25 / sample_rate_hz,
                          mxstep=100_000)
-    out = [_dynamics(yk, tk, *args) for yk, tk in zip(y, t)]
+    return t, y, [_dynamics(yk, tk, *args) for yk, tk in zip(y, t)]
+
+
+def _observe(g: TruthGear, t: np.ndarray, y: np.ndarray, out: list, duration_s: float,
+             sample_rate_hz: float, warmup_s: float, effect_seed: int) -> dict[str, np.ndarray]:
+    """What the sensors see of the integrated dynamics, with ``g``'s sensor effects."""
     acc = np.array([d[3] for d, _ in out])
     e = g.effects
     if e.housing_hz > 0:  # the sensor sees the housing's response to the mesh force

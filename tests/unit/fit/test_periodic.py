@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pydiag.fit.problem import PERIODIC_TOLERANCE, simulate_periodic
+from pydiag.fmu.periodic import PERIODIC_TOLERANCE, simulate_periodic
 
 RATE_HZ, PERIOD_S = 1000.0, 0.1
 
