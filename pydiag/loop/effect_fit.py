@@ -14,6 +14,7 @@ from pydiag.gear.effects import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.peaks import Peak
 from pydiag.loop.results import Comparison
+from pydiag.signal.transfer import HousingMode
 
 #: The refit of an effect's few parameters: a smaller swarm than a full diagnosis, and
 #: looser stops, as the effect is judged by a held-out test, not reported to six digits.
@@ -87,7 +88,7 @@ def with_effect(problem: FitProblem, base: Comparison, effect: Effect,
                           transfer=_transfer(problem, effect))
 
 
-def _transfer(problem: FitProblem, effect: Effect):
+def _transfer(problem: FitProblem, effect: Effect) -> tuple[HousingMode, ...]:
     """The transfer paths of ``problem``'s model with ``effect``."""
     return problem.transfer + ((effect.transfer,) if effect.transfer is not None else ())
 

@@ -46,8 +46,8 @@ def validate(problem: FitProblem, comparison: Comparison,
     """The comparison with its suggestions tried held out (module docstring).
 
     ``effect_fmu``: the FMU of an effect, called only for an effect that is fitted (one
-    without ``Effect.own_fmu`` is fitted on the base FMU); it raises a :class:`PydiagError` (or a
-    build error) when there is none. ``present``: effect keys the model already has
+    without ``Effect.own_fmu`` is fitted on the base FMU); it raises a
+    :class:`PydiagError` (or a build error) when there is none. ``present``: effect keys the model already has
     (compare of an effect's model); ``tried``: held-out verdicts already made on this
     comparison (by :func:`pydiag.loop.discover.discover`), used instead of fitting the
     effect again. An FMU that is not a GearDiag.GearPair model gets every suggestion
