@@ -31,6 +31,7 @@ from pydiag.fit.problem import build_problem
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import load_machine
+from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
@@ -57,7 +58,7 @@ class BatchTask:
     indicators: str | None = None  # the shaft whose condition indicators are columns too
     sensitivities: tuple[tuple[str, str], ...] = ()  # (NAME, sensitivity such as 100mV/g)
     machine: str | None = None  # a machine file of several stages: every stage diagnosed
-    baselines: tuple[str, ...] = ()  # its healthy records
+    baselines: tuple[MachineRecord, ...] = ()  # its healthy records, seen through it
     input_hz: float | None = None  # its nominal input speed
 
 
@@ -123,7 +124,7 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     result = diagnose_machine(task.fmu, m, load_machine(task.machine), task.input_hz,
                               settings.get("speed") or SpeedSettings(),
                               FaultEstimator(n_workers=1, **task.estimator),
-                              [_read(task, b) for b in task.baselines], adapter,
+                              task.baselines, adapter,
                               settings.get("feature_mode", "lines"), settings.get("fit_gain"))
     row: dict = {"status": "ok", "message": "; ".join(result.warnings),
                  **{k: v for k, v in result.speed.to_dict().items()

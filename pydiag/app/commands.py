@@ -23,7 +23,7 @@ from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import Machine, load_machine
-from pydiag.gear.machine_indicators import machine_report
+from pydiag.gear.machine_indicators import MachineRecord, machine_record, machine_report
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.measurements import write_measurement
@@ -242,11 +242,18 @@ def cmd_diagnose(args) -> int:
     return 0 if result.explained else 1
 
 
+def _baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
+    """The --baseline records as the machine sees them (their speed and every shaft's TSA),
+    read and made once."""
+    return [machine_record(read_input(args, path), machine, speed, args.rpm / 60.0)
+            for path in args.baseline or []]
+
+
 def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     """diagnose --machine with several stages: every stage fitted, judged against the
     baselines when there are some."""
     settings = problem_settings(args)
-    baselines = [read_input(args, path) for path in args.baseline or []]
+    baselines = _baseline_records(args, machine, settings["speed"])
     update, close = progress_bar(args.quiet)
     try:
         result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
@@ -324,11 +331,12 @@ def cmd_batch(args) -> int:
     if args.baseline and not staged:
         raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
                          "with its stages")
+    baselines = tuple(_baseline_records(args, machine, problem_settings(args)["speed"]))
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem_settings(args),
                              tuple(args.unit) if args.unit else None, args.indicators,
                              tuple(args.sensitivity or ()), args.machine if staged else None,
-                             tuple(args.baseline or ()), args.rpm / 60.0 if staged else None)
+                             baselines, args.rpm / 60.0 if staged else None)
              for p in paths]
     bar = None
     if not args.quiet:

@@ -25,6 +25,7 @@ on every sensor it describes.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +36,7 @@ from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import (MachineRecord, StageVerdict, judge_stages,
-                                            machine_record, shaft_records)
+                                            shaft_records)
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.tracking import order_track
 from pydiag.loop.diagnosis import Diagnosis, diagnose
@@ -164,11 +165,13 @@ def _sideband_suspect(problem: FitProblem) -> str | None:
 def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
                      input_hz: float, speed: SpeedSettings = SpeedSettings(),
                      estimator: FaultEstimator | None = None,
-                     baselines: list[Measurement] = (), adapter: Adapter | None = None,
+                     baselines: Sequence[MachineRecord] = (), adapter: Adapter | None = None,
                      feature_mode: str = "lines", fit_gain: bool | None = None
                      ) -> MachineDiagnosis:
     """Every stage of ``measurement`` diagnosed (module docstring), around the nominal input
-    speed ``input_hz``; ``baselines``: records of the machine in a known healthy state."""
+    speed ``input_hz``; ``baselines``: records of the machine in a known healthy state, as
+    :func:`~pydiag.gear.machine_indicators.machine_record` sees them (made once for a
+    batch of records)."""
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
     found = estimate_speed(measurement, machine.stage_kinematics(0, input_hz), speed,
@@ -177,9 +180,8 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     if baselines:
         record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop)),
                                str(measurement.metadata.get("file", "(in memory)")))
-        base = [machine_record(b, machine, speed, input_hz) for b in baselines]
-        verdicts, spread = judge_stages(machine, record, base)
-        names = tuple(b.file for b in base)
+        verdicts, spread = judge_stages(machine, record, list(baselines))
+        names = tuple(b.file for b in baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,

@@ -9,6 +9,7 @@ from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.features import KinematicFeaturizer
+from pydiag.gear.machine_indicators import machine_record
 from pydiag.gear.speed import SpeedSettings
 from pydiag.loop.stages import diagnose_machine, stage_problem
 
@@ -36,7 +37,9 @@ def test_a_stage_is_fitted_at_its_own_shafts_without_the_other_stages_lines(gear
 def test_every_stage_diagnosed_and_the_broken_one_judged_changed(gear_fmu):
     result = diagnose_machine(str(gear_fmu), gearbox_record(3, faulty_shaft=2, stage=1),
                               MACHINE, INPUT_HZ, SpeedSettings("mesh"),
-                              FaultEstimator(**SMALL), baselines=[gearbox_record(1)])
+                              FaultEstimator(**SMALL),
+                              baselines=[machine_record(gearbox_record(1), MACHINE,
+                                                        SpeedSettings("mesh"), INPUT_HZ)])
     first, second = result.stages
     assert first.fault_mode == "healthy" and first.severity == "none"
     assert second.verdict.changed and second.suspect == "gear"
@@ -70,6 +73,12 @@ def test_batch_diagnoses_every_stage_of_every_record(gear_fmu, tmp_path):
                   "2", "--polish", "0", "--workers", "2", "--quiet")
     assert res.returncode == 0, res.stderr
     rows = pd.read_csv(out).set_index("measurement")
+    # the baseline is read once, before any record: one that is not there stops the batch
+    res = run_cli("-m", "pydiag", "batch", "--fmu", str(gear_fmu), "--machine", str(machine),
+                  "--measurements", str(folder), "--baseline", str(tmp_path / "none.csv"),
+                  "--out", str(tmp_path / "none_rows.csv"), "--speed", "mesh", "--quiet")
+    assert res.returncode == 2 and "none.csv" in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and not (tmp_path / "none_rows.csv").exists()
     broken = rows.loc[str(folder / "broken.csv")]
     healthy = rows.loc[str(folder / "healthy.csv")]
     assert (broken["status"], healthy["status"]) == ("ok", "ok"), rows["message"]
