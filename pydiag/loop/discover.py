@@ -114,13 +114,21 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
                      time.perf_counter() - started, h.confident)
 
 
-def _shared_halves(problem: FitProblem, base: Comparison, keys: list[str]) -> dict:
+def _shared_halves(problem: FitProblem, base: Comparison, keys: list[str],
+                   estimator: FaultEstimator) -> dict:
     """What every effect's held-out test shares (:class:`pydiag.loop.held_out.Halves`), made
     once here for the workers; empty when it cannot be made (each effect's row then says
-    why)."""
+    why). The base polished free, which every effect that frees the base is scored
+    against, is made here too when two or more such effects may need it."""
     try:
         bands = {envelope_band(problem, EFFECTS[key]) for key in keys}
-        return {band: halves(problem, base, band, with_base_signals=True) for band in bands}
+        shared = {band: halves(problem, base, band, with_base_signals=True) for band in bands}
+        freeing = [key for key in keys if EFFECTS[key].reshapes_base
+                   and not EFFECTS[key].unknown_lines(problem.kinematics)]
+        if len(freeing) >= 2:
+            band = envelope_band(problem, EFFECTS[freeing[0]])
+            shared[band].free_base(estimator, dict(base.parameters))
+        return shared
     except PydiagError:
         return {}
 
@@ -164,8 +172,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
             if progress:
                 progress(found[-1])
     keys = [key for key in keys if key in fmus]
-    memo = _shared_halves(problem, base, keys)
     effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
+    memo = _shared_halves(problem, base, keys, effect_estimator)
     cores = effect_estimator.n_workers or os.cpu_count() or 1
     jobs = min(cores, len(keys))
     if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children

@@ -85,6 +85,17 @@ class Halves:
     measured: MeasuredSpectra
     lines: list[KinematicLine]
     base_signals: np.ndarray | None = None
+    freed_base: dict[str, float] | None = None  # the base polished free on A (one estimator)
+
+    def free_base(self, estimator: FaultEstimator, parameters: dict[str, float]
+                  ) -> dict[str, float]:
+        """The base fit ``parameters`` polished with every base parameter free on half A
+        (:func:`~pydiag.loop.effect_fit.free_polish`): what every effect that frees the
+        base is scored against, made once for all of them."""
+        if self.freed_base is None:
+            self.freed_base = free_polish(estimator, len(self.base_problem.parameters)).refine(
+                self.base_problem, parameters).parameters
+        return self.freed_base
 
 
 def envelope_band(problem: FitProblem, effect: Effect) -> tuple[float, float] | None:
@@ -221,8 +232,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
         effect_fmu = effect_fmu()
     effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half, estimator)
     if effect.reshapes_base:  # its fit freed the base: the base model gets the same polish
-        base_fit = free_polish(estimator, len(base_problem.parameters)).refine(
-            base_problem, base_fit).parameters
+        base_fit = shared.free_base(estimator, base_fit)
     if effect.reshapes_base:  # channel gains fitted on A (or held)
         y0 = _signals(base_problem, base_fit)
     else:
