@@ -21,7 +21,7 @@ venv: $(STAMP)
 # is its console script, and edits take effect at once.
 $(STAMP): requirements.txt pyproject.toml
 	$(PYTHON_BOOT) -m venv $(VENV)
-	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps -r requirements.txt
 	touch $(STAMP)
 
 fmu: $(FMUS)

@@ -49,3 +49,24 @@ def test_fresh_environment_installs_and_runs_the_command(tmp_path):
     res = subprocess.run([str(tmp_path / "env" / "bin" / "pydiag"), "--help"], cwd=tmp_path,
                          capture_output=True, text=True)
     assert res.returncode == 0 and "diagnose" in res.stdout, res.stderr
+
+
+def test_the_install_pins_are_pyprojects():
+    """make venv installs requirements.txt without resolving (--no-deps): it must hold every
+    pin of pyproject.toml, its extras too, at the same version, and pin all it lists."""
+    import re
+    import tomllib
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    wanted = project["dependencies"] + [d for extra in project["optional-dependencies"].values()
+                                         for d in extra]
+    lines = [ln.strip() for ln in (ROOT / "requirements.txt").read_text().splitlines()
+             if ln.strip() and not ln.startswith("#")]
+    assert lines[-1] == "-e ."
+    pins = {}
+    for ln in lines[:-1]:
+        name, _, version = ln.partition("==")
+        assert version, f"{ln!r} is not pinned"
+        pins[re.sub(r"[-_.]+", "-", name).lower()] = version
+    for dep in wanted:
+        name, _, version = dep.partition("==")
+        assert pins.get(re.sub(r"[-_.]+", "-", name).lower()) == version, dep
