@@ -113,7 +113,8 @@ def test_an_output_may_not_replace_a_baseline_or_the_machine_file(record, tmp_pa
         assert target.read_bytes() == before
 
 
-def test_the_housing_is_not_applied_to_a_model_that_has_it(record, housing_fmu, tmp_path):
+def test_the_housing_is_not_applied_to_a_model_that_has_it(record, housing_fmu, gear_fmu,
+                                                            tmp_path):
     """housing_sensor is a transfer path applied to the base model's output: given the
     Modelica model that has the mode already, compare refuses before the fit, where it
     would pass the signal through the mode twice."""
@@ -122,3 +123,11 @@ def test_the_housing_is_not_applied_to_a_model_that_has_it(record, housing_fmu, 
                   str(tmp_path / "h.sqlite"), *SMALL)
     one_line_error(res, "housing_sensor is a transfer path", "give --fmu the base model")
     assert not (tmp_path / "h.sqlite").exists()
+    # given the base model, the housing's mode is fitted on its output
+    out = tmp_path / "c.json"
+    res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--effect",
+                  "housing_sensor", "--measurement", str(record), "--history",
+                  str(tmp_path / "h.sqlite"), "--no-validate", "--json", str(out), *SMALL)
+    assert res.returncode == 0, res.stderr
+    fitted = json.loads(out.read_text())["parameters"]
+    assert 20 <= fitted["f_housing"] <= 10_000 and 0.005 <= fitted["zeta_housing"] <= 0.5
