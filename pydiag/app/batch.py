@@ -28,6 +28,7 @@ from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
+from pydiag.gear.classify import SEVERITIES
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import load_machine
@@ -145,8 +146,9 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
 
 
 def _severity_rank(severity: str) -> int:
-    order = ("none", "early", "medium", "advanced")
-    return order.index(severity) if severity in order else -1
+    """The paper's classes in order; "unknown" (no diagnosis, a changed stage the model
+    cannot class) below them all."""
+    return SEVERITIES.index(severity) if severity in SEVERITIES else -1
 
 
 def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",

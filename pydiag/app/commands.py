@@ -224,11 +224,8 @@ def cmd_diagnose(args) -> int:
     check_outputs(args, "json")
     m = read_input(args)
     machine = args.machine_description
-    if machine is not None and len(machine.stages) > 1:
+    if _staged(args):
         return _diagnose_stages(args, machine, m)
-    if args.baseline:
-        raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
-                         "with its stages")
     problem = problem_of(args, m)
     result = fit(args, problem)
     print(format_result(result))
@@ -240,6 +237,17 @@ def cmd_diagnose(args) -> int:
                "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0 if result.explained else 1
+
+
+def _staged(args) -> bool:
+    """Whether --machine describes several stages (diagnose and batch fit each); --baseline
+    without them is refused."""
+    machine = args.machine_description
+    staged = machine is not None and len(machine.stages) > 1
+    if args.baseline and not staged:
+        raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
+                         "with its stages")
+    return staged
 
 
 def _baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
@@ -306,8 +314,8 @@ def cmd_indicators(args) -> int:
 def _machine_indicators(args, machine: Machine, m: Measurement, speed: SpeedSettings) -> int:
     """indicators --machine: every shaft's TSA, and every stage judged against the
     baselines when there are some."""
-    baselines = [read_input(args, path) for path in args.baseline or []]
-    report = machine_report(m, machine, speed, args.rpm / 60.0, baselines)
+    report = machine_report(m, machine, speed, args.rpm / 60.0,
+                            _baseline_records(args, machine, speed))
     print(format_machine_report(report))
     warning = report.record.speed.tacho_warning()
     if warning:
@@ -327,13 +335,11 @@ def cmd_batch(args) -> int:
     settings = {k: v for k, v in estimator_settings(args).items() if k != "n_workers"}
     channels = channels_to_read(args)
     machine = args.machine_description
-    staged = machine is not None and len(machine.stages) > 1
-    if args.baseline and not staged:
-        raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
-                         "with its stages")
-    baselines = tuple(_baseline_records(args, machine, problem_settings(args)["speed"]))
+    staged = _staged(args)
+    problem = problem_settings(args)
+    baselines = tuple(_baseline_records(args, machine, problem["speed"]))
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
-                             args.sample_rate, args.adapter, problem_settings(args),
+                             args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,
                              tuple(args.sensitivity or ()), args.machine if staged else None,
                              baselines, args.rpm / 60.0 if staged else None)

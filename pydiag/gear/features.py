@@ -83,22 +83,15 @@ def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = 
     return Spectrum(spec.freq_hz[idx], spec.amplitude[idx], spec.noise_power)
 
 
-#: The shaft-order sidebands of a mesh harmonic that are the pair's own lines.
-OWN_SIDEBANDS = 6
-
-
 def own_lines(kin: GearKinematics, max_freq_hz: float) -> np.ndarray:
     """The pair's own lines up to ``max_freq_hz``: the mesh harmonics and their sidebands
-    1 to :data:`OWN_SIDEBANDS` at both shafts' orders, the shafts' first
+    (:meth:`~pydiag.gear.kinematics.GearKinematics.mesh_lines_hz`), the shafts' first
     :data:`N_SHAFT_HARMONICS` orders and the assembly phase's harmonics below the mesh (the
     paper's bands; a high order of a shaft is another stage's mesh as often as not)."""
     fp, fg, fm, fa = kin.f_pinion_hz, kin.f_gear_hz, kin.f_mesh_hz, kin.f_assembly_hz
     orders = np.arange(1, N_SHAFT_HARMONICS + 1)
-    lines = [orders * fp, orders * fg, np.arange(1, fm / fa) * fa]
-    k = np.arange(-OWN_SIDEBANDS, OWN_SIDEBANDS + 1)
-    for h in range(1, int(max_freq_hz / fm) + 2):
-        lines += [h * fm + k * fp, h * fm + k * fg]
-    out = np.concatenate(lines)
+    out = np.concatenate([orders * fp, orders * fg, np.arange(1, fm / fa) * fa,
+                          np.array(kin.mesh_lines_hz(max_freq_hz))])
     return out[(out > 0) & (out <= max_freq_hz)]
 
 

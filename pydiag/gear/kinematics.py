@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 from pydiag.core.errors import UsageError
 
+#: The shaft-order sidebands of a mesh harmonic that are its pair's own lines.
+MESH_SIDEBANDS = 6
 
 @dataclass(frozen=True)
 class Bearing:
@@ -100,3 +102,13 @@ class GearKinematics:
     def period_s(self) -> float:
         """Fundamental period: every shaft, tooth and assembly-phase line is a harmonic of 1/period."""
         return 1.0 / self.f_hunting_hz
+
+    def mesh_lines_hz(self, max_freq_hz: float,
+                      n_sidebands: int = MESH_SIDEBANDS) -> tuple[float, ...]:
+        """The mesh harmonics and their sidebands 1 to ``n_sidebands`` at both shafts'
+        orders, in (0, ``max_freq_hz``], sorted."""
+        lines = {h * self.f_mesh_hz + k * f
+                 for h in range(1, int(max_freq_hz / self.f_mesh_hz) + 2)
+                 for f in (self.f_pinion_hz, self.f_gear_hz)
+                 for k in range(-n_sidebands, n_sidebands + 1)}
+        return tuple(sorted(f for f in lines if 0 < f <= max_freq_hz))

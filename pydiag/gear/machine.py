@@ -141,19 +141,13 @@ class Machine:
         return GearKinematics(s.pinion_teeth, s.gear_teeth,
                               float(input_hz * self.shaft_ratio(stage)), bearing=bearing)
 
-    def stage_lines(self, stage: int, input_hz: float, max_freq_hz: float,
-                    n_sidebands: int = 6) -> tuple[float, ...]:
-        """Stage ``stage``'s mesh harmonics and their sidebands 1 to ``n_sidebands`` at both
-        of its shafts' orders, up to ``max_freq_hz``, with ``input_hz`` on the input shaft:
-        the lines another stage's fit names and leaves out."""
-        mesh = float(self.mesh_order(stage)) * input_hz
-        shafts = (float(self.shaft_ratio(stage)) * input_hz,
-                  float(self.shaft_ratio(stage + 1)) * input_hz)
-        lines = []
-        for h in range(1, int(max_freq_hz / mesh) + 2):
-            lines += [h * mesh + k * f for f in shafts
-                      for k in range(-n_sidebands, n_sidebands + 1)]
-        return tuple(sorted({f for f in lines if 0 < f <= max_freq_hz}))
+    def stage_lines(self, stage: int, input_hz: float, max_freq_hz: float
+                    ) -> tuple[float, ...]:
+        """Stage ``stage``'s mesh harmonics and their sidebands at both of its shafts'
+        orders up to ``max_freq_hz``, with ``input_hz`` on the input shaft
+        (:meth:`~pydiag.gear.kinematics.GearKinematics.mesh_lines_hz`): the lines another
+        stage's fit names and leaves out."""
+        return self.stage_kinematics(stage, input_hz).mesh_lines_hz(max_freq_hz)
 
 
 # ---------------------------------------------------------------------- reading

@@ -23,6 +23,7 @@ machine's residual energy.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -275,9 +276,10 @@ class MachineReport:
 
 
 def machine_report(measurement: Measurement, machine: Machine, speed: SpeedSettings,
-                   input_hz: float, baselines: list[Measurement] = ()) -> MachineReport:
-    """Every shaft of ``measurement`` and, with ``baselines``, every stage judged."""
+                   input_hz: float, baselines: Sequence[MachineRecord] = ()) -> MachineReport:
+    """Every shaft of ``measurement`` and, with ``baselines`` (healthy records as
+    :func:`machine_record` sees them), every stage judged."""
     record = machine_record(measurement, machine, speed, input_hz)
-    base = [machine_record(b, machine, speed, input_hz) for b in baselines]
+    base = list(baselines)
     verdicts, spread = judge_stages(machine, record, base) if base else ([], None)
     return MachineReport(machine, record, tuple(b.file for b in base), tuple(verdicts), spread)
