@@ -17,10 +17,10 @@ import signal
 import sys
 import threading
 
-from pydiag.app.commands import (apply_machine, cmd_batch, cmd_demo, cmd_diagnose,
-                                 cmd_indicators, cmd_inspect, cmd_regress, cmd_simulate,
-                                 warn_validation)
+from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators,
+                                 cmd_inspect, cmd_regress, cmd_simulate, warn_validation)
 from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
+from pydiag.app.machine_options import apply_machine
 from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
@@ -184,11 +184,20 @@ def _operating_args(p: argparse.ArgumentParser) -> None:
                    "machine file's, else 1)")
 
 
-def _other_shaft_arg(p: argparse.ArgumentParser) -> None:
+def _loop_args(p: argparse.ArgumentParser) -> None:
+    """compare's and discover's: the pair's surroundings, the stage, the effect models."""
+    p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM"
+                   "[,ANGLE_DEG] for BPFO/BPFI/BSF/FTF")
     p.add_argument("--other-shaft", type=speed_ratio, metavar="RATIO",
                    help="speed of another shaft over the pinion's (a motor shaft whose Z1 "
                    "teeth drive Z2 on the pinion's: Z2/Z1; a second stage on the gear's "
                    "shaft, Z3 driving Z4: NP/NG*Z3/Z4): its orders are kinematic lines")
+    p.add_argument("--stage", metavar="NAME|N", help="with a --machine of several stages: "
+                   "the stage whose pair model is fitted (its name, or its number from 1 at "
+                   "the input); every stage's lines are named")
+    p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
+    p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
+                   "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")
 
 
 def _record_args(p: argparse.ArgumentParser) -> None:
@@ -290,9 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="fit, then show where the model fails and which effect is missing")
     p.add_argument("--fmu", required=True)
     _measurement_args(p)
-    p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM"
-                   "[,ANGLE_DEG] for BPFO/BPFI/BSF/FTF")
-    _other_shaft_arg(p)
+    _loop_args(p)
     p.add_argument("--false-alarm-rate", type=rate, default=0.01,
                    help="chance of any false peak on a perfect model among the kinematic "
                    "lines, and again among the other bins, in (0, 1) (default 0.01)")
@@ -305,9 +312,6 @@ def build_parser() -> argparse.ArgumentParser:
                    "the FMU is its model (or the base, for housing_sensor's transfer path)")
     p.add_argument("--no-validate", action="store_true", help="do not try the suggested "
                    "effects held out (then none is confident)")
-    p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
-    p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
-                   "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_compare)
@@ -315,13 +319,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("discover", help="try every catalogue effect held out, rank them")
     p.add_argument("--fmu", required=True, help="the base model FMU")
     _measurement_args(p)
-    p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG]")
-    _other_shaft_arg(p)
+    _loop_args(p)
     p.add_argument("--effects", type=effect_list, help="comma-separated effect keys (default: "
                    "the whole catalogue)")
-    p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
-    p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
-                   "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")
     p.add_argument("--json", help="write the ranking as JSON here")
     _force(p)
     _optimiser_args(p)

@@ -22,16 +22,16 @@ from pydiag.fmu.inspect import describe, format_info
 from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.machine import Machine, load_machine
+from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record, machine_report
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.measurements import write_measurement
-from pydiag.io.readers import parse_units, read_measurement
+from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
 from pydiag.loop.diagnosis import Diagnosis, diagnose
-from pydiag.loop.stages import diagnose_machine
+from pydiag.loop.stages import diagnose_machine, machine_speed, stage_problem
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement
 
@@ -99,65 +99,6 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
-#: The commands that fit a pair model; of these, diagnose and batch fit every stage of a
-#: machine, compare and discover one pair (a machine of several stages is not theirs yet).
-PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
-
-
-def apply_machine(args) -> Machine | None:
-    """The machine file's facts as the options they stand for, where the command line did
-    not give them (it wins): channels and their units and sensitivities, the tacho, the
-    nominal speed; for the commands that fit a pair, its teeth and its pinion bearing.
-    Returns the machine (None without --machine)."""
-    if not getattr(args, "machine", None):
-        if getattr(args, "pulses_per_rev", None) is None and hasattr(args, "pulses_per_rev"):
-            args.pulses_per_rev = 1
-        return None
-    if args.teeth is not None:
-        raise UsageError("--teeth and --machine both give the gears' teeth: give one")
-    machine = load_machine(args.machine)
-    fits = args.command in PAIR_COMMANDS
-    staged = len(machine.stages) > 1
-    if fits and staged and args.command not in ("diagnose", "batch"):
-        raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
-                         "one gear pair (per-stage comparisons are not built yet): `pydiag "
-                         "diagnose --machine` fits every stage, `pydiag indicators --machine` "
-                         "judges every stage against a baseline")
-    if args.rpm is None:
-        if machine.input_hz is None:
-            raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
-                             "input_rpm")
-        args.rpm = 60 * machine.input_hz
-    tacho = machine.tacho
-    if tacho is not None and args.tacho is None:  # never a sensor, even with --speed mesh
-        if tacho.shaft != 0:
-            raise UsageError(f"{args.machine}: a tacho on the {machine.shafts[tacho.shaft]} "
-                             "shaft is not supported yet (only on the input shaft)")
-        args.tacho = tacho.channel
-        if args.pulses_per_rev is None:
-            args.pulses_per_rev = tacho.pulses_per_rev
-    if args.pulses_per_rev is None:
-        args.pulses_per_rev = 1
-    if not args.channel and machine.sensors:  # a staged fit picks each stage's own
-        args.channel = [f"{s.channel}={s.output}" if fits and not staged else s.channel
-                        for s in machine.sensors]
-    given_units = parse_units(args.unit)
-    if None not in given_units:
-        args.unit = list(args.unit or []) + [f"{s.channel}={s.unit}" for s in machine.sensors
-                                             if s.unit and s.channel not in given_units]
-    given = dict(args.sensitivity or [])
-    args.sensitivity = list(args.sensitivity or []) + [
-        (s.channel, s.sensitivity) for s in machine.sensors
-        if s.sensitivity and s.channel not in given]
-    if fits and not staged:
-        stage = machine.stages[0]
-        args.teeth = (stage.pinion_teeth, stage.gear_teeth)
-        bearing = next((b.bearing for b in machine.bearings if b.shaft == 0), None)
-        if bearing is not None and getattr(args, "bearing", "absent") is None:
-            args.bearing = bearing
-    return machine
-
-
 def channels_to_read(args) -> list[str] | None:
     """The --channel specs, with the tacho channel added when channels are chosen."""
     chosen = list(args.channel or [])
@@ -193,9 +134,18 @@ def problem_settings(args) -> dict:
                                    pulses_per_rev=args.pulses_per_rev)}
 
 
-def problem_of(args, measurement: Measurement, **kwargs) -> FitProblem:
-    return build_problem(args.fmu, measurement, adapter_of(args),
-                         **{**problem_settings(args), **kwargs})
+def problem_of(args, measurement: Measurement,
+               fixed_values: dict[str, float] | None = None) -> FitProblem:
+    """The fit problem of the command line: its pair's, or a machine's stage's (--stage)."""
+    machine, settings = getattr(args, "machine_description", None), problem_settings(args)
+    if machine is None or len(machine.stages) == 1:
+        return build_problem(args.fmu, measurement, adapter_of(args), **settings,
+                             fixed_values=fixed_values)
+    speed = settings["speed"]
+    return stage_problem(args.fmu, measurement, machine, args.stage_index,
+                         machine_speed(measurement, machine, args.rpm / 60.0, speed),
+                         adapter_of(args), settings["feature_mode"], settings["fit_gain"],
+                         (speed.tacho,) if speed.tacho else (), fixed_values)
 
 
 def fit(args, problem: FitProblem) -> Diagnosis:

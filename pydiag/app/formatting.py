@@ -38,6 +38,8 @@ def format_result(result: Diagnosis, truth: dict | None = None) -> str:
 def format_facts(facts: dict) -> str:
     """The record analysed: speed, periods, seconds, channel gains."""
     lines = []
+    if facts.get("stage"):
+        lines.append(f"stage      : {facts['stage']}")
     if "speed_hz" in facts:
         lines.append(f"speed      : {facts['speed_hz']:.5f} Hz pinion ({60 * facts['speed_hz']:.2f} "
                      f"rpm; nominal {facts['nominal_speed_hz']:.4g} Hz), varies "

@@ -30,6 +30,16 @@ def _effect_estimator(args) -> FaultEstimator:
     return FaultEstimator(**{**EFFECT_REFIT, **estimator_settings(args)})
 
 
+def _stage_fact(args) -> dict:
+    """The stage of a machine of several stages that was fitted: its name and teeth."""
+    machine = getattr(args, "machine_description", None)
+    if machine is None or len(machine.stages) == 1:
+        return {}
+    s = machine.stages[args.stage_index]
+    return {"stage": f"{s.name} ({s.pinion_teeth}/{s.gear_teeth} teeth) of {machine.name}; "
+                     "the speed is its pinion shaft's"}
+
+
 def cmd_compare(args) -> int:
     check_outputs(args, "json", "report")
     args.history = str(history.resolve(args.history))
@@ -62,6 +72,7 @@ def cmd_compare(args) -> int:
     md, _ = read_model_description(args.fmu)
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
+    facts.update(_stage_fact(args))
     warnings = fit_warnings(problem, c.fit_error, c.gains) if c.fit_error is not None else []
     # the run is recorded when its outputs are written (history.recording)
     with history.recording(args.history, c, args.measurement, md.modelName,
@@ -91,7 +102,7 @@ def cmd_discover(args) -> int:
                            Path(args.modelica) if args.modelica else MODELICA_ROOT,
                            Path(args.build_dir) if args.build_dir else None, progress,
                            _effect_estimator(args))
-    print(format_discovery(base, found))
+    print("\n".join(filter(None, [format_facts(_stage_fact(args)), format_discovery(base, found)])))
     if args.json:
         write_text(args.json, json.dumps(as_dict(base, found), indent=2) + "\n", args.force)
     return 0

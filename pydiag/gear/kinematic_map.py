@@ -12,6 +12,15 @@ Families (each line carries its family and order):
 - ``other_shaft``: k*f_other, the orders of another shaft of the machine (when its speed
   ratio is given: ``GearKinematics.other_shaft_ratio``), up to :data:`SHAFT_ORDERS`
 
+The rest of a gearbox (``GearKinematics.machine``), lines no effect of the pair models:
+
+- ``stage_mesh``: another stage's mesh harmonics; ``stage_mesh_sb``: their sidebands at
+  both of its shafts' orders (order = k, signed)
+- ``stage_assembly``: another stage's assembly-phase and hunting-tooth lines
+- ``machine_shaft``: the orders of the machine's other shafts (but the ``other_shaft``),
+  up to :data:`SHAFT_ORDERS`
+- ``machine_bearing``: the defect frequencies of bearings on the machine's other shafts
+
 A frequency is matched to the nearest line within ``tolerance_hz``; families earlier in
 ``PRIORITY`` win ties: a mesh harmonic is also a pinion harmonic and is named ``mesh``; a
 line within ``n_sidebands`` shaft orders of a mesh harmonic is named as its sideband. Each
@@ -20,12 +29,14 @@ line lists the other families with a line at the very same frequency (``also``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 from pydiag.gear.kinematics import GearKinematics
 
-PRIORITY = ("mesh", "mesh_sb_pinion", "mesh_sb_gear", "pinion", "gear", "assembly",
-            "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "other_shaft", "hunting")
+PRIORITY = ("mesh", "stage_mesh", "mesh_sb_pinion", "mesh_sb_gear", "stage_mesh_sb", "pinion",
+            "gear", "assembly", "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "machine_bearing",
+            "other_shaft", "machine_shaft", "stage_assembly", "hunting")
 #: The shaft orders a shaft's own vibration is modelled at (GearDiag.Components.ShaftOrders):
 #: an unbalance at 1x, a misalignment at 1x-2x, a coupling or a looseness up to about 10x.
 #: The map names another shaft's orders up to this (higher ones its own mesh would make,
@@ -87,7 +98,39 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float,
                     for sign in (-1, 1):
                         add(k * f + sign * f_shaft, "bpfi_sb", sign * k,
                             f"{k}x BPFI {'+' if sign > 0 else '-'} shaft")
+    if kin.machine is not None:
+        _machine_lines(kin, max_freq_hz, n_sidebands, add)
     return coinciding(lines)
+
+
+def _machine_lines(kin: GearKinematics, max_freq_hz: float, n_sidebands: int, add) -> None:
+    """The lines of the rest of the gearbox (module docstring), through ``add``."""
+    fp, context = kin.f_pinion_hz, kin.machine
+    for stage in context.stages:
+        f_in, f_out = stage.pinion_ratio * fp, stage.gear_ratio * fp
+        fm = stage.pinion_teeth * f_in
+        for h in range(1, int(max_freq_hz / fm) + 2):
+            add(h * fm, "stage_mesh", h, f"{h}x {stage.name} mesh")
+            for k in range(1, n_sidebands + 1):
+                for sign in (-1, 1):
+                    for shaft, f in ((stage.pinion_shaft, f_in), (stage.gear_shaft, f_out)):
+                        add(h * fm + sign * k * f, "stage_mesh_sb", sign * k,
+                            f"{h}x {stage.name} mesh {'+' if sign > 0 else '-'} {k}x {shaft}")
+        pair = GearKinematics(stage.pinion_teeth, stage.gear_teeth, f_in)
+        for name, f in (("assembly phase", pair.f_assembly_hz), ("hunting tooth", pair.f_hunting_hz)):
+            for k in range(1, int(max_freq_hz / f) + 1):
+                add(k * f, "stage_assembly", k, f"{k}x {stage.name} {name}")
+    named = kin.other_shaft_ratio
+    for shaft in context.shafts:
+        if named is not None and math.isclose(shaft.ratio, named, rel_tol=1e-12):
+            continue  # the other shaft's own family
+        f = shaft.ratio * fp
+        for k in range(1, min(SHAFT_ORDERS, int(max_freq_hz / f)) + 1):
+            add(k * f, "machine_shaft", k, f"{k}x {shaft.name}")
+    for b in context.bearings:
+        for family, f in b.bearing.frequencies(b.shaft_ratio * fp).items():
+            for k in range(1, int(max_freq_hz / f) + 1):
+                add(k * f, "machine_bearing", k, f"{k}x {family.upper()} {b.name} ({b.shaft})")
 
 
 #: The families of a rolling bearing's lines.

@@ -1,5 +1,6 @@
 """Gear-pair kinematics: the characteristic frequencies of a pinion/gear mesh, and the
-machine facts beside the pair that put lines in its spectrum (another shaft, a bearing)."""
+machine facts beside the pair that put lines in its spectrum (another shaft, a bearing, the
+other stages of its gearbox)."""
 
 from __future__ import annotations
 
@@ -31,6 +32,55 @@ class Bearing:
 
 
 @dataclass(frozen=True)
+class OtherStage:
+    """Another stage of the pair's gearbox: its teeth, its shafts' names, and its pinion
+    shaft's speed over the pair's pinion speed."""
+
+    name: str
+    pinion_teeth: int
+    gear_teeth: int
+    pinion_ratio: float
+    pinion_shaft: str
+    gear_shaft: str
+
+    @property
+    def gear_ratio(self) -> float:
+        """Its gear shaft's speed over the pair's pinion speed."""
+        return self.pinion_ratio * self.pinion_teeth / self.gear_teeth
+
+
+@dataclass(frozen=True)
+class OtherShaft:
+    """A shaft of the gearbox that is neither of the pair's: its name and its speed over
+    the pair's pinion speed."""
+
+    name: str
+    ratio: float
+
+
+@dataclass(frozen=True)
+class OtherBearing:
+    """A rolling bearing of the gearbox on a shaft the pair's own bearing is not on: its
+    name, geometry, the shaft's name and that shaft's speed over the pair's pinion speed."""
+
+    name: str
+    bearing: Bearing
+    shaft: str
+    shaft_ratio: float
+
+
+@dataclass(frozen=True)
+class MachineContext:
+    """The rest of a gearbox around one of its stages: what puts lines in the stage's
+    spectrum that are none of the pair's own (every speed relative to the pair's pinion,
+    so the context holds at any speed)."""
+
+    stages: tuple[OtherStage, ...] = ()
+    shafts: tuple[OtherShaft, ...] = ()
+    bearings: tuple[OtherBearing, ...] = ()
+
+
+@dataclass(frozen=True)
 class GearKinematics:
     """Teeth counts and pinion speed; every frequency of the pair follows from these three
     numbers. A machine with another shaft (a second stage's, a motor's behind a first
@@ -45,6 +95,8 @@ class GearKinematics:
             a second stage whose z3 teeth on the gear's shaft drive z4: Np/Ng * z3/z4
         bearing: a rolling bearing's geometry (its lines are kinematic, and a bearing
             effect's model takes it), or None: none known
+        machine: the other stages, shafts and bearings of the pair's gearbox (their lines
+            are kinematic; no effect of the pair models them), or None: a pair alone
     """
 
     n_pinion: int
@@ -52,6 +104,7 @@ class GearKinematics:
     f_pinion_hz: float
     other_shaft_ratio: float | None = None
     bearing: Bearing | None = None
+    machine: MachineContext | None = None
 
     def __post_init__(self) -> None:
         if self.n_pinion < 1 or self.n_gear < 1:

@@ -46,7 +46,8 @@ from fractions import Fraction
 from pathlib import Path
 
 from pydiag.core.errors import MachineError
-from pydiag.gear.kinematics import Bearing, GearKinematics
+from pydiag.gear.kinematics import (Bearing, GearKinematics, MachineContext, OtherBearing,
+                                    OtherShaft, OtherStage)
 
 #: Stage types whose kinematics are those of a parallel-axis pair.
 PARALLEL_TYPES = ("spur", "helical")
@@ -129,17 +130,48 @@ class Machine:
             ratio *= Fraction(stage.pinion_teeth, stage.gear_teeth)
         return ratio
 
+    def stage_index(self, text: str) -> int:
+        """The index of the stage called ``text``, or numbered ``text`` from 1 at the input;
+        a :class:`~pydiag.core.errors.MachineError` naming the stages otherwise."""
+        names = [s.name for s in self.stages]
+        if text in names:
+            return names.index(text)
+        if text.strip().isdigit() and 1 <= int(text) <= len(names):
+            return int(text) - 1
+        raise MachineError(f"{self.source}: no stage {text!r}; the stages are "
+                           + ", ".join(f"{k} ({n})" for k, n in enumerate(names, 1)))
+
     def mesh_order(self, stage: int) -> Fraction:
         """Stage ``stage``'s mesh frequency in orders of the input shaft."""
         return self.stages[stage].pinion_teeth * self.shaft_ratio(stage)
 
     def stage_kinematics(self, stage: int, input_hz: float) -> GearKinematics:
-        """Stage ``stage`` as a gear pair at ``input_hz`` on the input shaft; the pair's
-        bearings are those on its pinion shaft (the first one)."""
+        """Stage ``stage`` as a gear pair at ``input_hz`` on the input shaft, in its
+        machine: the pair's bearing is the first on its pinion shaft; its other shaft (the
+        one the other-shaft effect models) the next shaft downstream of its gear, else the
+        one upstream of its pinion; every other stage, shaft and bearing is its
+        :class:`~pydiag.gear.kinematics.MachineContext`."""
         s = self.stages[stage]
-        bearing = next((b.bearing for b in self.bearings if b.shaft == stage), None)
-        return GearKinematics(s.pinion_teeth, s.gear_teeth,
-                              float(input_hz * self.shaft_ratio(stage)), bearing=bearing)
+        own = next((b for b in self.bearings if b.shaft == stage), None)
+        base = self.shaft_ratio(stage)
+
+        def ratio(shaft: int) -> float:
+            return float(self.shaft_ratio(shaft) / base)
+
+        others = [k for k in range(len(self.shafts)) if k not in (stage, stage + 1)]
+        neighbour = stage + 2 if stage + 2 < len(self.shafts) else stage - 1
+        context = MachineContext(
+            tuple(OtherStage(o.name, o.pinion_teeth, o.gear_teeth, ratio(j), self.shafts[j],
+                             self.shafts[j + 1])
+                  for j, o in enumerate(self.stages) if j != stage),
+            tuple(OtherShaft(self.shafts[k], ratio(k)) for k in others),
+            tuple(OtherBearing(b.name, b.bearing, self.shafts[b.shaft], ratio(b.shaft))
+                  for b in self.bearings if b is not own))
+        return GearKinematics(s.pinion_teeth, s.gear_teeth, float(input_hz * base),
+                              other_shaft_ratio=ratio(neighbour) if others else None,
+                              bearing=None if own is None else own.bearing,
+                              machine=context if len(self.stages) > 1 or context.bearings
+                              else None)
 
     def stage_lines(self, stage: int, input_hz: float, max_freq_hz: float
                     ) -> tuple[float, ...]:

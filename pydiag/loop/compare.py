@@ -109,11 +109,14 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     for s in suggestions:
         s.competing = [o for o in EFFECTS if o != s.effect and claims[o] & claims[s.effect]]
     suggestions.sort(key=lambda s: -s.score)
-    # the plots' cursors: mesh harmonics, low shaft orders and their mesh sidebands, bearings
+    # the plots' cursors: every stage's mesh harmonics, low shaft orders and their mesh
+    # sidebands, bearings
     orders = {"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3, "bpfo": 5,
-              "bpfi": 5, "bsf": 5, "ftf": 5, "other_shaft": 3}
+              "bpfi": 5, "bsf": 5, "ftf": 5, "other_shaft": 3, "stage_mesh_sb": 1,
+              "machine_shaft": 3, "machine_bearing": 3}
     markers = [{"freq_hz": ln.freq_hz, "family": ln.family, "label": ln.label} for ln in lines
-               if ln.family == "mesh" or 0 < abs(ln.order) <= orders.get(ln.family, 0)]
+               if ln.family in ("mesh", "stage_mesh")
+               or 0 < abs(ln.order) <= orders.get(ln.family, 0)]
     return Comparison(problem.spec.fmu_path, float(np.sqrt(np.sum(np.square(errors)))),
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
                       peaks, suggestions, false_alarm_rate, featurizer.n_periods,

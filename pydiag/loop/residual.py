@@ -29,14 +29,17 @@ from pydiag.signal.spectra import Spectrum, local_maxima, whole_periods
 
 #: Groups of the residual by family, and the kinematic families each gathers.
 RESIDUAL_GROUPS = ("mesh_harmonics", "pinion_orders", "gear_orders", "assembly_hunting",
-                   "bearing", "other_shaft_orders", "non_kinematic", "broadband")
+                   "bearing", "other_shaft_orders", "other_stages", "non_kinematic",
+                   "broadband")
 #: The indices of the groups of bins no kinematic line is on.
 NOT_KINEMATIC = (RESIDUAL_GROUPS.index("non_kinematic"), RESIDUAL_GROUPS.index("broadband"))
 FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
                 "pinion": "pinion_orders", "mesh_sb_gear": "gear_orders", "gear": "gear_orders",
                 "assembly": "assembly_hunting", "hunting": "assembly_hunting", "bpfo": "bearing",
                 "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing",
-                "other_shaft": "other_shaft_orders"}
+                "other_shaft": "other_shaft_orders", "machine_shaft": "other_shaft_orders",
+                "machine_bearing": "bearing", "stage_mesh": "other_stages",
+                "stage_mesh_sb": "other_stages", "stage_assembly": "other_stages"}
 #: Mains frequencies a non-kinematic line is checked against, Hz.
 MAINS_HZ = (50.0, 60.0)
 
@@ -68,13 +71,18 @@ def describe_non_kinematic(freq_hz: float, kin, bin_hz: float) -> str:
     """What a line no kinematic frequency explains could be."""
     text = (f"not kinematic: {freq_hz / kin.f_pinion_hz:.3g}x pinion, "
             f"{freq_hz / kin.f_gear_hz:.3g}x gear")
-    if kin.f_other_shaft_hz is not None:
+    if kin.machine is not None:
+        for shaft in kin.machine.shafts:
+            text += f", {freq_hz / (shaft.ratio * kin.f_pinion_hz):.3g}x {shaft.name}"
+    elif kin.f_other_shaft_hz is not None:
         text += f", {freq_hz / kin.f_other_shaft_hz:.3g}x other shaft"
     for mains in MAINS_HZ:
         n = round(freq_hz / mains)
         if n >= 1 and abs(freq_hz - n * mains) <= bin_hz:
             text += f", {n}x {mains:g} Hz mains"
-    return text + " (another shaft or stage, the mains, or a resonance)"
+    return text + (" (a shaft or stage the machine file lacks, the mains, or a resonance)"
+                   if kin.machine is not None else
+                   " (another shaft or stage, the mains, or a resonance)")
 
 
 def error_bins(measured: np.ndarray, margin: float, n_periods: int) -> np.ndarray:

@@ -101,12 +101,22 @@ class MachineDiagnosis:
         return [f"{s.name}: {w}" for s in self.stages for w in s.fit.warnings]
 
 
+def machine_speed(measurement: Measurement, machine: Machine, input_hz: float,
+                  speed: SpeedSettings = SpeedSettings()) -> SpeedEstimate:
+    """The input shaft's speed in ``measurement``, around the nominal ``input_hz``: from
+    the tacho, else from every stage's mesh at once (:mod:`pydiag.gear.speed`)."""
+    return estimate_speed(measurement, machine.stage_kinematics(0, input_hz), speed,
+                          machine=machine)
+
+
 def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, stage: int,
                   speed: SpeedEstimate, adapter: Adapter | None = None,
                   feature_mode: str = "lines", fit_gain: bool | None = None,
-                  drop: tuple[str, ...] = ()) -> FitProblem:
+                  drop: tuple[str, ...] = (),
+                  fixed_values: dict[str, float] | None = None) -> FitProblem:
     """The fit problem of stage ``stage``: the record tracked at its pinion shaft, the
-    other stages' lines left out (module docstring)."""
+    other stages' lines left out (module docstring); its kinematics name every line of
+    the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`)."""
     ratio = float(machine.shaft_ratio(stage))
     estimate = dataclasses.replace(
         speed, speed_hz=speed.speed_hz * ratio, nominal_hz=speed.nominal_hz * ratio,
@@ -119,7 +129,7 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
     tracked = _stage_channels(order_track(measurement, estimate, drop=drop), machine, stage)
     return build_problem(fmu_path, tracked, adapter, kinematics=kin,
                          featurizer=KinematicFeaturizer(kin, feature_mode, others),
-                         fit_gain=fit_gain, speed_estimate=estimate)
+                         fit_gain=fit_gain, speed_estimate=estimate, fixed_values=fixed_values)
 
 
 def _stage_channels(measurement: Measurement, machine: Machine, stage: int) -> Measurement:
@@ -174,8 +184,7 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     batch of records)."""
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
-    found = estimate_speed(measurement, machine.stage_kinematics(0, input_hz), speed,
-                           machine=machine)
+    found = machine_speed(measurement, machine, input_hz, speed)
     verdicts, spread, names = [None] * len(machine.stages), None, ()
     if baselines:
         record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop)),

@@ -65,12 +65,20 @@ def test_the_machine_files_tacho_is_used_and_a_wrong_pulse_count_is_named(tmp_pa
     assert "from the tacho's" in stderr and "--pulses-per-rev" in stderr
 
 
-def test_a_pair_fit_refuses_a_two_stage_machine_and_says_what_works(gear_fmu):
-    res = run_cli("-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--machine", str(MACHINE),
-                  "--measurement", str(DATA / f"{RECORDS[0]}.zip"), "--sample-rate", RATE)
-    assert res.returncode == 2
-    assert "2 stages" in res.stderr and "indicators --machine" in res.stderr
-    assert len(res.stderr.strip().splitlines()) == 1
+def test_compare_fits_the_stage_named_and_names_the_other_stages_lines(gear_fmu, tmp_path):
+    common = ["-m", "pydiag", "compare", "--fmu", str(gear_fmu), "--machine", str(MACHINE),
+              "--measurement", str(DATA / f"{RECORDS[0]}.zip"), "--sample-rate", RATE,
+              "--history", str(tmp_path / "h.sqlite")]
+    out = tmp_path / "c.json"
+    res = run_cli(*common, "--stage", "1", "--no-validate", "--json", str(out),
+                  "--particles", "4", "--iterations", "2", "--polish", "20", "--quiet")
+    assert res.returncode == 0, res.stderr
+    c = json.loads(out.read_text())
+    assert c["speed_hz"] == pytest.approx(29.905, abs=0.01)  # the tacho's, on the input
+    # stage 2's mesh (16 input orders: its lines fall on stage 1's 2x, 4x mesh the other way)
+    families = {p["family"] for p in c["peaks"]}
+    assert {"stage_mesh", "stage_mesh_sb"} <= families, families
+    assert c["residual_by_family"]["acc"]["other_stages"]["measured"] > 0.05
 
 
 def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, tmp_path):

@@ -87,3 +87,25 @@ def test_batch_diagnoses_every_stage_of_every_record(gear_fmu, tmp_path):
                                                                               "healthy")
     assert healthy["fault_mode"] == "healthy" and healthy["severity"] == "none"
     assert broken["stage 1:change_db"] > healthy["stage 1:change_db"]
+
+
+def test_compare_of_one_stage_names_the_other_stages_lines(gear_fmu):
+    """Stage 2 compared on a two-stage record: stage 1's mesh and its sidebands, which no
+    pair model of stage 2 makes, are the other stage's lines in the peaks and the residual
+    families, not unexplained; the cursors mark both stages' meshes."""
+    from pydiag.gear.speed import estimate_speed
+    from pydiag.loop.compare import compare
+    m = gearbox_record(4)
+    speed = estimate_speed(m, MACHINE.stage_kinematics(0, INPUT_HZ), SpeedSettings("mesh"),
+                           machine=MACHINE)
+    problem = stage_problem(str(gear_fmu), m, MACHINE, 1, speed)
+    c = compare(problem, FaultEstimator(n_particles=4, iterations=2, polish_evaluations=20))
+    first_mesh = 20 * speed.speed_hz
+    near = [p for p in c.peaks if abs(p.freq_hz - first_mesh) < 1.5 * c.bin_hz]
+    assert near and {p.family for p in near} == {"stage_mesh"}, near
+    assert any(p.family == "stage_mesh_sb" for p in c.peaks)
+    assert not [p for p in c.peaks if p.family == "unexplained"
+                and p.energy_fraction > 0.01], c.peaks[:5]
+    shares = c.residual_by_family["acc"]
+    assert shares["other_stages"]["measured"] > 0.2, shares
+    assert {"mesh", "stage_mesh"} <= {mk["family"] for mk in c.markers}

@@ -83,3 +83,17 @@ def test_more_workers_than_cores_is_refused_unless_asked(capsys, monkeypatch, tm
                                         ("14/21*19/47", 14 / 21 * 19 / 47), ("2*0.5", 1.0)])
 def test_a_speed_ratio_is_a_number_a_fraction_or_a_product_of_them(text, ratio):
     assert cli.speed_ratio(text) == pytest.approx(ratio, rel=1e-12)
+
+
+@pytest.mark.parametrize("extra, message", [
+    ([], "2 stages; compare fits one stage's pair model: give --stage (1 or 'input stage', "
+         "2 or 'output stage')"),
+    (["--stage", "3"], "no stage '3'; the stages are 1 (input stage), 2 (output stage)"),
+    (["--stage", "1", "--other-shaft", "0.2"], "describes the machine's: give them there"),
+])
+def test_compare_on_a_machine_of_several_stages_fits_the_stage_named(capsys, extra, message):
+    from pathlib import Path
+    machine = Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml"
+    code, err = run(["compare", "--fmu", "x.fmu", "--measurement", "m.csv", "--machine",
+                     str(machine), *extra], capsys)
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err

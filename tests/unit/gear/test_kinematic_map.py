@@ -41,3 +41,57 @@ def test_lines_within_the_tolerance_are_told_of_each_other():
     assert [ln.label for ln in told] == ["7x pinion", "2x BPFO", "10x gear"]  # sorted
     assert told[0].also == ("bpfo",) and told[1].also == ("pinion",) and told[2].also == ()
     assert coinciding([pinion, bpfo])[0].also == ()  # exactly the same frequency only
+
+
+def test_a_stage_of_a_gearbox_names_every_other_stage_shaft_and_bearing():
+    """A machine's stage (PHM09's 32/96 then 48/80, a third stage and a bearing added):
+    the other stages' mesh harmonics, their sidebands at their own shafts, their assembly
+    and hunting lines, the other shafts' orders and their bearings are kinematic lines of
+    their own families, which no effect of the pair claims."""
+    from pydiag.gear.machine import machine_from_dict
+    machine = machine_from_dict({
+        "name": "box", "shafts": ["input", "idler", "output", "drum"],
+        "stages": [{"pinion_teeth": 32, "gear_teeth": 96, "name": "first"},
+                   {"pinion_teeth": 48, "gear_teeth": 80, "name": "second"},
+                   {"pinion_teeth": 19, "gear_teeth": 47, "name": "third"}],
+        "bearings": [{"shaft": "output", "n_balls": 9, "ball_diameter_mm": 7.94,
+                      "pitch_diameter_mm": 39.04}]})
+    kin = machine.stage_kinematics(0, 30.0)
+    assert (kin.n_pinion, kin.n_gear, kin.f_pinion_hz) == (32, 96, 30.0)
+    assert kin.other_shaft_ratio == pytest.approx(0.2)  # the output, next to the idler
+    lines = kinematic_map(kin, 2000.0)
+    tol = 1e-6
+
+    def named(f):
+        return match(f, lines, tol)
+
+    second_mesh, idler, output = 16 * 30.0, 10.0, 6.0
+    assert named(second_mesh).label == "1x second mesh"  # not the pair's 16x pinion
+    assert "pinion" in named(second_mesh).also
+    assert named(2 * second_mesh).label == "1x mesh"  # this box's 2x second mesh
+    assert "stage_mesh" in named(2 * second_mesh).also
+    assert named(3 * second_mesh).label == "3x second mesh"
+    assert named(second_mesh + idler).label == "1x second mesh + 1x idler"  # not 49x gear
+    assert named(second_mesh - 2 * output).family == "stage_mesh_sb"
+    assembly = [ln for ln in lines if ln.family == "stage_assembly"]  # 5 phases: 96 Hz
+    assert any(ln.label == "1x second assembly phase" and ln.freq_hz == pytest.approx(96.0)
+               for ln in assembly)
+    assert "stage_assembly" in named(96.0).also  # and the third mesh's sideband there
+    drum = output * 19 / 47
+    third_mesh = 19 * output
+    assert named(third_mesh).label == "1x third mesh"
+    assert named(third_mesh + drum).label == "1x third mesh + 1x drum"
+    assert named(output).family == "other_shaft" and named(output).label == "1x other shaft"
+    assert named(3 * drum).label == "3x drum" and named(3 * drum).family == "machine_shaft"
+    bpfo = BEARING.frequencies(output)["bpfo"]
+    assert named(bpfo).family == "machine_bearing" and "output" in named(bpfo).label
+    assert named(30.0 * 33).family == "mesh_sb_pinion"  # the pair's own lines stay its own
+    pair = kinematic_map(kin.pair, 2000.0)
+    assert match(second_mesh, pair, tol).family == "pinion"
+    assert not {ln.family for ln in pair} & {"stage_mesh", "stage_mesh_sb", "stage_assembly",
+                                              "machine_shaft", "machine_bearing"}
+    # the middle stage's other shaft is downstream, the last stage's upstream of its pinion
+    assert machine.stage_kinematics(1, 30.0).other_shaft_ratio == pytest.approx(0.6 * 19 / 47)
+    last = machine.stage_kinematics(2, 30.0)
+    assert last.other_shaft_ratio == pytest.approx(10 / 6)
+    assert last.bearing.n_balls == 9 and last.machine.bearings == ()  # on its pinion shaft

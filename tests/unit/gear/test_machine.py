@@ -155,3 +155,12 @@ def test_a_tacho_estimate_carries_the_mesh_speed_to_check_it_by():
     assert found.speed_hz == pytest.approx(2 * mean_hz(revs), rel=1e-3)
     assert found.mesh_speed_hz == pytest.approx(mean_hz(revs), rel=1e-3)
     assert found.tacho_disagreement_pct == pytest.approx(-50, abs=0.1)
+
+
+def test_a_stage_is_found_by_name_or_number_and_a_wrong_one_is_named():
+    machine = machine_from_dict({**TWO_STAGE, "stages": [
+        {**TWO_STAGE["stages"][0], "name": "input stage"}, TWO_STAGE["stages"][1]]})
+    assert machine.stage_index("input stage") == 0 and machine.stage_index("2") == 1
+    for wrong in ("3", "0", "output"):
+        with pytest.raises(MachineError, match="the stages are 1 \\(input stage\\), 2"):
+            machine.stage_index(wrong)

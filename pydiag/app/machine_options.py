@@ -1,0 +1,80 @@
+"""The machine file as the command-line options it stands for (``--machine FILE``)."""
+
+from __future__ import annotations
+
+from pydiag.core.errors import UsageError
+from pydiag.gear.machine import Machine, load_machine
+from pydiag.io.readers import parse_units
+
+#: The commands that fit a pair model; of these, diagnose and batch fit every stage of a
+#: machine, compare and discover the one stage --stage names.
+PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
+
+
+def apply_machine(args) -> Machine | None:
+    """The machine file's facts as the options they stand for, where the command line did
+    not give them (it wins): channels and their units and sensitivities, the tacho, the
+    nominal speed; for the commands that fit a pair, its teeth and its pinion bearing.
+    Returns the machine (None without --machine)."""
+    if not getattr(args, "machine", None):
+        if getattr(args, "pulses_per_rev", None) is None and hasattr(args, "pulses_per_rev"):
+            args.pulses_per_rev = 1
+        return None
+    if args.teeth is not None:
+        raise UsageError("--teeth and --machine both give the gears' teeth: give one")
+    machine = load_machine(args.machine)
+    fits = args.command in PAIR_COMMANDS
+    staged = len(machine.stages) > 1
+    args.stage_index = _stage_of(args, machine) if fits else None
+    if args.rpm is None:
+        if machine.input_hz is None:
+            raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
+                             "input_rpm")
+        args.rpm = 60 * machine.input_hz
+    tacho = machine.tacho
+    if tacho is not None and args.tacho is None:  # never a sensor, even with --speed mesh
+        if tacho.shaft != 0:
+            raise UsageError(f"{args.machine}: a tacho on the {machine.shafts[tacho.shaft]} "
+                             "shaft is not supported yet (only on the input shaft)")
+        args.tacho = tacho.channel
+        if args.pulses_per_rev is None:
+            args.pulses_per_rev = tacho.pulses_per_rev
+    if args.pulses_per_rev is None:
+        args.pulses_per_rev = 1
+    if not args.channel and machine.sensors:  # a staged fit picks each stage's own
+        args.channel = [f"{s.channel}={s.output}" if fits and not staged else s.channel
+                        for s in machine.sensors]
+    given_units = parse_units(args.unit)
+    if None not in given_units:
+        args.unit = list(args.unit or []) + [f"{s.channel}={s.unit}" for s in machine.sensors
+                                             if s.unit and s.channel not in given_units]
+    given = dict(args.sensitivity or [])
+    args.sensitivity = list(args.sensitivity or []) + [
+        (s.channel, s.sensitivity) for s in machine.sensors
+        if s.sensitivity and s.channel not in given]
+    if fits and not staged:
+        stage = machine.stages[0]
+        args.teeth = (stage.pinion_teeth, stage.gear_teeth)
+        bearing = next((b.bearing for b in machine.bearings if b.shaft == 0), None)
+        if bearing is not None and getattr(args, "bearing", "absent") is None:
+            args.bearing = bearing
+    return machine
+
+
+def _stage_of(args, machine: Machine) -> int | None:
+    """The stage compare and discover fit (``--stage``; the only one of a one-stage
+    machine); None for the commands that fit every stage."""
+    stage = getattr(args, "stage", None)
+    if len(machine.stages) == 1:
+        return 0 if stage is None else machine.stage_index(stage)
+    if args.command in ("diagnose", "batch"):
+        return None
+    if stage is None:
+        raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
+                         "one stage's pair model: give --stage (" + ", ".join(
+                             f"{k} or {s.name!r}" for k, s in enumerate(machine.stages, 1))
+                         + "); `pydiag diagnose --machine` fits every stage")
+    if args.other_shaft is not None or args.bearing is not None:
+        raise UsageError(f"--other-shaft and --bearing describe a pair's surroundings; "
+                         f"{args.machine} describes the machine's: give them there")
+    return machine.stage_index(stage)
