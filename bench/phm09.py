@@ -5,10 +5,16 @@ record leaving itself out. Prints a table a record and the time each took. Usage
 
     .venv/bin/python bench/phm09.py [DIR]     # default ../shared/data/phm09
     .venv/bin/python bench/phm09.py --model   # and every stage fitted without a baseline
+    .venv/bin/python bench/phm09.py --batch   # pydiag batch --machine: local pool and Dask
 
 With ``--model`` each record's stages are also fitted (``diagnose --machine`` without a
 baseline: the pair model's classes on the paper's simulated scale), side by side with the
 baseline's verdicts: the model must earn its place against the indicators.
+
+With ``--batch`` the folder is diagnosed by ``pydiag batch --machine`` with the first
+healthy record as baseline, once on the local pool and once on a Dask cluster on this
+machine (as many single-threaded worker processes as cores): wall time and records a
+minute of each.
 
 Labels: ``spur 1`` all good; ``spur 2`` the 32-tooth input pinion chipped and the
 48-tooth idler pinion eccentric (both stages); other cases are shown without a label.
@@ -18,9 +24,12 @@ Cite the PHM Society 2009 Data Challenge where you report results.
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import re
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -42,6 +51,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default=str(ROOT.parent / "shared" / "data" / "phm09"))
     ap.add_argument("--model", action="store_true", help="also fit every stage (no baseline)")
+    ap.add_argument("--batch", action="store_true", help="time pydiag batch --machine instead")
     args = ap.parse_args()
     machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
     files = sorted(p for p in Path(args.folder).iterdir() if NAME.search(p.name)
@@ -49,7 +59,10 @@ def main() -> int:
     if not files:
         print(f"no record named like 'spur 1_30hz_High_1' in {args.folder}", file=sys.stderr)
         return 2
-    print(f"# {platform.machine()}, {platform.python_version()}, {len(files)} records")
+    print(f"# {platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}, "
+          f"{len(files)} records")
+    if args.batch:
+        return batch_throughput(args.folder, files)
     seen = {}
     for path in files:
         case, hz, load, run = NAME.search(path.name).groups()
@@ -105,6 +118,37 @@ def main() -> int:
               f"{'record':<24}{'stage 1':<22}{'stage 2':<22}label")
         print("\n".join(models))
         print(f"healthy or not as labelled: {model_right} of {model_total}")
+    return 0
+
+
+def batch_throughput(folder: str, files: list[Path]) -> int:
+    """``pydiag batch --machine`` over ``folder`` on the local pool and on a Dask cluster."""
+    from dask.distributed import LocalCluster
+    baseline = next((p for p in files if NAME.search(p.name).group(1) == "1"), None)
+    if baseline is None:
+        print("no healthy (spur 1) record to take as baseline", file=sys.stderr)
+        return 2
+    cores = os.cpu_count() or 1
+    print(f"baseline: {baseline.name}; defaults of diagnose (both stages fitted)")
+    print(f"{'scheduler':<28}{'records':>8}{'wall s':>9}{'records/min':>13}")
+    with tempfile.TemporaryDirectory() as tmp, \
+            LocalCluster(n_workers=cores, threads_per_worker=1, processes=True,
+                         dashboard_address=None) as cluster:
+        for name, scheduler in (("local pool", "local"), ("dask LocalCluster", cluster.scheduler_address)):
+            out = Path(tmp) / f"{name.split()[0]}.csv"
+            started = time.perf_counter()
+            res = subprocess.run(
+                [sys.executable, "-m", "pydiag", "batch", "--fmu",
+                 str(ROOT / "build" / "GearPair.fmu"), "--machine",
+                 str(ROOT / "examples" / "phm09_spur.toml"), "--measurements", folder,
+                 "--sample-rate", str(RATE_HZ), "--baseline", str(baseline), "--out", str(out),
+                 "--scheduler", scheduler, "--quiet"], capture_output=True, text=True, cwd=ROOT)
+            took = time.perf_counter() - started
+            if res.returncode != 0:
+                print(f"{name}: failed: {res.stderr.strip()}", file=sys.stderr)
+                return 1
+            n = len(out.read_text().splitlines()) - 1
+            print(f"{name:<28}{n:>8}{took:>9.1f}{60 * n / took:>13.2f}")
     return 0
 
 
