@@ -7,11 +7,11 @@ it), the speed found and the record order-tracked; compare (every line of the wh
 record), then every suggestion tried held out (:func:`pydiag.loop.validate.validate`).
 The confident one with the largest held-out z is accepted: its parameters join the base
 model's (bounds as the residual narrowed them), its FMU becomes the base model's (an
-``in_base`` effect keeps the FMU), they are fitted on the whole record from the fit
+``in_base`` effect keeps the FMU; a second effect with a model of its own makes the model
+of both, :mod:`pydiag.loop.compose`), they are fitted on the whole record from the fit
 before (``refit_with_effect``, as ``pydiag compare --effect`` does), and the loop
-validates that comparison's suggestions. It stops when nothing is
-confident, or when a second effect would need an FMU of its own on top of the first (a
-combined Modelica model, which this script does not write).
+validates that comparison's suggestions, trying each effect with a model of its own on
+the model with every accepted one. It stops when nothing is confident.
 
 Printed per record and step: the residual by family, every suggestion's held-out status,
 and the held-out error (noise-corrected Eq. 12 on the second half of the periods, on bins
@@ -42,6 +42,7 @@ from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare, refit_with_effect  # noqa: E402
 from pydiag.loop.effect_fit import with_effect  # noqa: E402
 from pydiag.loop.residual import RESIDUAL_GROUPS  # noqa: E402
+from pydiag.loop.compose import composed_fmu  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402
 
@@ -56,13 +57,14 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
     name = path.name.split(".")[0]
     accepted, rows = [], []
     fmu_of = lambda e: str(effect_fmu(e.key, ROOT / "modelica", build))  # noqa: E731
+    composed_of = lambda keys: str(composed_fmu(keys, ROOT / "modelica", build))  # noqa: E731
     problem = build_problem(BASE_FMU, m, operating_point=OPERATING_POINT,
                             speed=SpeedSettings("auto"), fit_gain=True)
     fitted = None  # step 0: the base fit; then the accepted effect's model, refitted
     for step in range(steps):
         t0 = time.perf_counter()
         c = validate(problem, fitted or compare(problem, FaultEstimator(seed=0)), fmu_of,
-                     present=tuple(accepted))
+                     present=tuple(accepted), composed=composed_of)
         wall = time.perf_counter() - t0
         model = "GearPair" + "".join(f" + {a}" for a in accepted)
         print(f"\n{name}, step {step}: {model}: error {c.error:.3f} on {c.n_error_bins} bins, "
@@ -89,14 +91,13 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
         rows.append(f"| {name} | {step} | {model} | {c.error:.3f} | {base_held} | "
                     f"**{s.effect}** ({values}, z {s.held_out.z:.0f}) | "
                     f"{s.held_out.error_effect:.3f} | {verdicts} | {wall:.0f} |")
-        if not effect.in_base and str(problem.spec.fmu_path) != BASE_FMU:
-            print(f"  {s.effect} needs a model combined with {accepted[-1]}: stop", flush=True)
-            break
+        beside = tuple(a for a in accepted if EFFECTS[a].own_fmu)
         accepted.append(s.effect)
         # the model with the effect, as `pydiag compare --effect` makes it: the effect's
         # parameters fitted on the whole record from the base fit, then compared
         t0 = time.perf_counter()
-        fmu = problem.spec.fmu_path if effect.in_base else fmu_of(effect)
+        fmu = (problem.spec.fmu_path if not effect.own_fmu
+               else composed_of(beside + (s.effect,)) if beside else fmu_of(effect))
         fitted = refit_with_effect(problem, c, effect, fmu)
         problem = with_effect(problem, c, effect, fmu)
         print(f"  refitted with {s.effect}: error {fitted.error:.3f}, "

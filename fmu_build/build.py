@@ -9,9 +9,13 @@ from fmu_build.fmu_export import export_fmu
 from fmu_build.ode_system import OdeSystem, build_ode_system
 
 
-def ode_system(model_file: str | Path, model: str) -> OdeSystem:
-    return build_ode_system(flatten(model_file, model))
+def ode_system(model_file: str | Path, model: str,
+               library_roots: tuple[Path, ...] = ()) -> OdeSystem:
+    return build_ode_system(flatten(model_file, model, library_roots))
 
 
-def build_fmu(model_file: str | Path, model: str, out_path: str | Path) -> Path:
-    return export_fmu(ode_system(model_file, model), out_path)
+def build_fmu(model_file: str | Path, model: str, out_path: str | Path,
+              library_roots: tuple[Path, ...] = ()) -> Path:
+    """``model`` of ``model_file`` as an FMU at ``out_path``; ``library_roots``: folders
+    holding the packages it uses beyond its own library's (a model written outside it)."""
+    return export_fmu(ode_system(model_file, model, library_roots), out_path)

@@ -89,12 +89,15 @@ def _literal_value(tree: Tree | None) -> float | None:
     return None
 
 
-def flatten(model_file: str | Path, model: str) -> FlatModel:
-    """Compile ``model`` from ``model_file`` with rumoca; raise ModelicaBuildError on any failure."""
+def flatten(model_file: str | Path, model: str,
+            library_roots: tuple[Path, ...] = ()) -> FlatModel:
+    """Compile ``model`` from ``model_file`` with rumoca (its library's root, and
+    ``library_roots`` besides); raise ModelicaBuildError on any failure."""
     path = Path(model_file)
     if not path.is_file():
         raise ModelicaBuildError(f"no such Modelica file: {path}")
-    session = rumoca.Session(roots=[str(find_library_root(path))])
+    roots = [str(find_library_root(path))] + [str(Path(r).resolve()) for r in library_roots]
+    session = rumoca.Session(roots=list(dict.fromkeys(roots)))
     try:
         compiled = session.load(str(path), model=model)
         dae = compiled.to_dict("dae")

@@ -19,8 +19,9 @@ from pydiag.loop import history
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
-from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root, discover,
-                                  effect_fmu)
+from pydiag.loop.compose import composed_fmu
+from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
+                                  default_build_dir, discover, effect_fmu)
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
 
@@ -67,6 +68,8 @@ def cmd_compare(args) -> int:
         c = validate(problem, c, lambda e: str(effect_fmu(e.key, root, build)),
                      _effect_estimator(args),
                      present=(args.effect,) if args.effect else (),
+                     composed=lambda keys: str(composed_fmu(keys, root, build or
+                                                            default_build_dir(root))),
                      progress=None if args.quiet else
                      (lambda key: print(f"validating {key} held out ...", file=sys.stderr)))
     md, _ = read_model_description(args.fmu)

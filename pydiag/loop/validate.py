@@ -7,8 +7,9 @@ unexplained energy, or whatever its score when it is scored on an envelope (its 
 the spectrum's) or fitted affinely (one simulation more than it has parameters, less than
 the base's own compare costs, so the test rather than the score decides). It is not tried
 when the model has it already, when the machine's description does not place its lines
-(another shaft's ratio, a bearing's geometry), or when its model extends GearDiag.GearPair
-while the model compared has another effect it lacks.
+(another shaft's ratio, a bearing's geometry). An effect with a model of its own, tried
+on a model that has other such effects already, is fitted on the model of them all
+(:mod:`pydiag.loop.compose`) when ``composed`` can make it.
 """
 
 from __future__ import annotations
@@ -42,7 +43,8 @@ def validate(problem: FitProblem, comparison: Comparison,
              min_score: float = MIN_SCORE,
              false_alarm_rate: float = FALSE_ALARM_RATE, present: tuple[str, ...] = (),
              progress: Callable[[str], None] | None = None,
-             tried: dict[str, HeldOut] | None = None) -> Comparison:
+             tried: dict[str, HeldOut] | None = None,
+             composed: Callable[[tuple[str, ...]], str] | None = None) -> Comparison:
     """The comparison with its suggestions tried held out (module docstring).
 
     ``effect_fmu``: the FMU of an effect, called only for an effect that is fitted (one
@@ -50,7 +52,9 @@ def validate(problem: FitProblem, comparison: Comparison,
     :class:`PydiagError` (or a build error) when there is none. ``present``: effect keys the model already has
     (compare of an effect's model); ``tried``: held-out verdicts already made on this
     comparison (by :func:`pydiag.loop.discover.discover`), used instead of fitting the
-    effect again. An FMU that is not a GearDiag.GearPair model gets every suggestion
+    effect again; ``composed``: the FMU of a model with several effects (their keys), for
+    an effect tried beside those ``present`` (without it, such an effect is not
+    validated). An FMU that is not a GearDiag.GearPair model gets every suggestion
     "not validated": the effects extend it."""
     model = read_model_description(problem.spec.fmu_path)[0]
     if not GEARPAIR_PARAMETERS <= {v.name for v in model.modelVariables}:
@@ -76,8 +80,8 @@ def validate(problem: FitProblem, comparison: Comparison,
         if unknown:
             mark(s, Status.NOT_TRIED, unknown)
             continue
-        beside = [k for k in present if effect.own_fmu and EFFECTS[k].own_fmu]
-        if beside:  # its model extends GearPair, not the model that has them
+        beside = tuple(k for k in present if effect.own_fmu and EFFECTS[k].own_fmu)
+        if beside and composed is None:  # its model extends GearPair, not the model
             mark(s, Status.NOT_VALIDATED, f"the model has {', '.join(beside)}, which "
                                           f"{effect.model} lacks: trying {s.effect} too "
                                           "needs a Modelica model with both")
@@ -87,7 +91,8 @@ def validate(problem: FitProblem, comparison: Comparison,
             if progress:
                 progress(s.effect)
             try:
-                fmu = (functools.partial(effect_fmu, effect) if effect.own_fmu
+                fmu = (functools.partial(composed, beside + (effect.key,)) if beside
+                       else functools.partial(effect_fmu, effect) if effect.own_fmu
                        else problem.spec.fmu_path)  # built if it is fitted
                 h = held_out(problem, comparison, effect, fmu, estimator, false_alarm_rate,
                              memo)

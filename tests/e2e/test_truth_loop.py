@@ -22,8 +22,9 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare, refit_with_effect
+from pydiag.loop.compose import composed_fmu
 from pydiag.loop.discover import discover, effect_fmu
-from pydiag.loop.effect_fit import EFFECT_REFIT
+from pydiag.loop.effect_fit import EFFECT_REFIT, with_effect
 from pydiag.loop.held_out import ENVELOPE_TOP, held_out
 from pydiag.loop.residual import measured_spectra
 from pydiag.loop.validate import validate
@@ -52,6 +53,9 @@ HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           # a misaligned motor shaft behind a first stage, 29/17 of the pinion's speed: 1x-3x
           # of its angle, 2x the strongest (GearDiag: ten orders of time, no phases)
           "other_shaft_orders": dict(other_shaft_acc=3.0)}
+#: Two hidden effects in one record: a gear runout and the motor shaft's orders (a
+#: sensor-only difference from the runout's record: one integration for both).
+TWO_HIDDEN = dict(gear_runout_m=10e-6, other_shaft_acc=3.0)
 #: The strike frequency of each bearing effect on the simulator, Hz.
 STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
@@ -68,7 +72,7 @@ def truth_records(tmp_path_factory):
     def make():  # one integration a core (the other workers wait for them, idle)
         from concurrent.futures import ProcessPoolExecutor
         gears = {key: TruthGear().with_effects(**magnitudes)
-                 for key, magnitudes in {"none": {}, **HIDDEN}.items()}
+                 for key, magnitudes in {"none": {}, **HIDDEN, "two": TWO_HIDDEN}.items()}
         groups: dict = {}  # the records that differ only in what the sensor sees
         for key, g in gears.items():
             groups.setdefault(dynamics_of(g), []).append(key)
@@ -394,3 +398,38 @@ def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_recor
     runs = [ln.split() for ln in res.stdout.splitlines()[1:]]
     assert [r[2] for r in runs] == ["GearPair", "OtherShaftOrders"]
     assert float(runs[1][4]) < float(runs[0][4])
+
+
+def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, truth_records,
+                                                         effect_fmu_of, tmp_path):
+    """A gear runout and the motor shaft's orders in one record: the loop accepts the
+    runout (the most confident), fits it, then finds the motor shaft confident on the
+    model of both (written from the two effects' files), accepts it, and nothing is
+    confident after; the error falls at each step."""
+    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"])
+    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS, operating_point={
+        **OPERATING_POINT, "other_shaft_ratio": TruthGear().effects.other_shaft_ratio})
+
+    def composed(keys):
+        return str(composed_fmu(keys, ROOT / "modelica", tmp_path))
+
+    c = validate(problem, compare(problem, FaultEstimator(**FAST)), effect_fmu_of,
+                 composed=composed)
+    accepted, errors = (), [c.error]
+    for _ in range(2):
+        confident = sorted((s for s in c.suggested_effects if s.confident),
+                           key=lambda s: -s.held_out.z)
+        assert confident, [(s.effect, s.message) for s in c.suggested_effects]
+        effect = EFFECTS[confident[0].effect]
+        fmu = composed(accepted + (effect.key,)) if accepted else effect_fmu_of(effect)
+        fitted = refit_with_effect(problem, c, effect, fmu)
+        problem = with_effect(problem, c, effect, fmu)
+        accepted += (effect.key,)
+        c = validate(problem, fitted, effect_fmu_of, present=accepted, composed=composed)
+        errors.append(c.error)
+    assert accepted == ("gear_eccentricity", "other_shaft_orders"), accepted
+    assert "GearPairWith" in str(problem.spec.fmu_path)
+    assert not [s for s in c.suggested_effects if s.confident], \
+        [(s.effect, s.message) for s in c.suggested_effects]
+    assert errors[0] > errors[1] > errors[2], errors
+    assert c.parameters["ecc_gear"] == pytest.approx(10e-6, rel=0.2), c.parameters

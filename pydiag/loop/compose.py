@@ -1,0 +1,215 @@
+"""Models with several catalogue effects at once: the Modelica source of GearDiag.GearPair
+with every effect's contribution, written from the effects' own files, and its FMU built
+once per content.
+
+Every effect of the catalogue with a model of its own extends GearDiag.GearPair and gives
+one of its hooks (``GearDiag/Effects/package.mo``). Contributions combine as the physics
+does:
+
+- ``k_mod`` (relative stiffness), ``e_extra`` (transmission error), ``F_extra`` (force)
+  and what ``acc_sensor`` adds to ``der(v)`` (a shaft's or a bearing's own vibration at
+  the sensor) are sums: each effect's term is added;
+- ``contact`` (the teeth separate) and ``t_angle`` (the shafts' angle) are the state of
+  the mesh itself: one effect at most may set each.
+
+The effects' declarations (parameters, components) are copied as written; a component
+name two effects use is prefixed with the effect's key in the second; a parameter two
+effects declare differently cannot be shared, and the composition is refused naming it.
+The source is written beside the FMU, readable; the FMU's name carries a hash of the
+source and of the library it extends, so an edit of either builds a new one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from pydiag.core.errors import UsageError
+from pydiag.gear.effects import EFFECTS, model_file
+
+#: Hooks whose contributions add.
+SUMMED_HOOKS = ("k_mod", "e_extra", "F_extra", "acc_sensor")
+#: Hooks one effect at most may set.
+SOLE_HOOKS = ("contact", "t_angle")
+#: What every contribution to ``acc_sensor`` starts with: the mesh's own acceleration.
+SENSOR_BASE = "der(v)"
+
+_EXTENDS = re.compile(r"extends\s+GearDiag\.GearPair\s*\(")
+_COMPONENT = re.compile(r"^\s*GearDiag\.[\w.]+\s+(\w+)\s*[(\s\"]", re.M)
+_PARAMETER = re.compile(r"^\s*parameter\s+\w+\s+(\w+)", re.M)
+
+
+class CompositionError(UsageError):
+    """The effects cannot share one model (a hook both set, a parameter both declare)."""
+
+
+@dataclass(frozen=True)
+class EffectSource:
+    """One effect's model as written: the hook it gives and the expression, its
+    declarations (the lines after the ``extends`` clause), and their names."""
+
+    key: str
+    hook: str
+    expression: str
+    declarations: str
+    parameters: dict[str, str]
+    components: tuple[str, ...]
+
+
+def read_effect(key: str, modelica_root: Path) -> EffectSource:
+    """The effect ``key``'s Modelica source, taken apart (module docstring)."""
+    effect = EFFECTS[key]
+    if not effect.own_fmu:
+        raise CompositionError(f"{key} has no model of its own (it is fitted on the base "
+                               "model or applied to its output)")
+    path = model_file(effect, modelica_root)
+    text = re.sub(r"//[^\n]*", "", path.read_text())
+    found = _EXTENDS.search(text)
+    if found is None:
+        raise CompositionError(f"{path}: does not extend GearDiag.GearPair")
+    depth, end = 1, found.end()
+    while depth:
+        if end >= len(text):
+            raise CompositionError(f"{path}: the extends clause is not closed")
+        depth += {"(": 1, ")": -1}.get(text[end], 0)
+        end += 1
+    hook, sep, expression = text[found.end():end - 1].partition("=")
+    hook = hook.strip()
+    if not sep or hook not in SUMMED_HOOKS + SOLE_HOOKS or "," in _top_level(expression):
+        raise CompositionError(f"{path}: gives {hook or 'nothing'}; an effect gives one of "
+                               f"the hooks {', '.join(SUMMED_HOOKS + SOLE_HOOKS)}")
+    expression = " ".join(expression.split())
+    if hook == "acc_sensor":
+        if not expression.startswith(SENSOR_BASE + " +"):
+            raise CompositionError(f"{path}: acc_sensor = {expression[:40]}...: only a term "
+                                   f"added to {SENSOR_BASE} combines with other effects")
+        expression = expression[len(SENSOR_BASE) + 2:].strip()
+    body = text[text.index(";", end) + 1:]
+    body = body[:re.search(rf"^\s*end\s+{path.stem}\s*;", body, re.M).start()]
+    parameters = {}
+    for statement in _statements(body):
+        name = _PARAMETER.match(statement)
+        if name:
+            parameters[name.group(1)] = " ".join(statement.split())
+    return EffectSource(key, hook, expression, body.rstrip(), parameters,
+                        tuple(_COMPONENT.findall(body)))
+
+
+def _rename(text: str, old: str, new: str) -> str:
+    """``text`` with the name ``old`` replaced by ``new`` outside string literals."""
+    parts = text.split('"')
+    return '"'.join(re.sub(rf"\b{old}\b", new, p) if i % 2 == 0 else p
+                    for i, p in enumerate(parts))
+
+
+def _top_level(expression: str) -> str:
+    """``expression`` with everything inside parentheses removed."""
+    out, depth = [], 0
+    for ch in expression:
+        depth += {"(": 1, ")": -1}.get(ch, 0)
+        if depth == 0 and ch not in "()":
+            out.append(ch)
+    return "".join(out)
+
+
+def _statements(body: str) -> list[str]:
+    """The declarations of a model body, one a ``;`` outside strings and parentheses."""
+    out, current, depth, quoted = [], [], 0, False
+    for ch in body:
+        current.append(ch)
+        if ch == '"':
+            quoted = not quoted
+        elif not quoted:
+            depth += {"(": 1, ")": -1}.get(ch, 0)
+            if ch == ";" and depth == 0:
+                out.append("".join(current).strip())
+                current = []
+    return out
+
+
+@dataclass(frozen=True)
+class ComposedModel:
+    """GearDiag.GearPair with the effects ``keys``: the model's name and its source."""
+
+    keys: tuple[str, ...]
+    name: str
+    source: str
+
+
+def compose(keys: tuple[str, ...], modelica_root: Path) -> ComposedModel:
+    """The model with every effect of ``keys`` (module docstring), in a canonical order
+    (the catalogue's), so that the same set makes the same model."""
+    keys = tuple(k for k in EFFECTS if k in set(keys))
+    if len(keys) < 2:
+        raise CompositionError("a composed model takes two effects or more")
+    sources = [read_effect(k, modelica_root) for k in keys]
+    terms: dict[str, list[str]] = {}
+    setters: dict[str, str] = {}
+    declared: dict[str, tuple[str, str]] = {}
+    components: set[str] = set()
+    bodies = []
+    for src in sources:
+        if src.hook in SOLE_HOOKS and src.hook in setters:
+            raise CompositionError(f"{setters[src.hook]} and {src.key} both set {src.hook}: "
+                                   "one model cannot have both")
+        setters.setdefault(src.hook, src.key)
+        body, expression = src.declarations, src.expression
+        for name in src.components:
+            if name in components:  # the second one's renamed, in its expression too
+                new = f"{src.key}_{name}"
+                body, expression = _rename(body, name, new), _rename(expression, name, new)
+                name = new
+            components.add(name)
+        for name, text in src.parameters.items():
+            if name in declared:
+                other, first = declared[name]
+                if first != text:
+                    raise CompositionError(f"{other} and {src.key} both declare {name}, "
+                                           "differently: one model cannot have both")
+                body = "\n".join(line for line in body.splitlines()
+                                 if " ".join(line.split()) != text)
+            declared.setdefault(name, (src.key, text))
+        terms.setdefault(src.hook, []).append(expression)
+        bodies.append(f"  // {src.key} ({EFFECTS[src.key].model})\n{body.strip(chr(10))}")
+    modifiers = []
+    for hook in SUMMED_HOOKS + SOLE_HOOKS:
+        if hook in terms:
+            added = " + ".join(f"({t})" for t in terms[hook])
+            modifiers.append(f"{hook} = {SENSOR_BASE} + {added}" if hook == "acc_sensor"
+                             else f"{hook} = {added}")
+    name = "GearPairWith" + "".join(EFFECTS[k].model.rsplit(".", 1)[1] for k in keys)
+    description = "GearDiag.GearPair with " + ", ".join(keys)
+    source = ("within GearDiag;  // its effects' models are GearDiag's, and see what it declares\n"
+              f"model {name} \"{description}\"\n"
+              "  // Written by pydiag from the effects' models (pydiag/loop/compose.py).\n"
+              f"  extends GearDiag.GearPair(\n    " + ",\n    ".join(modifiers) + ");\n"
+              + "\n".join(bodies) + f"\nend {name};\n")
+    return ComposedModel(keys, name, source)
+
+
+def library_hash(modelica_root: Path) -> str:
+    """A hash of every Modelica file of the library (paths and contents)."""
+    digest = hashlib.sha256()
+    for path in sorted(Path(modelica_root).rglob("*.mo")):
+        digest.update(str(path.relative_to(modelica_root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def composed_fmu(keys: tuple[str, ...], modelica_root: Path, build_dir: Path) -> Path:
+    """The FMU of :func:`compose`'s model, built unless one of the same source and library
+    exists; its source is ``<build_dir>/composed/<name>.mo``."""
+    from fmu_build import build_fmu
+
+    model = compose(keys, modelica_root)
+    tag = hashlib.sha256((model.source + library_hash(modelica_root)).encode()).hexdigest()[:12]
+    folder = Path(build_dir) / "composed"
+    folder.mkdir(parents=True, exist_ok=True)
+    source = folder / f"{model.name}.mo"
+    out = folder / f"{model.name}_{tag}.fmu"
+    if not out.exists():
+        source.write_text(model.source)
+        build_fmu(source, f"GearDiag.{model.name}", out, library_roots=(Path(modelica_root),))
+    return out

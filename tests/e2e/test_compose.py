@@ -1,0 +1,63 @@
+"""Models with several effects (:mod:`pydiag.loop.compose`): written from the effects' own
+Modelica files, built once per content, and what they simulate is what each effect adds to
+the gear pair, added."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pydiag.fmu.plant import FmuPlant
+from pydiag.loop.compose import CompositionError, compose, composed_fmu
+from pydiag.loop.discover import effect_fmu
+
+ROOT = Path(__file__).resolve().parents[2]
+MODELICA = ROOT / "modelica"
+FS, DURATION, WARMUP = 10_000.0, 0.48, 0.05  # 12 pinion turns of GearPair's 14/21 at 25 Hz
+RUNOUT = {"ecc_gear": 40e-6, "phase_gear": 0.4}
+SHAFTS = {"A_s2": 30.0, "A_s5": 12.0, "A_o1": 20.0, "A_o3": 45.0, "r_other": 0.37}
+
+
+def acc(fmu: Path, values: dict) -> np.ndarray:
+    with FmuPlant(fmu, ("acc",), FS) as plant:
+        return plant.simulate({"a_f": 0.3, "f_dte": 0.4, **values}, DURATION, WARMUP)[0]
+
+
+def test_a_composed_model_adds_what_each_effect_adds(gear_fmu, effects_dir, tmp_path):
+    """A gear runout (a transmission error the mesh filters) and both shafts' own orders
+    (terms at the sensor): the composed model's acceleration is the pair's plus what each
+    effect's own model adds to it, within the integrator's tolerance; the shafts' component
+    (``shaft`` in both effects' models) is two components."""
+    keys = ("pinion_shaft_orders", "gear_eccentricity", "other_shaft_orders")
+    model = compose(keys, MODELICA)
+    assert model.keys == ("gear_eccentricity", "pinion_shaft_orders", "other_shaft_orders")
+    assert "other_shaft_orders_shaft(f_shaft = r_other*f_pinion" in model.source
+    assert '"The other shaft, seen at the sensor"' in model.source  # names in text kept
+    fmu = composed_fmu(keys, MODELICA, tmp_path)
+    assert (tmp_path / "composed" / f"{model.name}.mo").read_text() == model.source
+    assert composed_fmu(tuple(reversed(keys)), MODELICA, tmp_path) == fmu  # cached
+    base = acc(gear_fmu, {})
+    each = [acc(effect_fmu(k, MODELICA, effects_dir), values) - base
+            for k, values in (("gear_eccentricity", RUNOUT),
+                              ("pinion_shaft_orders", {k: v for k, v in SHAFTS.items()
+                                                       if k.startswith("A_s")}),
+                              ("other_shaft_orders", {k: v for k, v in SHAFTS.items()
+                                                      if not k.startswith("A_s")}))]
+    together = acc(fmu, {**RUNOUT, **SHAFTS})
+    smallest = min(np.max(np.abs(e)) for e in each)  # the runout's: 0.5 m/s2 of 80
+    assert smallest > 0.1
+    assert np.max(np.abs(together - base - sum(each))) < 0.01 * smallest
+
+
+def test_effects_that_cannot_share_a_model_are_refused_by_name(modelica_copy):
+    with pytest.raises(CompositionError, match="both declare A_b, differently"):
+        compose(("bearing_outer_race", "bearing_inner_race"), MODELICA)
+    with pytest.raises(CompositionError, match="housing_sensor has no model of its own"):
+        compose(("housing_sensor", "gear_eccentricity"), MODELICA)
+    runout = modelica_copy / "GearDiag" / "Effects" / "GearEccentricity.mo"
+    runout.write_text(runout.read_text().replace("extends GearDiag.GearPair(e_extra =",
+                                                 "extends GearDiag.GearPair(t_angle = time + "))
+    with pytest.raises(CompositionError, match="speed_fluctuation and gear_eccentricity both "
+                                               "set t_angle|gear_eccentricity and "
+                                               "speed_fluctuation both set t_angle"):
+        compose(("gear_eccentricity", "speed_fluctuation"), modelica_copy)
