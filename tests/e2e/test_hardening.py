@@ -97,7 +97,7 @@ def test_a_level_off_by_a_unit_factor_is_named(gear_fmu, record, tmp_path):
     out = tmp_path / "d.json"
     res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",
                   str(record), "--channel", "acc", "--unit", "acc=g", "--json", str(out),
-                  "--quiet")
+                  "--quiet", "--particles", "8", "--iterations", "6", "--polish", "60")
     assert "g read as m/s2" in res.stderr, res.stderr
     assert json.loads(out.read_text())["fault_mode"] == "no_diagnosis"
 

@@ -281,12 +281,15 @@ def test_without_the_other_shafts_ratio_its_lines_are_not_kinematic_and_nothing_
     assert not h.tried and h.message == other.message, h.message
 
 
+@pytest.mark.slow
 def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth_records,
                                                                  effect_fmu_of):
     """The base fit of the ripple's record, without the effect, is bent (the faulty
     tooth's d_f and f_f near 0 to make up for the lines the speed fluctuation moved);
     compare with the effect (``compare --effect``) frees the base parameters with it and
-    explains the record."""
+    explains the record. In make test-slow (35-50 s: the ripple's model is simulated whole
+    at every step); make test finds the ripple held out with the base freed the same way
+    (test_compare_and_discover_find_the_hidden_effect)."""
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["speed_fluctuation"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point={"bearing": BEARING})
