@@ -11,12 +11,13 @@ and so does a diagnosis the model cannot make (it explains none of the record).
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import signal
 import sys
 import threading
 
+from pydiag.app.arguments import (bearing, effect_list, number, parameter_value, positive,
+                                  rate, sensitivity, speed_ratio, teeth)
 from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators,
                                  cmd_inspect, cmd_regress, cmd_simulate, warn_validation)
 from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
@@ -25,103 +26,9 @@ from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.indicators import SHAFTS
-from pydiag.gear.kinematics import Bearing
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
 from pydiag.loop.regress import DEFAULT_RTOL
-
-
-# ---------------------------------------------------------------------- argument types
-def _number(kind, low=None, high=None, low_open=False, high_open=False):
-    """An argparse type: a finite ``kind`` within the bounds, else a message naming them."""
-    def parse(text: str):
-        try:
-            value = kind(text)
-        except ValueError as err:
-            what = "an integer" if kind is int else "a number"
-            raise argparse.ArgumentTypeError(f"'{text}' is not {what}") from err
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"'{text}' is not a finite number")
-        if low is not None and (value <= low if low_open else value < low):
-            raise argparse.ArgumentTypeError(f"{text} must be {'>' if low_open else '>='} {low}")
-        if high is not None and (value >= high if high_open else value > high):
-            raise argparse.ArgumentTypeError(f"{text} must be {'<' if high_open else '<='} {high}")
-        return value
-    return parse
-
-
-positive = _number(float, 0, low_open=True)
-rate = _number(float, 0, 1, low_open=True, high_open=True)
-
-
-def parameter_value(text: str) -> tuple[str, float]:
-    name, sep, value = text.partition("=")
-    if not sep or not name.strip():
-        raise argparse.ArgumentTypeError(f"takes NAME=VALUE, got '{text}'")
-    return name.strip(), _number(float)(value)
-
-
-def bearing(text: str) -> Bearing:
-    try:
-        parts = [float(v) for v in text.split(",")]
-    except ValueError:
-        parts = []
-    if len(parts) not in (3, 4) or not all(math.isfinite(p) for p in parts):
-        raise argparse.ArgumentTypeError(f"takes N_BALLS,BALL_MM,PITCH_MM[,ANGLE_DEG], got '{text}'")
-    n, d_mm, pitch_mm = parts[:3]
-    angle = parts[3] if len(parts) > 3 else 0.0
-    if n != int(n) or n < 1:
-        raise argparse.ArgumentTypeError(f"the number of balls must be a positive integer, got {n:g}")
-    if not 0 < d_mm < pitch_mm:
-        raise argparse.ArgumentTypeError(f"need 0 < ball diameter < pitch diameter, got {d_mm:g} "
-                                         f"and {pitch_mm:g} mm")
-    if not 0 <= angle < 90:
-        raise argparse.ArgumentTypeError(f"the contact angle must lie in [0, 90) degrees, got {angle:g}")
-    return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, math.radians(angle))
-
-
-def sensitivity(text: str) -> tuple[str, str]:
-    name, sep, value = text.partition("=")
-    if not sep or not name.strip() or not value.strip():
-        raise argparse.ArgumentTypeError(f"takes NAME=SENSITIVITY (e.g. ch1=100mV/g), got "
-                                         f"'{text}'")
-    return name.strip(), value.strip()
-
-
-def speed_ratio(text: str) -> float:
-    """A speed ratio: a number, a fraction, or a product of them (``14/21*19/47``)."""
-    try:
-        value = 1.0
-        for factor in text.split("*"):
-            num, sep, den = factor.partition("/")
-            value *= float(num) / float(den) if sep else float(num)
-    except (ValueError, ZeroDivisionError):
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"takes a positive speed ratio (e.g. 1.706, 29/17 or "
-                                         f"14/21*19/47), got '{text}'")
-    return value
-
-
-def teeth(text: str) -> tuple[int, int]:
-    parts = text.split(",")
-    try:
-        values = [int(p) for p in parts]
-    except ValueError:
-        values = []
-    if len(values) != 2 or min(values) < 1:
-        raise argparse.ArgumentTypeError(f"takes NP,NG (pinion and gear teeth, positive "
-                                         f"integers), got '{text}'")
-    return values[0], values[1]
-
-
-def effect_list(text: str) -> list[str]:
-    keys = [k.strip() for k in text.split(",") if k.strip()]
-    unknown = [k for k in keys if k not in EFFECTS]
-    if unknown or not keys:
-        raise argparse.ArgumentTypeError(f"unknown effect(s) {', '.join(unknown) or '(none)'}; "
-                                         f"known: {', '.join(EFFECTS)}")
-    return keys
 
 
 # ---------------------------------------------------------------------- parser
@@ -133,14 +40,14 @@ class Parser(argparse.ArgumentParser):
 
 
 def _optimiser_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--particles", type=_number(int, 2), help="swarm size (default 16; an "
+    p.add_argument("--particles", type=number(int, 2), help="swarm size (default 16; an "
                    "effect's refit: 8)")
-    p.add_argument("--iterations", type=_number(int, 1), help="swarm iterations (default 20; "
+    p.add_argument("--iterations", type=number(int, 1), help="swarm iterations (default 20; "
                    "an effect's refit: 6)")
-    p.add_argument("--polish", type=_number(int, 0), help="least-squares polish evaluations "
+    p.add_argument("--polish", type=number(int, 0), help="least-squares polish evaluations "
                    "per start, 0 to skip (default 150; an effect's refit: 60)")
-    p.add_argument("--seed", type=_number(int, 0), help="random seed (default 0)")
-    p.add_argument("--workers", type=_number(int, 1),
+    p.add_argument("--seed", type=number(int, 0), help="random seed (default 0)")
+    p.add_argument("--workers", type=number(int, 1),
                    help="worker processes (default: cores; at most the cores unless "
                    "--oversubscribe); batch: measurements in parallel")
     p.add_argument("--oversubscribe", action="store_true",
@@ -179,7 +86,7 @@ def _operating_args(p: argparse.ArgumentParser) -> None:
                    help="how to find the speed in the record: auto (tacho if given, else the "
                    "mesh lines), mesh, tacho, or nominal (take it as constant; default auto)")
     p.add_argument("--tacho", metavar="NAME", help="tacho channel (pulses), not a sensor")
-    p.add_argument("--pulses-per-rev", type=_number(int, 1),
+    p.add_argument("--pulses-per-rev", type=number(int, 1),
                    help="tacho pulses per pinion (input shaft) revolution (default: the "
                    "machine file's, else 1)")
 
@@ -233,7 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sample-rate", type=positive, default=10_000.0, help="Hz (default 10000)")
     p.add_argument("--snr", type=positive, help="signal/noise power ratio per channel "
                    "(default: no noise)")
-    p.add_argument("--seed", type=_number(int, 0), default=0)
+    p.add_argument("--seed", type=number(int, 0), default=0)
     p.add_argument("--sensor", action="append", help="output to record (repeat; default acc, disp)")
     p.add_argument("--adapter", help="adapter TOML describing the FMU (sensors, start values)")
     p.add_argument("--out", required=True, help="CSV file to write")
@@ -288,7 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--golden", required=True, help="golden JSON file")
     p.add_argument("--bless", action="store_true", help="write the golden file from this FMU "
                    "(replace an existing one with --force)")
-    p.add_argument("--rtol", type=_number(float, 0), default=DEFAULT_RTOL,
+    p.add_argument("--rtol", type=number(float, 0), default=DEFAULT_RTOL,
                    help=f"tolerance, fraction of the largest line (default {DEFAULT_RTOL:g})")
     p.add_argument("--sensor", action="append", help="output to check when blessing (repeat)")
     p.add_argument("--sample-rate", type=positive, default=10_000.0, help="Hz when blessing")

@@ -3,7 +3,7 @@ every number is checked before any work."""
 
 import pytest
 
-from pydiag.app import cli
+from pydiag.app import arguments, cli
 from pydiag.core.errors import MeasurementError
 
 
@@ -82,7 +82,7 @@ def test_more_workers_than_cores_is_refused_unless_asked(capsys, monkeypatch, tm
 @pytest.mark.parametrize("text,ratio", [("1.706", 1.706), ("29/17", 29 / 17),
                                         ("14/21*19/47", 14 / 21 * 19 / 47), ("2*0.5", 1.0)])
 def test_a_speed_ratio_is_a_number_a_fraction_or_a_product_of_them(text, ratio):
-    assert cli.speed_ratio(text) == pytest.approx(ratio, rel=1e-12)
+    assert arguments.speed_ratio(text) == pytest.approx(ratio, rel=1e-12)
 
 
 @pytest.mark.parametrize("extra, message", [
