@@ -4,7 +4,7 @@ compare again; until no effect is confident.
 For each record of a labelled set in the layout of ``../shared/data/gfd`` (channel a1 in g,
 no time column): GearPair with the channel gain fitted (the healthy teeth's ``a0`` with
 it), the speed found and the record order-tracked; compare (every line of the whole
-record), then every suggestion tried held out (:func:`pydiag.loop.validate.validate`).
+record), then every suggestion tried held out (:func:`pydiag.loop.validate.validate`; the loop is :mod:`pydiag.loop.accumulate`).
 The confident one with the largest held-out z is accepted: its parameters join the base
 model's (bounds as the residual narrowed them), its FMU becomes the base model's (an
 ``in_base`` effect keeps the FMU; a second effect with a model of its own makes the model
@@ -36,15 +36,12 @@ sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
-from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.compare import compare, refit_with_effect  # noqa: E402
-from pydiag.loop.effect_fit import with_effect  # noqa: E402
+from pydiag.loop.accumulate import LoopStep, accumulate  # noqa: E402
 from pydiag.loop.residual import RESIDUAL_GROUPS  # noqa: E402
 from pydiag.loop.compose import composed_fmu  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
-from pydiag.loop.validate import validate  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
@@ -52,23 +49,21 @@ BASE_FMU = str(ROOT / "build" / "GearPair.fmu")
 
 
 def loop(path: Path, steps: int, build: Path) -> list[str]:
-    """The markdown rows of one record's sequence; prints as it goes."""
+    """The markdown rows of one record's sequence (:func:`pydiag.loop.accumulate.accumulate`);
+    prints each step as it is made."""
     m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
     name = path.name.split(".")[0]
-    accepted, rows = [], []
-    fmu_of = lambda e: str(effect_fmu(e.key, ROOT / "modelica", build))  # noqa: E731
-    composed_of = lambda keys: str(composed_fmu(keys, ROOT / "modelica", build))  # noqa: E731
     problem = build_problem(BASE_FMU, m, operating_point=OPERATING_POINT,
                             speed=SpeedSettings("auto"), fit_gain=True)
-    fitted = None  # step 0: the base fit; then the accepted effect's model, refitted
-    for step in range(steps):
-        t0 = time.perf_counter()
-        c = validate(problem, fitted or compare(problem, FaultEstimator(seed=0)), fmu_of,
-                     present=tuple(accepted), composed=composed_of)
-        wall = time.perf_counter() - t0
-        model = "GearPair" + "".join(f" + {a}" for a in accepted)
-        print(f"\n{name}, step {step}: {model}: error {c.error:.3f} on {c.n_error_bins} bins, "
-              f"{wall:.0f} s", flush=True)
+    rows, clock = [], [time.perf_counter()]
+
+    def report(step: LoopStep) -> None:
+        wall = time.perf_counter() - clock[-1]
+        clock.append(time.perf_counter())
+        c = step.comparison
+        model = "GearPair" + "".join(f" + {a}" for a in step.effects)
+        print(f"\n{name}, step {len(rows)}: {model}: error {c.error:.3f} on {c.n_error_bins} "
+              f"bins, {wall:.0f} s", flush=True)
         shares = c.residual_by_family["acc"]
         print("  by family (measured / residual): " + ", ".join(
             f"{g} {100 * shares[g]['measured']:.0f}/{100 * shares[g]['residual']:.0f} %"
@@ -76,32 +71,21 @@ def loop(path: Path, steps: int, build: Path) -> list[str]:
         for s in c.suggested_effects:
             print(f"  {s.effect}: {s.message}", flush=True)
         tried = [s for s in c.suggested_effects if s.held_out]
-        confident = sorted((s for s in c.suggested_effects if s.confident),
-                           key=lambda s: -s.held_out.z)
         base_held = f"{tried[0].held_out.error_base:.3f}" if tried else "-"
-        verdicts = "; ".join(f"{s.effect}: {s.status.value}"
-                             for s in tried) or "nothing tried"
-        if not confident:
-            rows.append(f"| {name} | {step} | {model} | {c.error:.3f} | {base_held} | - | - | "
-                        f"{verdicts} | {wall:.0f} |")
-            break
-        s = confident[0]
-        effect = EFFECTS[s.effect]
+        verdicts = "; ".join(f"{s.effect}: {s.status.value}" for s in tried) or "nothing tried"
+        if step.accepted is None:
+            rows.append(f"| {name} | {len(rows)} | {model} | {c.error:.3f} | {base_held} | - | "
+                        f"- | {verdicts} | {wall:.0f} |")
+            return
+        s = next(s for s in c.suggested_effects if s.effect == step.accepted)
         values = ", ".join(f"{k} {v:.3g}" for k, v in s.held_out.parameters.items())
-        rows.append(f"| {name} | {step} | {model} | {c.error:.3f} | {base_held} | "
+        rows.append(f"| {name} | {len(rows)} | {model} | {c.error:.3f} | {base_held} | "
                     f"**{s.effect}** ({values}, z {s.held_out.z:.0f}) | "
                     f"{s.held_out.error_effect:.3f} | {verdicts} | {wall:.0f} |")
-        beside = tuple(a for a in accepted if EFFECTS[a].own_fmu)
-        accepted.append(s.effect)
-        # the model with the effect, as `pydiag compare --effect` makes it: the effect's
-        # parameters fitted on the whole record from the base fit, then compared
-        t0 = time.perf_counter()
-        fmu = (problem.spec.fmu_path if not effect.own_fmu
-               else composed_of(beside + (s.effect,)) if beside else fmu_of(effect))
-        fitted = refit_with_effect(problem, c, effect, fmu)
-        problem = with_effect(problem, c, effect, fmu)
-        print(f"  refitted with {s.effect}: error {fitted.error:.3f}, "
-              f"{time.perf_counter() - t0:.0f} s", flush=True)
+
+    accumulate(problem, lambda e: str(effect_fmu(e.key, ROOT / "modelica", build)),
+               lambda keys: str(composed_fmu(keys, ROOT / "modelica", build)), steps,
+               FaultEstimator(seed=0), progress=report)
     return rows
 
 

@@ -1,5 +1,5 @@
-"""Command line: pydiag simulate | diagnose | compare | discover | history | batch | regress |
-inspect | demo.
+"""Command line: pydiag simulate | diagnose | indicators | compare | discover | loop | history |
+batch | regress | inspect | demo.
 
 This module parses arguments (every number is checked here, before any work), calls the
 command, and maps errors to exit codes: a :class:`~pydiag.core.errors.PydiagError` is the
@@ -20,7 +20,7 @@ from pydiag.app.arguments import (bearing, effect_list, number, parameter_value,
                                   rate, sensitivity, speed_ratio, teeth)
 from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators,
                                  cmd_inspect, cmd_regress, cmd_simulate, warn_validation)
-from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history
+from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history, cmd_loop
 from pydiag.app.machine_options import apply_machine
 from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
@@ -233,6 +233,18 @@ def build_parser() -> argparse.ArgumentParser:
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_discover)
+
+    p = sub.add_parser("loop", help="compare, accept the one confident effect, compare the "
+                       "model with it, and again until nothing is confident")
+    p.add_argument("--fmu", required=True, help="the base model FMU")
+    _measurement_args(p)
+    _loop_args(p)
+    p.add_argument("--max-steps", type=number(int, 1), default=4,
+                   help="comparisons at most (default 4)")
+    p.add_argument("--json", help="write the steps as JSON here")
+    _force(p)
+    _optimiser_args(p)
+    p.set_defaults(func=cmd_loop)
 
     p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
     p.add_argument("--history", help="SQLite run history (default: as for compare)")

@@ -7,6 +7,7 @@ from pydiag.gear.machine_indicators import MachineReport
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.stages import MachineDiagnosis
+from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.results import Comparison, Discovery, Status
 from pydiag.loop.regress import RegressionReport
 
@@ -98,6 +99,22 @@ def format_discovery(base: Comparison, found: list[Discovery]) -> str:
                      f"{h.error_effect:8.4f} {100 * reduction:8.0f}%  {params}")
         lines.append(f"{'':5}{'CONFIDENT' if d.confident else ''} {d.message}".rstrip())
     return "\n".join(lines)
+
+
+def format_loop_step(number: int, step: LoopStep) -> str:
+    """One step of ``pydiag loop``: the model, its error, what was accepted after it."""
+    model = " + ".join(("base",) + step.effects)
+    text = f"step {number}: {model}: error {step.error:.4f}"
+    if step.accepted is not None:
+        return (f"{text}; accepted {step.accepted} (held out: error {step.held_out_error_base:.4f}"
+                f" -> {step.held_out_error_with:.4f}, z {step.z:.1f})")
+    suggestions = step.comparison.suggested_effects
+    confident = sorted((s for s in suggestions if s.confident), key=lambda s: -s.held_out.z)
+    if confident:
+        return (f"{text}; stopped at the step limit, confident: "
+                + ", ".join(f"{s.effect} (z {s.held_out.z:.1f})" for s in confident))
+    tried = [f"{s.effect}: {s.status.value}" for s in suggestions if s.held_out is not None]
+    return f"{text}; nothing confident" + (f" ({'; '.join(tried)})" if tried else "")
 
 
 def format_history(rows: list[dict]) -> str:

@@ -1,4 +1,4 @@
-"""The commands of the model-improvement loop: compare, discover, history."""
+"""The commands of the model-improvement loop: compare, discover, loop, history."""
 
 from __future__ import annotations
 
@@ -9,13 +9,14 @@ from pathlib import Path
 from pydiag.app.commands import (check_outputs, estimator_settings, problem_of, progress_bar,
                                  read_input)
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
-                                   format_history)
+                                   format_history, format_loop_step)
 from pydiag.core.errors import UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS
 from pydiag.io.outputs import write_text
 from pydiag.loop import history
+from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
@@ -108,6 +109,31 @@ def cmd_discover(args) -> int:
     print("\n".join(filter(None, [format_facts(_stage_fact(args)), format_discovery(base, found)])))
     if args.json:
         write_text(args.json, json.dumps(as_dict(base, found), indent=2) + "\n", args.force)
+    return 0
+
+
+def cmd_loop(args) -> int:
+    """compare, accept the one confident effect, compare again, until nothing is
+    confident (:mod:`pydiag.loop.accumulate`), printing each step as it is made."""
+    check_outputs(args, "json")
+    root = Path(args.modelica) if args.modelica else MODELICA_ROOT
+    check_modelica_root(root)
+    build = Path(args.build_dir) if args.build_dir else default_build_dir(root)
+    problem = problem_of(args, read_input(args))
+    facts = format_facts(_stage_fact(args))
+    if facts:
+        print(facts)
+    numbered = iter(range(1, args.max_steps + 1))
+    steps, final = accumulate(
+        problem, lambda e: str(effect_fmu(e.key, root, build)),
+        lambda keys: str(composed_fmu(keys, root, build)), args.max_steps,
+        FaultEstimator(**estimator_settings(args)), _effect_estimator(args),
+        lambda step: print(format_loop_step(next(numbered), step), flush=True))
+    print(f"model      : {final.spec.fmu_path}")
+    if args.json:
+        write_text(args.json, json.dumps({"steps": [s.to_dict() for s in steps],
+                                          "model_fmu": str(final.spec.fmu_path)},
+                                         indent=2) + "\n", args.force)
     return 0
 
 

@@ -7,8 +7,8 @@ from pydiag.gear.machine import Machine, load_machine
 from pydiag.io.readers import parse_units
 
 #: The commands that fit a pair model; of these, diagnose and batch fit every stage of a
-#: machine, compare and discover the one stage --stage names.
-PAIR_COMMANDS = ("diagnose", "compare", "discover", "batch")
+#: machine, compare, discover and loop the one stage --stage names.
+PAIR_COMMANDS = ("diagnose", "compare", "discover", "loop", "batch")
 
 
 def apply_machine(args) -> Machine | None:

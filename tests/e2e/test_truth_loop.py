@@ -21,10 +21,11 @@ from pydiag.fit.problem import build_problem
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.io.measurements import write_measurement
+from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.compose import composed_fmu
 from pydiag.loop.discover import discover, effect_fmu
-from pydiag.loop.effect_fit import EFFECT_REFIT, with_effect
+from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.held_out import ENVELOPE_TOP, held_out
 from pydiag.loop.residual import measured_spectra
 from pydiag.loop.validate import validate
@@ -412,27 +413,33 @@ def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, truth_record
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS, operating_point={
         **OPERATING_POINT, "other_shaft_ratio": TruthGear().effects.other_shaft_ratio})
+    steps, final = accumulate(problem, effect_fmu_of,
+                              lambda keys: str(composed_fmu(keys, ROOT / "modelica", tmp_path)),
+                              estimator=FaultEstimator(**FAST))
+    assert [s.accepted for s in steps] == ["gear_eccentricity", "other_shaft_orders", None], \
+        [(s.accepted, s.error) for s in steps]
+    assert steps[2].effects == ("gear_eccentricity", "other_shaft_orders")
+    assert "GearPairWith" in str(final.spec.fmu_path)
+    assert not [s for s in steps[2].comparison.suggested_effects if s.confident]
+    assert steps[0].error > steps[1].error > steps[2].error, [s.error for s in steps]
+    assert all(s.held_out_error_with < s.held_out_error_base for s in steps[:2])
+    assert steps[2].comparison.parameters["ecc_gear"] == pytest.approx(10e-6, rel=0.2)
 
-    def composed(keys):
-        return str(composed_fmu(keys, ROOT / "modelica", tmp_path))
 
-    c = validate(problem, compare(problem, FaultEstimator(**FAST)), effect_fmu_of,
-                 composed=composed)
-    accepted, errors = (), [c.error]
-    for _ in range(2):
-        confident = sorted((s for s in c.suggested_effects if s.confident),
-                           key=lambda s: -s.held_out.z)
-        assert confident, [(s.effect, s.message) for s in c.suggested_effects]
-        effect = EFFECTS[confident[0].effect]
-        fmu = composed(accepted + (effect.key,)) if accepted else effect_fmu_of(effect)
-        fitted = refit_with_effect(problem, c, effect, fmu)
-        problem = with_effect(problem, c, effect, fmu)
-        accepted += (effect.key,)
-        c = validate(problem, fitted, effect_fmu_of, present=accepted, composed=composed)
-        errors.append(c.error)
-    assert accepted == ("gear_eccentricity", "other_shaft_orders"), accepted
-    assert "GearPairWith" in str(problem.spec.fmu_path)
-    assert not [s for s in c.suggested_effects if s.confident], \
-        [(s.effect, s.message) for s in c.suggested_effects]
-    assert errors[0] > errors[1] > errors[2], errors
-    assert c.parameters["ecc_gear"] == pytest.approx(10e-6, rel=0.2), c.parameters
+def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, truth_records,
+                                                                      tmp_path):
+    """pydiag loop, one comparison allowed: the runout is confident on the two-effect
+    record, not accepted, and the line and the JSON say so."""
+    meas, out = tmp_path / "m.csv", tmp_path / "loop.json"
+    write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"]))
+    res = run_cli("-m", "pydiag", "loop", "--fmu", str(gear_fmu), "--measurement", str(meas),
+                  "--other-shaft", "29/17", "--gain", "fixed", "--max-steps", "1", "--json",
+                  str(out), "--particles", "6", "--iterations", "4", "--polish", "40",
+                  "--quiet", "--build-dir", str(tmp_path / "fmus"))
+    assert res.returncode == 0, res.stderr
+    assert "step 1: base: error" in res.stdout
+    assert "stopped at the step limit, confident: gear_eccentricity (z " in res.stdout, \
+        res.stdout  # the most confident first
+    data = json.loads(out.read_text())
+    assert [s["effect"] for s in data["steps"]] == [None]
+    assert data["model_fmu"] == str(gear_fmu)
