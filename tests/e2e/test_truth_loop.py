@@ -354,17 +354,20 @@ def test_cli_compare_shows_a_bearing_confirmed_on_the_envelope(gear_fmu, truth_r
     assert "confident: confirmed held out" in page.read_text()
 
 
-@pytest.mark.parametrize("validate_after", [False, pytest.param(True, marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("validate_after", [False, True])
 def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_records,
                                                            effect_fmu_of, tmp_path, effects_dir,
                                                            validate_after):
     """The loop on the command line, on the motor shaft's record: compare, told the motor
     shaft's ratio (--other-shaft 29/17), names its lines and makes other_shaft_orders the
     one confident suggestion; compare of its model (--effect) fits its orders at the
-    simulator's amplitudes, the error falls and the history shows it. In make test-slow,
-    that second compare validates what is left too, and nothing is confident: the housing
-    tried on a model whose lines are not all synchronous simulates the whole record at
-    every step of its fits (a minute on 2 cores)."""
+    simulator's amplitudes, the error falls and the history shows it. With
+    ``validate_after`` that second compare validates what is left too, and nothing is
+    confident: the housing tried on a model whose lines are not all synchronous simulates
+    the whole record at every step of its fits (a minute on 2 cores). Both in make
+    test-slow; make test runs the loop on the command line and in the library
+    (test_cli_loop_stops_at_its_step_limit..., test_two_hidden_effects...)."""
     meas, db = tmp_path / "m.csv", tmp_path / "h.sqlite"
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
                                    clean=truth_records["other_shaft_orders"]))
