@@ -437,7 +437,7 @@ def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, 
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"]))
     res = run_cli("-m", "pydiag", "loop", "--fmu", str(gear_fmu), "--measurement", str(meas),
                   "--other-shaft", "29/17", "--gain", "fixed", "--max-steps", "1", "--json",
-                  str(out), "--particles", "6", "--iterations", "4", "--polish", "40",
+                  str(out), "--particles", "4", "--iterations", "3", "--polish", "20",
                   "--quiet", "--build-dir", str(tmp_path / "fmus"))
     assert res.returncode == 0, res.stderr
     assert "step 1: base: error" in res.stdout
