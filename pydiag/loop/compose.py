@@ -22,6 +22,7 @@ source and of the library it extends, so an edit of either builds a new one.
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -87,7 +88,10 @@ def read_effect(key: str, modelica_root: Path) -> EffectSource:
                                    f"added to {SENSOR_BASE} combines with other effects")
         expression = expression[len(SENSOR_BASE) + 2:].strip()
     body = text[text.index(";", end) + 1:]
-    body = body[:re.search(rf"^\s*end\s+{path.stem}\s*;", body, re.M).start()]
+    closing = re.search(rf"^\s*end\s+{path.stem}\s*;", body, re.M)
+    if closing is None:
+        raise CompositionError(f"{path}: no 'end {path.stem};' closes the model")
+    body = body[:closing.start()]
     parameters = {}
     for statement in _statements(body):
         name = _PARAMETER.match(statement)
@@ -209,7 +213,13 @@ def composed_fmu(keys: tuple[str, ...], modelica_root: Path, build_dir: Path) ->
     folder.mkdir(parents=True, exist_ok=True)
     source = folder / f"{model.name}.mo"
     out = folder / f"{model.name}_{tag}.fmu"
-    if not out.exists():
+    if not out.exists():  # built beside, then renamed: a failed build leaves no FMU
         source.write_text(model.source)
-        build_fmu(source, f"GearDiag.{model.name}", out, library_roots=(Path(modelica_root),))
+        partial = folder / f".{out.stem}.{os.getpid()}.fmu"
+        try:
+            build_fmu(source, f"GearDiag.{model.name}", partial,
+                      library_roots=(Path(modelica_root),))
+            os.replace(partial, out)
+        finally:
+            partial.unlink(missing_ok=True)
     return out
