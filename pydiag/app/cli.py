@@ -242,6 +242,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=number(int, 1), default=4,
                    help="comparisons at most (default 4)")
     p.add_argument("--json", help="write the steps as JSON here")
+    p.add_argument("--history", help="SQLite run history every step is recorded in "
+                   "(default: as for compare)")
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_loop)

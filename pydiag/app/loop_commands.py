@@ -116,6 +116,8 @@ def cmd_loop(args) -> int:
     """compare, accept the one confident effect, compare again, until nothing is
     confident (:mod:`pydiag.loop.accumulate`), printing each step as it is made."""
     check_outputs(args, "json")
+    args.history = str(history.resolve(args.history))
+    history.check(args.history)
     root = Path(args.modelica) if args.modelica else MODELICA_ROOT
     check_modelica_root(root)
     build = Path(args.build_dir) if args.build_dir else default_build_dir(root)
@@ -130,6 +132,13 @@ def cmd_loop(args) -> int:
         FaultEstimator(**estimator_settings(args)), _effect_estimator(args),
         lambda step: print(format_loop_step(next(numbered), step), flush=True))
     print(f"model      : {final.spec.fmu_path}")
+    ids = []
+    for step in steps:  # every step a run of the history, its model named by its FMU
+        name = read_model_description(step.comparison.fmu)[0].modelName
+        with history.recording(args.history, step.comparison, args.measurement, name) as (i, _):
+            ids.append(i)
+    print(f"recorded as run{'s' if len(ids) > 1 else ''} "
+          f"{'-'.join(str(i) for i in sorted({ids[0], ids[-1]}))} in {args.history}")
     if args.json:
         write_text(args.json, json.dumps({"steps": [s.to_dict() for s in steps],
                                           "model_fmu": str(final.spec.fmu_path)},

@@ -438,9 +438,11 @@ def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, 
     res = run_cli("-m", "pydiag", "loop", "--fmu", str(gear_fmu), "--measurement", str(meas),
                   "--other-shaft", "29/17", "--gain", "fixed", "--max-steps", "1", "--json",
                   str(out), "--particles", "4", "--iterations", "3", "--polish", "20",
-                  "--quiet", "--build-dir", str(tmp_path / "fmus"))
+                  "--quiet", "--build-dir", str(tmp_path / "fmus"), "--history",
+                  str(tmp_path / "h.sqlite"))
     assert res.returncode == 0, res.stderr
     assert "step 1: base: error" in res.stdout
+    assert f"recorded as run 1 in {tmp_path / 'h.sqlite'}" in res.stdout
     assert "stopped at the step limit, confident: gear_eccentricity (z " in res.stdout, \
         res.stdout  # the most confident first
     data = json.loads(out.read_text())
