@@ -92,7 +92,8 @@ def _operating_args(p: argparse.ArgumentParser) -> None:
 
 
 def _loop_args(p: argparse.ArgumentParser) -> None:
-    """compare's and discover's: the pair's surroundings, the stage, the effect models."""
+    """compare's, discover's and loop's: the pair's surroundings, the stage, the effect
+    models."""
     p.add_argument("--bearing", type=bearing, help="pinion bearing N_BALLS,BALL_MM,PITCH_MM"
                    "[,ANGLE_DEG] for BPFO/BPFI/BSF/FTF")
     p.add_argument("--other-shaft", type=speed_ratio, metavar="RATIO",

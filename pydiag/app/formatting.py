@@ -101,10 +101,11 @@ def format_discovery(base: Comparison, found: list[Discovery]) -> str:
     return "\n".join(lines)
 
 
-def format_loop_step(number: int, step: LoopStep) -> str:
-    """One step of ``pydiag loop``: the model, its error, what was accepted after it."""
+def format_loop_step(step: LoopStep) -> str:
+    """One step of ``pydiag loop``: the model, its error, what was accepted after it (a
+    step's number is one more than the effects its model has)."""
     model = " + ".join(("base",) + step.effects)
-    text = f"step {number}: {model}: error {step.error:.4f}"
+    text = f"step {len(step.effects) + 1}: {model}: error {step.error:.4f}"
     if step.accepted is not None:
         return (f"{text}; accepted {step.accepted} (held out: error {step.held_out_error_base:.4f}"
                 f" -> {step.held_out_error_with:.4f}, z {step.z:.1f})")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import Callable
 
 from pydiag.app.commands import (check_outputs, estimator_settings, problem_of, progress_bar,
                                  read_input)
@@ -13,7 +14,7 @@ from pydiag.app.formatting import (format_comparison, format_discovery, format_f
 from pydiag.core.errors import UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fmu.description import read_model_description
-from pydiag.gear.effects import EFFECTS
+from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.io.outputs import write_text
 from pydiag.loop import history
 from pydiag.loop.accumulate import accumulate
@@ -30,6 +31,16 @@ from pydiag.loop.report import write_report
 def _effect_estimator(args) -> FaultEstimator:
     """The refit of an effect: EFFECT_REFIT's budget, overridden by the options given."""
     return FaultEstimator(**{**EFFECT_REFIT, **estimator_settings(args)})
+
+
+def _effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, ...]], str]]:
+    """(an effect's FMU, the FMU of several effects), built on first use from --modelica
+    (checked here) into --build-dir (default: the per-user cache)."""
+    root = Path(args.modelica) if args.modelica else MODELICA_ROOT
+    check_modelica_root(root)
+    build = Path(args.build_dir) if args.build_dir else default_build_dir(root)
+    return (lambda e: str(effect_fmu(e.key, root, build)),
+            lambda keys: str(composed_fmu(keys, root, build)))
 
 
 def _stage_fact(args) -> dict:
@@ -49,8 +60,7 @@ def cmd_compare(args) -> int:
     effect = EFFECTS[args.effect] if args.effect else None
     if effect is not None and effect.transfer is not None:
         check_transfer_base(args.fmu, effect)
-    if not args.no_validate:
-        check_modelica_root(Path(args.modelica) if args.modelica else MODELICA_ROOT)
+    models = None if args.no_validate else _effect_models(args)
     m = read_input(args)
     # with an effect model, the base fit runs with the effect switched off (lower bounds)
     problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
@@ -63,14 +73,9 @@ def cmd_compare(args) -> int:
             problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
     finally:
         close()
-    if not args.no_validate:
-        root = Path(args.modelica) if args.modelica else MODELICA_ROOT
-        build = Path(args.build_dir) if args.build_dir else None
-        c = validate(problem, c, lambda e: str(effect_fmu(e.key, root, build)),
-                     _effect_estimator(args),
-                     present=(args.effect,) if args.effect else (),
-                     composed=lambda keys: str(composed_fmu(keys, root, build or
-                                                            default_build_dir(root))),
+    if models is not None:
+        c = validate(problem, c, models[0], _effect_estimator(args),
+                     present=(args.effect,) if args.effect else (), composed=models[1],
                      progress=None if args.quiet else
                      (lambda key: print(f"validating {key} held out ...", file=sys.stderr)))
     md, _ = read_model_description(args.fmu)
@@ -118,27 +123,23 @@ def cmd_loop(args) -> int:
     check_outputs(args, "json")
     args.history = str(history.resolve(args.history))
     history.check(args.history)
-    root = Path(args.modelica) if args.modelica else MODELICA_ROOT
-    check_modelica_root(root)
-    build = Path(args.build_dir) if args.build_dir else default_build_dir(root)
+    effect_model, composed_model = _effect_models(args)
     problem = problem_of(args, read_input(args))
     facts = format_facts(_stage_fact(args))
     if facts:
         print(facts)
-    numbered = iter(range(1, args.max_steps + 1))
     steps, final = accumulate(
-        problem, lambda e: str(effect_fmu(e.key, root, build)),
-        lambda keys: str(composed_fmu(keys, root, build)), args.max_steps,
+        problem, effect_model, composed_model, args.max_steps,
         FaultEstimator(**estimator_settings(args)), _effect_estimator(args),
-        lambda step: print(format_loop_step(next(numbered), step), flush=True))
+        lambda step: print(format_loop_step(step), flush=True))
     print(f"model      : {final.spec.fmu_path}")
     ids = []
     for step in steps:  # every step a run of the history, its model named by its FMU
         name = read_model_description(step.comparison.fmu)[0].modelName
         with history.recording(args.history, step.comparison, args.measurement, name) as (i, _):
             ids.append(i)
-    print(f"recorded as run{'s' if len(ids) > 1 else ''} "
-          f"{'-'.join(str(i) for i in sorted({ids[0], ids[-1]}))} in {args.history}")
+    print(f"recorded as run {ids[0]} in {args.history}" if len(ids) == 1 else
+          f"recorded as runs {ids[0]}-{ids[-1]} in {args.history}")
     if args.json:
         write_text(args.json, json.dumps({"steps": [s.to_dict() for s in steps],
                                           "model_fmu": str(final.spec.fmu_path)},

@@ -62,7 +62,7 @@ def apply_machine(args) -> Machine | None:
 
 
 def _stage_of(args, machine: Machine) -> int | None:
-    """The stage compare and discover fit (``--stage``; the only one of a one-stage
+    """The stage compare, discover and loop fit (``--stage``; the only one of a one-stage
     machine); None for the commands that fit every stage."""
     stage = getattr(args, "stage", None)
     if len(machine.stages) == 1:
