@@ -205,7 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_regress)
 
     p = sub.add_parser("compare", help="fit, then show where the model fails and which effect is missing")
-    p.add_argument("--fmu", required=True)
+    p.add_argument("--fmu", help="the model FMU; with --machine of several stages and no "
+                   "--stage, none: the machine's own model (every stage) is written and built")
     _measurement_args(p)
     _loop_args(p)
     p.add_argument("--false-alarm-rate", type=rate, default=0.01,

@@ -41,6 +41,8 @@ def format_facts(facts: dict) -> str:
     lines = []
     if facts.get("stage"):
         lines.append(f"stage      : {facts['stage']}")
+    if facts.get("model"):
+        lines.append(f"model      : {facts['model']}")
     if "speed_hz" in facts:
         lines.append(f"speed      : {facts['speed_hz']:.5f} Hz pinion ({60 * facts['speed_hz']:.2f} "
                      f"rpm; nominal {facts['nominal_speed_hz']:.4g} Hz), varies "

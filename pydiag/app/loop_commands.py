@@ -7,11 +7,13 @@ import sys
 from pathlib import Path
 from typing import Callable
 
-from pydiag.app.commands import (check_outputs, estimator_settings, problem_of, progress_bar,
-                                 read_input)
+from pydiag.app.commands import (check_outputs, estimator_settings, problem_of,
+                                 problem_settings, progress_bar, read_input)
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
                                    format_history, format_loop_step)
 from pydiag.core.errors import UsageError
+from pydiag.core.measurement import Measurement
+from pydiag.fit.problem import FitProblem
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
@@ -22,6 +24,8 @@ from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import composed_fmu
+from pydiag.loop.machine_model import machine_fmu, machine_problem
+from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
                                   default_build_dir, discover, effect_fmu)
 from pydiag.loop.validate import validate
@@ -33,20 +37,48 @@ def _effect_estimator(args) -> FaultEstimator:
     return FaultEstimator(**{**EFFECT_REFIT, **estimator_settings(args)})
 
 
-def _effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, ...]], str]]:
-    """(an effect's FMU, the FMU of several effects), built on first use from --modelica
-    (checked here) into --build-dir (default: the per-user cache)."""
+def _library(args) -> tuple[Path, Path]:
+    """(the Modelica library root, --modelica, checked here; the build folder, --build-dir,
+    default the per-user cache)."""
     root = Path(args.modelica) if args.modelica else MODELICA_ROOT
     check_modelica_root(root)
-    build = Path(args.build_dir) if args.build_dir else default_build_dir(root)
+    return root, Path(args.build_dir) if args.build_dir else default_build_dir(root)
+
+
+def _effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, ...]], str]]:
+    """(an effect's FMU, the FMU of several effects), built on first use (:func:`_library`)."""
+    root, build = _library(args)
     return (lambda e: str(effect_fmu(e.key, root, build)),
             lambda keys: str(composed_fmu(keys, root, build)))
+
+
+def _machine_problem(args, m: Measurement) -> tuple[FitProblem, Path]:
+    """compare without --fmu: the fit problem of the machine's own model of every stage
+    (:mod:`pydiag.loop.machine_model`), and the path of its Modelica source."""
+    machine = getattr(args, "machine_description", None)
+    if machine is None:
+        raise UsageError("give --fmu, or --machine FILE to fit the machine's own model")
+    if args.effect:
+        raise UsageError(f"--effect fits a pair's effect: give --stage (the stages of "
+                         f"{args.machine}: " + ", ".join(s.name for s in machine.stages)
+                         + ") and --fmu")
+    root, build = _library(args)
+    model, fmu = machine_fmu(machine, root, build)
+    settings = problem_settings(args)
+    speed = settings["speed"]
+    drop = (speed.tacho,) if speed.tacho else ()
+    problem = machine_problem(fmu, model, m, machine,
+                              machine_speed(m, machine, args.rpm / 60.0, speed),
+                              settings["fit_gain"], settings["feature_mode"], drop)
+    return problem, fmu.with_suffix("").with_name(model.name + ".mo")
 
 
 def _stage_fact(args) -> dict:
     """The stage of a machine of several stages that was fitted: its name and teeth."""
     machine = getattr(args, "machine_description", None)
     if machine is None or len(machine.stages) == 1:
+        return {}
+    if args.stage_index is None:
         return {}
     s = machine.stages[args.stage_index]
     return {"stage": f"{s.name} ({s.pinion_teeth}/{s.gear_teeth} teeth) of {machine.name}; "
@@ -58,12 +90,16 @@ def cmd_compare(args) -> int:
     args.history = str(history.resolve(args.history))
     history.check(args.history)
     effect = EFFECTS[args.effect] if args.effect else None
-    if effect is not None and effect.transfer is not None:
+    if effect is not None and effect.transfer is not None and args.fmu:
         check_transfer_base(args.fmu, effect)
-    models = None if args.no_validate else _effect_models(args)
     m = read_input(args)
-    # with an effect model, the base fit runs with the effect switched off (lower bounds)
-    problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
+    source = None
+    if args.fmu:
+        models = None if args.no_validate else _effect_models(args)
+        # with an effect model, the base fit runs with the effect switched off (lower bounds)
+        problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
+    else:  # the catalogue's effects are a pair's: not tried on a machine's model yet
+        (problem, source), models = _machine_problem(args, m), None
     update, close = progress_bar(args.quiet, "compare")
     try:
         c = compare(problem, FaultEstimator(**estimator_settings(args), progress=update),
@@ -78,10 +114,13 @@ def cmd_compare(args) -> int:
                      present=(args.effect,) if args.effect else (), composed=models[1],
                      progress=None if args.quiet else
                      (lambda key: print(f"validating {key} held out ...", file=sys.stderr)))
-    md, _ = read_model_description(args.fmu)
+    md, _ = read_model_description(problem.spec.fmu_path)
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
     facts.update(_stage_fact(args))
+    if source is not None:
+        facts["model"] = (f"{source} (every stage of {args.machine}, written by pydiag; "
+                          "effects are tried on one stage's pair: --stage, --fmu)")
     warnings = fit_warnings(problem, c.fit_error, c.gains) if c.fit_error is not None else []
     # the run is recorded when its outputs are written (history.recording)
     with history.recording(args.history, c, args.measurement, md.modelName,

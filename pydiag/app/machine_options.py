@@ -44,14 +44,16 @@ def apply_machine(args) -> Machine | None:
     if not args.channel and machine.sensors:  # a staged fit picks each stage's own
         args.channel = [f"{s.channel}={s.output}" if fits and not staged else s.channel
                         for s in machine.sensors]
+    # the file's sensors the command line chose (every one when it chose none)
+    chosen = {c.split("=", 1)[0] for c in args.channel or []}
+    sensors = [s for s in machine.sensors if not chosen or s.channel in chosen]
     given_units = parse_units(args.unit)
     if None not in given_units:
-        args.unit = list(args.unit or []) + [f"{s.channel}={s.unit}" for s in machine.sensors
+        args.unit = list(args.unit or []) + [f"{s.channel}={s.unit}" for s in sensors
                                              if s.unit and s.channel not in given_units]
     given = dict(args.sensitivity or [])
     args.sensitivity = list(args.sensitivity or []) + [
-        (s.channel, s.sensitivity) for s in machine.sensors
-        if s.sensitivity and s.channel not in given]
+        (s.channel, s.sensitivity) for s in sensors if s.sensitivity and s.channel not in given]
     if fits and not staged:
         stage = machine.stages[0]
         args.teeth = (stage.pinion_teeth, stage.gear_teeth)
@@ -63,17 +65,21 @@ def apply_machine(args) -> Machine | None:
 
 def _stage_of(args, machine: Machine) -> int | None:
     """The stage compare, discover and loop fit (``--stage``; the only one of a one-stage
-    machine); None for the commands that fit every stage."""
+    machine); None for the commands that fit every stage (diagnose and batch, stage by
+    stage; compare without --fmu, the machine's own model)."""
     stage = getattr(args, "stage", None)
     if len(machine.stages) == 1:
         return 0 if stage is None else machine.stage_index(stage)
     if args.command in ("diagnose", "batch"):
         return None
+    if stage is None and args.command == "compare" and not args.fmu:
+        return None  # the machine's own model, every stage
     if stage is None:
         raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
                          "one stage's pair model: give --stage (" + ", ".join(
                              f"{k} or {s.name!r}" for k, s in enumerate(machine.stages, 1))
-                         + "); `pydiag diagnose --machine` fits every stage")
+                         + "); `pydiag diagnose --machine` fits every stage, `pydiag "
+                         "compare --machine` without --fmu the machine's model of them all")
     if args.other_shaft is not None or args.bearing is not None:
         raise UsageError(f"--other-shaft and --bearing describe a pair's surroundings; "
                          f"{args.machine} describes the machine's: give them there")

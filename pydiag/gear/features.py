@@ -15,6 +15,7 @@ Two feature modes:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -40,7 +41,12 @@ class Band:
 
 
 def paper_bands(kin: GearKinematics) -> list[Band]:
-    """The paper's ten bands, with edges derived from the kinematics."""
+    """The paper's ten bands, with edges derived from the kinematics; of a modelled machine
+    (:attr:`~pydiag.gear.kinematics.GearKinematics.modelled_machine`), every stage's ten
+    (the stage's number before each band's name from the second on)."""
+    if kin.modelled_machine:
+        return [dataclasses.replace(b, name=b.name if k == 0 else f"stage{k + 1}:{b.name}")
+                for k, stage in enumerate(kin.stages()) for b in paper_bands(stage)]
     half_line = 0.5 * kin.f_hunting_hz
     bands = [Band(f"mesh{h}", (h - 0.5) * kin.f_mesh_hz, (h + 0.5) * kin.f_mesh_hz)
              for h in range(1, N_MESH_HARMONICS + 1)]
@@ -129,8 +135,8 @@ class KinematicFeaturizer:
 
     def describe_duration(self) -> str:
         k = self.kinematics
-        return (f"one fundamental period ({k.period_s:.4g} s = {k.n_assembly_phases} pinion "
-                "turns)")
+        return (f"one fundamental period ({k.period_s:.4g} s = "
+                f"{k.period_s * k.f_pinion_hz:.4g} pinion turns)")
 
     def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
         return signal_features(signal, sample_rate_hz, self.kinematics, self.mode,

@@ -73,11 +73,17 @@ class OtherBearing:
 class MachineContext:
     """The rest of a gearbox around one of its stages: what puts lines in the stage's
     spectrum that are none of the pair's own (every speed relative to the pair's pinion,
-    so the context holds at any speed)."""
+    so the context holds at any speed).
+
+    ``fundamental_order``: set when the model simulates every stage (a machine model,
+    :mod:`pydiag.loop.machine_model`): the machine's fundamental frequency over the pair's
+    pinion speed, with which every stage's lines repeat; the pair's kinematics then have
+    the machine's period and analyse every stage's bands. None: the pair's own."""
 
     stages: tuple[OtherStage, ...] = ()
     shafts: tuple[OtherShaft, ...] = ()
     bearings: tuple[OtherBearing, ...] = ()
+    fundamental_order: float | None = None
 
 
 @dataclass(frozen=True)
@@ -152,9 +158,25 @@ class GearKinematics:
         return self.f_mesh_hz / math.lcm(self.n_pinion, self.n_gear)
 
     @property
+    def modelled_machine(self) -> bool:
+        """Whether the model simulates every stage of the pair's machine (``machine``'s
+        ``fundamental_order`` is set)."""
+        return self.machine is not None and self.machine.fundamental_order is not None
+
+    @property
     def period_s(self) -> float:
-        """Fundamental period: every shaft, tooth and assembly-phase line is a harmonic of 1/period."""
+        """Fundamental period: every shaft, tooth and assembly-phase line is a harmonic of
+        1/period (of every stage's, for a modelled machine)."""
+        if self.modelled_machine:
+            return 1.0 / (self.machine.fundamental_order * self.f_pinion_hz)
         return 1.0 / self.f_hunting_hz
+
+    def stages(self) -> tuple["GearKinematics", ...]:
+        """The pair, then every other stage of its machine as a pair at its own speed."""
+        others = self.machine.stages if self.machine is not None else ()
+        return (self.pair,) + tuple(GearKinematics(o.pinion_teeth, o.gear_teeth,
+                                                   o.pinion_ratio * self.f_pinion_hz)
+                                    for o in others)
 
     def mesh_lines_hz(self, max_freq_hz: float,
                       n_sidebands: int = MESH_SIDEBANDS) -> tuple[float, ...]:

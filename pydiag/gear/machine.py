@@ -39,6 +39,7 @@ file and the key.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass
@@ -172,6 +173,26 @@ class Machine:
                               bearing=None if own is None else own.bearing,
                               machine=context if len(self.stages) > 1 or context.bearings
                               else None)
+
+    def fundamental_order(self) -> Fraction:
+        """The machine's fundamental frequency in input-shaft orders: the largest with which
+        every stage's hunting-tooth frequency repeats (exact)."""
+        out = Fraction(0)
+        for k, s in enumerate(self.stages):
+            hunting = self.mesh_order(k) / math.lcm(s.pinion_teeth, s.gear_teeth)
+            out = Fraction(math.gcd(out.numerator * hunting.denominator,
+                                    hunting.numerator * out.denominator),
+                           out.denominator * hunting.denominator)
+        return out
+
+    def model_kinematics(self, input_hz: float) -> GearKinematics:
+        """The first stage's kinematics (:meth:`stage_kinematics`) for a model that
+        simulates every stage: the machine's fundamental period, every stage's bands
+        (:attr:`~pydiag.gear.kinematics.GearKinematics.modelled_machine`)."""
+        kin = self.stage_kinematics(0, input_hz)
+        context = kin.machine or MachineContext()
+        return dataclasses.replace(kin, machine=dataclasses.replace(
+            context, fundamental_order=float(self.fundamental_order())))
 
     def stage_lines(self, stage: int, input_hz: float, max_freq_hz: float
                     ) -> tuple[float, ...]:

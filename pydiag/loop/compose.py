@@ -205,20 +205,26 @@ def library_hash(modelica_root: Path) -> str:
 def composed_fmu(keys: tuple[str, ...], modelica_root: Path, build_dir: Path) -> Path:
     """The FMU of :func:`compose`'s model, built unless one of the same source and library
     exists; its source is ``<build_dir>/composed/<name>.mo``."""
+    model = compose(keys, modelica_root)
+    return built_fmu(model.name, model.source, modelica_root, Path(build_dir) / "composed")
+
+
+def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Path:
+    """The FMU of the model ``GearDiag.<name>`` written as ``source`` (it uses the library
+    at ``modelica_root``), built unless one of the same source and library exists in
+    ``folder``; the source is kept there as ``<name>.mo``, readable and editable."""
     from fmu_build import build_fmu
 
-    model = compose(keys, modelica_root)
-    tag = hashlib.sha256((model.source + library_hash(modelica_root)).encode()).hexdigest()[:12]
-    folder = Path(build_dir) / "composed"
+    tag = hashlib.sha256((source + library_hash(modelica_root)).encode()).hexdigest()[:12]
+    folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    source = folder / f"{model.name}.mo"
-    out = folder / f"{model.name}_{tag}.fmu"
+    path = folder / f"{name}.mo"
+    out = folder / f"{name}_{tag}.fmu"
     if not out.exists():  # built beside, then renamed: a failed build leaves no FMU
-        source.write_text(model.source)
+        path.write_text(source)
         partial = folder / f".{out.stem}.{os.getpid()}.fmu"
         try:
-            build_fmu(source, f"GearDiag.{model.name}", partial,
-                      library_roots=(Path(modelica_root),))
+            build_fmu(path, f"GearDiag.{name}", partial, library_roots=(Path(modelica_root),))
             os.replace(partial, out)
         finally:
             partial.unlink(missing_ok=True)

@@ -17,10 +17,18 @@ MACHINE = machine_from_dict({"name": "two-stage test box",
                                         {"pinion_teeth": 24, "gear_teeth": 54}]})
 
 
+#: A box whose stages repeat together every 10 input turns (18/36 then 20/50 teeth, no
+#: hunting tooth), 0.4 s: short enough for a model that simulates both stages.
+SHORT_MACHINE = machine_from_dict({"name": "short-period test box",
+                                   "stages": [{"pinion_teeth": 18, "gear_teeth": 36},
+                                              {"pinion_teeth": 20, "gear_teeth": 50}]})
+
+
 def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
-                   depth: float = 0.8, noise: float = 0.3) -> Measurement:
-    """A record at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2 output) carries a
-    broken tooth of ``depth`` on stage ``stage``'s mesh."""
+                   depth: float = 0.8, noise: float = 0.3, machine=MACHINE) -> Measurement:
+    """A record of ``machine`` at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2
+    output) carries a broken tooth of ``depth`` on stage ``stage``'s mesh."""
+    MACHINE = machine  # noqa: N806 (the box the record is of)
     rng = np.random.default_rng(seed)
     n = int(FS * DURATION)
     t = np.arange(n) / FS

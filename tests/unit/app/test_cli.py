@@ -97,3 +97,22 @@ def test_compare_on_a_machine_of_several_stages_fits_the_stage_named(capsys, ext
     code, err = run(["compare", "--fmu", "x.fmu", "--measurement", "m.csv", "--machine",
                      str(machine), *extra], capsys)
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_machine_files_sensors_apply_to_the_channels_chosen_only():
+    """--channel ch1 on a machine file that gives ch1 and ch2 in volts: ch1's unit is
+    taken, ch2's is not (a unit for a channel not read was refused as if the user had
+    given --unit for it)."""
+    from pathlib import Path
+
+    from pydiag.app.machine_options import apply_machine
+    machine = Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml"
+    args = cli.build_parser().parse_args(["compare", "--measurement", "m.csv", "--machine",
+                                          str(machine), "--stage", "1", "--channel",
+                                          "ch1=acc"])
+    apply_machine(args)
+    assert args.unit == ["ch1=V"] and args.channel == ["ch1=acc"]
+    args = cli.build_parser().parse_args(["compare", "--measurement", "m.csv", "--machine",
+                                          str(machine), "--stage", "1"])
+    apply_machine(args)
+    assert args.unit == ["ch1=V", "ch2=V"]

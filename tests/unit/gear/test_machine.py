@@ -164,3 +164,25 @@ def test_a_stage_is_found_by_name_or_number_and_a_wrong_one_is_named():
     for wrong in ("3", "0", "output"):
         with pytest.raises(MachineError, match="the stages are 1 \\(input stage\\), 2"):
             machine.stage_index(wrong)
+
+
+@pytest.mark.parametrize("stages, turns", [
+    ([(32, 96), (48, 80)], 15),  # PHM09: 3 input turns, then 5 idler turns (15 input)
+    ([(18, 36), (20, 50)], 10),  # 1 gear turn (2 input), then 5 turns of 2 input turns
+    ([(20, 64), (24, 54)], 144),  # hunting teeth: 16 input turns, then 9 x 64/20 = 28.8
+])
+def test_a_model_of_every_stage_repeats_when_every_stage_does(stages, turns):
+    """The machine's period is the shortest whole number of every stage's hunting-tooth
+    periods, counted in input turns; its kinematics analyse every stage's bands."""
+    machine = machine_from_dict({"name": "box", "stages": [
+        {"pinion_teeth": p, "gear_teeth": g} for p, g in stages]})
+    assert machine.fundamental_order() == Fraction(1, turns)
+    kin = machine.model_kinematics(25.0)
+    assert kin.period_s == pytest.approx(turns / 25.0)
+    assert machine.stage_kinematics(0, 25.0).period_s < kin.period_s
+    from pydiag.gear.features import paper_bands
+    bands = paper_bands(kin)
+    assert len(bands) == 10 * len(stages)
+    second = machine.stage_kinematics(1, 25.0)
+    assert any(b.low_hz < second.f_mesh_hz < b.high_hz and b.name == "stage2:mesh1"
+               for b in bands)
