@@ -121,7 +121,8 @@ def cmd_compare(args) -> int:
     if source is not None:
         facts["model"] = (f"{source} (every stage of {args.machine}, written by pydiag; "
                           "effects are tried on one stage's pair: --stage, --fmu)")
-    warnings = fit_warnings(problem, c.fit_error, c.gains) if c.fit_error is not None else []
+    warnings = (fit_warnings(problem, c.fit_error, c.gains, c.parameters)
+                if c.fit_error is not None else [])
     # the run is recorded when its outputs are written (history.recording)
     with history.recording(args.history, c, args.measurement, md.modelName,
                            args.source) as (run_id, runs):

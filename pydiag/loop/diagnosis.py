@@ -31,6 +31,8 @@ UNIT_FACTORS = {9.80665: "g read as m/s2", 1 / 9.80665: "m/s2 read as g",
                 1e6: "a micro- prefix missed", 1e-6: "a micro- prefix too many",
                 39.37: "metres read as inches", 1 / 39.37: "inches read as metres"}
 UNIT_FACTOR_TOLERANCE = 0.15
+#: A fitted parameter within this share of its range below its top is at the top.
+TOP_OF_RANGE = 0.01
 
 
 @dataclass
@@ -88,7 +90,7 @@ def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -
     else:
         labels, contrast = ("not_classified",) + ("unknown",) * 3, None
     return Diagnosis(fit, *labels, contrast, facts,
-                     fit_warnings(problem, fit.error, facts.get("gains")))
+                     fit_warnings(problem, fit.error, facts.get("gains"), fit.parameters))
 
 
 def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None) -> Diagnosis:
@@ -125,11 +127,21 @@ def unexplained(problem: FitProblem, error: float) -> bool:
     return error / np.sqrt(len(problem.channels)) >= UNEXPLAINED_ERROR
 
 
-def fit_warnings(problem: FitProblem, error: float,
-                 gains: dict[str, float] | None = None) -> list[str]:
-    """Why a fit of ``problem`` with this ``error`` (and these fitted ``gains``) is not to
-    be trusted: an empty list when nothing looks wrong."""
+def fit_warnings(problem: FitProblem, error: float, gains: dict[str, float] | None = None,
+                 parameters: dict[str, float] | None = None) -> list[str]:
+    """Why a fit of ``problem`` with this ``error`` (and these fitted ``gains`` and
+    ``parameters``, by name) is not to be trusted: an empty list when nothing looks wrong.
+
+    A parameter at the top of its range is named: the record asks for more of it than the
+    model allows, so the model's form or range is wrong there (at the bottom, a fault
+    parameter says "none of it", a normal answer)."""
     found = []
+    for p in problem.parameters:
+        value = (parameters or {}).get(p.name)
+        if value is not None and not p.periodic and value >= p.high - TOP_OF_RANGE * (p.high - p.low):
+            found.append(f"{p.name} = {value:.4g} is at the top of its range [{p.low:g}, "
+                         f"{p.high:g}]: the record asks for more than the model allows (its "
+                         "form or its range is wrong there)")
     check = "check the units (--unit), the channel mapping (--channel) and the sample rate"
     per_channel = error / np.sqrt(len(problem.channels))
     if unexplained(problem, error):
