@@ -20,7 +20,8 @@ from pydiag.app.arguments import (bearing, effect_list, number, parameter_value,
                                   rate, sensitivity, speed_ratio, teeth)
 from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators,
                                  cmd_inspect, cmd_regress, cmd_simulate, warn_validation)
-from pydiag.app.loop_commands import cmd_compare, cmd_discover, cmd_history, cmd_loop
+from pydiag.app.loop_commands import (cmd_accept, cmd_compare, cmd_discover, cmd_history,
+                                      cmd_loop)
 from pydiag.app.machine_options import apply_machine
 from pydiag.core.errors import PydiagError
 from pydiag.gear.effects import EFFECTS
@@ -250,6 +251,16 @@ def build_parser() -> argparse.ArgumentParser:
     _optimiser_args(p)
     p.set_defaults(func=cmd_loop)
 
+    p = sub.add_parser("accept", help="give a stage of a machine file a catalogue effect: "
+                       "compare --machine then fits the machine's model with it")
+    p.add_argument("effect", choices=list(EFFECTS), metavar="EFFECT",
+                   help="the catalogue effect (pydiag compare names them)")
+    p.add_argument("--machine", required=True, metavar="FILE",
+                   help="the machine file (TOML) to add it to; edited in place")
+    p.add_argument("--stage", metavar="NAME|N", help="the stage it is on (its name, or its "
+                   "number from 1 at the input; not needed for a machine of one stage)")
+    p.set_defaults(func=cmd_accept)
+
     p = sub.add_parser("history", help="list compare runs; --plot the error across model revisions")
     p.add_argument("--history", help="SQLite run history (default: as for compare)")
     p.add_argument("--plot", help="PNG (or .svg, .pdf) file for the error history")
@@ -304,7 +315,8 @@ def _run(args: argparse.Namespace) -> int:
     try:
         if isinstance(getattr(args, "fmu", None), str):
             warn_validation(args.fmu)
-        args.machine_description = apply_machine(args)
+        # the machine file as the options it stands for, on the commands that read records
+        args.machine_description = apply_machine(args) if hasattr(args, "rpm") else None
         return args.func(args)
     except PydiagError as err:
         print(f"pydiag {args.command}: error: {err}", file=sys.stderr)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -23,8 +24,9 @@ from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
-from pydiag.loop.compose import composed_fmu
-from pydiag.loop.machine_model import machine_fmu, machine_problem
+from pydiag.loop.compose import BuiltModel, composed_fmu
+from pydiag.loop.machine_model import (MachineModel, accept, fit_machine, machine_fmu,
+                                       machine_problem)
 from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
                                   default_build_dir, discover, effect_fmu)
@@ -52,9 +54,10 @@ def _effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, 
             lambda keys: str(composed_fmu(keys, root, build)))
 
 
-def _machine_problem(args, m: Measurement) -> tuple[FitProblem, Path]:
+def _machine_problem(args, m: Measurement
+                     ) -> tuple[FitProblem, tuple[MachineModel, BuiltModel]]:
     """compare without --fmu: the fit problem of the machine's own model of every stage
-    (:mod:`pydiag.loop.machine_model`), and the path of its Modelica source."""
+    (:mod:`pydiag.loop.machine_model`), and that model, as written and as built."""
     machine = getattr(args, "machine_description", None)
     if machine is None:
         raise UsageError("give --fmu, or --machine FILE to fit the machine's own model")
@@ -63,14 +66,14 @@ def _machine_problem(args, m: Measurement) -> tuple[FitProblem, Path]:
                          f"{args.machine}: " + ", ".join(s.name for s in machine.stages)
                          + ") and --fmu")
     root, build = _library(args)
-    model, fmu = machine_fmu(machine, root, build)
+    model, built = machine_fmu(machine, root, build)
     settings = problem_settings(args)
     speed = settings["speed"]
     drop = (speed.tacho,) if speed.tacho else ()
-    problem = machine_problem(fmu, model, m, machine,
+    problem = machine_problem(built.fmu, model, m, machine,
                               machine_speed(m, machine, args.rpm / 60.0, speed),
                               settings["fit_gain"], settings["feature_mode"], drop)
-    return problem, fmu.with_suffix("").with_name(model.name + ".mo")
+    return problem, (model, built)
 
 
 def _stage_fact(args) -> dict:
@@ -93,17 +96,23 @@ def cmd_compare(args) -> int:
     if effect is not None and effect.transfer is not None and args.fmu:
         check_transfer_base(args.fmu, effect)
     m = read_input(args)
-    source = None
+    machine_model = None  # (as written, as built) when compare fits the machine's own
     if args.fmu:
         models = None if args.no_validate else _effect_models(args)
         # with an effect model, the base fit runs with the effect switched off (lower bounds)
         problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
     else:  # the catalogue's effects are a pair's: not tried on a machine's model yet
-        (problem, source), models = _machine_problem(args, m), None
+        (problem, machine_model), models = _machine_problem(args, m), None
     update, close = progress_bar(args.quiet, "compare")
     try:
-        c = compare(problem, FaultEstimator(**estimator_settings(args), progress=update),
-                    args.false_alarm_rate)
+        estimator = FaultEstimator(**estimator_settings(args), progress=update)
+        if machine_model is None:
+            c = compare(problem, estimator, args.false_alarm_rate)
+        else:  # the machine's model: its effects fitted after its stages
+            fit = fit_machine(problem, machine_model[0], estimator,
+                              _effect_estimator(args).replace(progress=update))
+            c = dataclasses.replace(compare(problem, None, args.false_alarm_rate,
+                                            parameters=fit.parameters), fit_error=fit.error)
         if effect is not None:
             base, c = c, refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args))
             problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
@@ -118,9 +127,12 @@ def cmd_compare(args) -> int:
     facts = {k: v for k, v in problem.record_facts().items()
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
     facts.update(_stage_fact(args))
-    if source is not None:
-        facts["model"] = (f"{source} (every stage of {args.machine}, written by pydiag; "
-                          "effects are tried on one stage's pair: --stage, --fmu)")
+    if machine_model is not None:
+        built = machine_model[1]
+        facts["model"] = (f"{built.source} (every stage of {args.machine}, "
+                          + ("your edit of what pydiag wrote" if built.edited else
+                             "written by pydiag") +
+                          "; effects are tried on one stage's pair: --stage, --fmu)")
     warnings = (fit_warnings(problem, c.fit_error, c.gains, c.parameters)
                 if c.fit_error is not None else [])
     # the run is recorded when its outputs are written (history.recording)
@@ -184,6 +196,15 @@ def cmd_loop(args) -> int:
         write_text(args.json, json.dumps({"steps": [s.to_dict() for s in steps],
                                           "model_fmu": str(final.spec.fmu_path)},
                                          indent=2) + "\n", args.force)
+    return 0
+
+
+def cmd_accept(args) -> int:
+    """Give a stage of the machine file an effect (:func:`pydiag.loop.machine_model.accept`)."""
+    machine = accept(args.machine, args.effect, args.stage)
+    stage = machine.stages[machine.effects[-1].stage].name
+    print(f"{args.machine}: {args.effect} on {stage}; `pydiag compare --machine "
+          f"{args.machine} --measurement RECORD` fits the machine's model with it")
     return 0
 
 

@@ -31,10 +31,16 @@ input shaft's: shaft k turns at ``Machine.shaft_ratio(k)`` times it. Example::
     channel = "ch3"
     pulses_per_rev = 10
     shaft = "input"                   # optional, default the input
+    [[effects]]                       # optional: what the machine's own model adds to a
+    key = "gear_tooth_fault"          #   stage, a catalogue effect (pydiag accept writes
+    stage = "first"                   #   these; the stage may be left out of one stage's)
 
 Planetary stages (``type = "planetary"``) are recognised and refused: their kinematics
 are not built yet. Every mistake is a :class:`~pydiag.core.errors.MachineError` naming the
 file and the key.
+
+One concern: what a gearbox is (its file read and checked, the speeds and periods that
+follow from its teeth); what is fitted to it lives in :mod:`pydiag.loop`.
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from pydiag.core.errors import MachineError
+from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematics import (Bearing, GearKinematics, MachineContext, OtherBearing,
                                     OtherShaft, OtherStage)
 
@@ -55,12 +62,14 @@ PARALLEL_TYPES = ("spur", "helical")
 #: Stage types known but not built yet.
 LATER_TYPES = ("planetary",)
 
-_TOP_KEYS = {"name", "input_rpm", "shafts", "stages", "bearings", "sensors", "tacho"}
+_TOP_KEYS = {"name", "input_rpm", "shafts", "stages", "bearings", "sensors", "tacho",
+             "effects"}
 _STAGE_KEYS = {"name", "type", "pinion_teeth", "gear_teeth"}
 _BEARING_KEYS = {"name", "shaft", "n_balls", "ball_diameter_mm", "pitch_diameter_mm",
                  "contact_angle_deg"}
 _SENSOR_KEYS = {"channel", "unit", "sensitivity", "near_stage", "output"}
 _TACHO_KEYS = {"channel", "pulses_per_rev", "shaft"}
+_EFFECT_KEYS = {"key", "stage"}
 
 
 @dataclass(frozen=True)
@@ -104,6 +113,15 @@ class Tacho:
 
 
 @dataclass(frozen=True)
+class StageEffect:
+    """A catalogue effect (:mod:`pydiag.gear.effects`, by key) the machine's own model
+    has on the stage with index ``stage``."""
+
+    key: str
+    stage: int
+
+
+@dataclass(frozen=True)
 class Machine:
     """A gearbox: stages from the input, shaft names (input first), bearings, sensors,
     tacho; ``input_hz`` the nominal input speed or None (then ``--rpm`` must say it)."""
@@ -116,6 +134,7 @@ class Machine:
     sensors: tuple[Sensor, ...] = ()
     tacho: Tacho | None = None
     source: str = "(in memory)"
+    effects: tuple[StageEffect, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.stages:
@@ -362,8 +381,28 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
         if tacho.channel in channels:
             raise MachineError(f"{_where(source, 'tacho', 'channel')}: '{tacho.channel}' is "
                                "also a vibration sensor")
+    effects = []
+    for i, t in enumerate(_tables(data, "effects", source)):
+        where = f"effects[{i}]"
+        _check_keys(t, _EFFECT_KEYS, source, where)
+        if "key" not in t:
+            raise MachineError(f"{_where(source, where, 'key')}: missing")
+        key = _text(t["key"], source, where, "key")
+        if key not in EFFECTS:
+            raise MachineError(f"{_where(source, where, 'key')}: no effect {key!r} in the "
+                               f"catalogue ({', '.join(EFFECTS)})")
+        if "stage" not in t and len(stages) > 1:
+            raise MachineError(f"{_where(source, where, 'stage')}: missing (the machine has "
+                               f"{len(stages)} stages)")
+        stage = t.get("stage", names[0])
+        if stage not in names:
+            raise MachineError(f"{_where(source, where, 'stage')}: no stage called {stage!r}; "
+                               f"the stages are {', '.join(names)}")
+        if StageEffect(key, names.index(stage)) in effects:
+            raise MachineError(f"{_where(source, where, 'key')}: {key} is on {stage} twice")
+        effects.append(StageEffect(key, names.index(stage)))
     return Machine(machine.name, stages, machine.shafts, machine.input_hz, tuple(bearings),
-                   tuple(sensors), tacho, source)
+                   tuple(sensors), tacho, source, tuple(effects))
 
 
 def load_machine(path: str | Path) -> Machine:

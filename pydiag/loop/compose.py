@@ -206,26 +206,53 @@ def composed_fmu(keys: tuple[str, ...], modelica_root: Path, build_dir: Path) ->
     """The FMU of :func:`compose`'s model, built unless one of the same source and library
     exists; its source is ``<build_dir>/composed/<name>.mo``."""
     model = compose(keys, modelica_root)
-    return built_fmu(model.name, model.source, modelica_root, Path(build_dir) / "composed")
+    return built_fmu(model.name, model.source, modelica_root, Path(build_dir) / "composed").fmu
 
 
-def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Path:
+@dataclass(frozen=True)
+class BuiltModel:
+    """A model pydiag wrote and built: its FMU, its source file, and whether that source
+    is the user's edit of what pydiag wrote (then the FMU is built from the edit)."""
+
+    fmu: Path
+    source: Path
+    edited: bool = False
+
+
+def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> BuiltModel:
     """The FMU of the model ``GearDiag.<name>`` written as ``source`` (it uses the library
     at ``modelica_root``), built unless one of the same source and library exists in
-    ``folder``; the source is kept there as ``<name>.mo``, readable and editable."""
+    ``folder``. The source is kept there as ``<name>.mo``, readable and editable: an edit
+    of it is the user's and wins (the FMU is built from it; ``edited``), told from pydiag's
+    own earlier text by the hash of what pydiag last wrote (``.<name>.mo.written``), so a
+    source pydiag writes differently replaces only its own."""
     from fmu_build import build_fmu
 
-    tag = hashlib.sha256((source + library_hash(modelica_root)).encode()).hexdigest()[:12]
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{name}.mo"
+    written = folder / f".{name}.mo.written"
+    edited = False
+    if path.exists():
+        text = path.read_text()
+        mine = written.exists() and written.read_text() == _digest(text)
+        edited = not mine and text != source
+        if edited:
+            source = text
+    if not edited and (not path.exists() or path.read_text() != source):
+        path.write_text(source)
+        written.write_text(_digest(source))
+    tag = _digest(source + library_hash(modelica_root))[:12]
     out = folder / f"{name}_{tag}.fmu"
     if not out.exists():  # built beside, then renamed: a failed build leaves no FMU
-        path.write_text(source)
         partial = folder / f".{out.stem}.{os.getpid()}.fmu"
         try:
             build_fmu(path, f"GearDiag.{name}", partial, library_roots=(Path(modelica_root),))
             os.replace(partial, out)
         finally:
             partial.unlink(missing_ok=True)
-    return out
+    return BuiltModel(out, path, edited)
+
+
+def _digest(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()

@@ -11,6 +11,16 @@ fit's gain, as for a pair. A sensor's output adds the stages' signals as they ar
 simulated, so a line two stages share has the level their phases give: the stages start
 with their faulty teeth in mesh together, and that relative phase is not fitted.
 
+A stage carries the catalogue effects the machine file gives it (``[[effects]]``, which
+``pydiag accept`` writes): one with a model of its own makes the stage that model
+(``GearDiag.Effects.GearToothFault input_stage(...)``), several make it their composed
+model (:mod:`pydiag.loop.compose`, declared inside the machine's), one of the base
+model's own parameters frees them; their parameters are fitted as ``<stage>.<name>``. They
+are fitted after the stages (:func:`fit_machine`), so an effect never leaves the error
+above the stages' alone. An effect whose lines do not repeat with the machine (a
+bearing's, a ripple's) or that is a sensor's path (the housing) is not a stage's in this
+model yet.
+
 The stages are not coupled: each mesh turns at its constant speed, as the pair model's
 does. What couples them in a gearbox (the shafts' torsion, one stage's transmission error
 in the other's load) is not modelled.
@@ -18,19 +28,26 @@ in the other's load) is not modelled.
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import json
+import os
 import re
-from dataclasses import dataclass
+import tomllib
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.core.parameters import Parameter
+from pydiag.core.parameters import Parameter, fmu_values
+from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, HEALTHY_TOOTH
-from pydiag.gear.machine import Machine
+from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.machine import Machine, StageEffect, load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
-from pydiag.loop.compose import built_fmu
+from pydiag.loop.compose import BuiltModel, built_fmu, compose
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
 from pydiag.model.simulate import SIMULATED_SOURCE
 
@@ -79,14 +96,17 @@ class MachineModel:
     stages: tuple[str, ...]
     outputs: tuple[SensorOutput, ...]
     first_stage: tuple[int, int]
+    effect_parameters: tuple[Parameter, ...] = ()
+    fixed_values: dict[str, float] = field(default_factory=dict)
 
     def parameters(self, with_healthy_tooth: bool, outputs: set[str]
                    ) -> tuple[Parameter, ...]:
         """What a fit of ``outputs`` estimates: every stage's fault parameters (``a0`` too
         with ``with_healthy_tooth``, when the level is fitted) named ``<stage>.<name>``,
-        then the stage levels of those outputs."""
+        its effects' parameters, then the stage levels of those outputs."""
         own = GEAR_FAULT_PARAMETERS + ((HEALTHY_TOOTH,) if with_healthy_tooth else ())
         out = [Parameter(f"{s}.{p.name}", p.low, p.high) for s in self.stages for p in own]
+        out += list(self.effect_parameters)
         out += [Parameter(level, *PATH_RANGE_DB) for o in self.outputs if o.name in outputs
                 for level in o.levels.values()]
         return tuple(out)
@@ -109,18 +129,77 @@ class MachineModel:
                        source=f"the machine model {self.name}")
 
 
-def machine_model(machine: Machine) -> MachineModel:
-    """The model of ``machine`` (module docstring)."""
+def on_a_stage(effect: Effect) -> bool:
+    """Whether a machine's model can give ``effect`` to a stage (module docstring)."""
+    return effect.synchronous and effect.transfer is None
+
+
+def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
+                 nested: dict[str, str]) -> str:
+    """The Modelica class of stage ``k`` with its effects (a composed one declared in
+    ``nested``, by name)."""
+    keys = [e.key for e in machine.effects if e.stage == k]
+    for key in keys:
+        if not on_a_stage(EFFECTS[key]):
+            raise UsageError(f"{machine.source}: effects: {key} is not a stage's in a "
+                             "machine's model yet (a bearing's or a ripple's lines do not "
+                             "repeat with the machine; the housing is a sensor's path)")
+    own = tuple(k for k in keys if EFFECTS[k].own_fmu)
+    if not own:
+        return "GearDiag.GearPair"
+    if len(own) == 1:
+        return EFFECTS[own[0]].model
+    if modelica_root is None:
+        raise UsageError("a stage with several effects needs the Modelica library (--modelica)")
+    composed = compose(own, modelica_root)
+    body = composed.source.split("\n", 1)[1]  # without its `within`
+    nested[composed.name] = "\n".join("  " + line if line else line
+                                      for line in body.rstrip().splitlines())
+    return composed.name
+
+
+def _effect_parameters(machine: Machine, k: int, instance: str
+                       ) -> tuple[list[Parameter], dict[str, float]]:
+    """Stage ``k``'s effects' parameters as ``<instance>.<name>`` (ranges as the stage's
+    teeth say: a tooth's index), and the values of those not fitted (off, or the
+    machine's)."""
+    kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
+    fitted, fixed = [], {}
+    for e in (EFFECTS[s.key] for s in machine.effects if s.stage == k):
+        chosen = e.bounds([], 0.0, kin)
+        if e.parameters and not chosen:
+            raise UsageError(f"{machine.source}: effects: {e.key} has nothing to fit on "
+                             f"{machine.stages[k].name} (its lines are all another's of the "
+                             "stage's)")
+        names = {p.fmu_variable for p in chosen}
+        fixed.update({f"{instance}.{name}": value for name, value in e.neutral_values().items()
+                      if name not in names})
+        fixed.update({f"{instance}.{name}": value for name, value in e.values_from(kin).items()})
+        fitted += [dataclasses.replace(p, name=f"{instance}.{p.name}",
+                                       variable=f"{instance}.{p.fmu_variable}") for p in chosen]
+    return fitted, fixed
+
+
+def machine_model(machine: Machine, modelica_root: Path | None = None) -> MachineModel:
+    """The model of ``machine`` (module docstring); ``modelica_root``: the library whose
+    effects a stage with several is composed of."""
     taken: set[str] = {SPEED_PARAMETER}
     stages = tuple(_identifier(s.name, f"stage{k + 1}", taken)
                    for k, s in enumerate(machine.stages))
     lines = [f"  parameter Real {SPEED_PARAMETER}(unit=\"Hz\") = "
              f"{machine.input_hz or 25.0:.12g} \"Input shaft speed\";"]
+    nested: dict[str, str] = {}
+    effect_parameters: list[Parameter] = []
+    fixed: dict[str, float] = {}
     for k, (s, inst) in enumerate(zip(machine.stages, stages)):
         ratio = machine.shaft_ratio(k)
         speed = SPEED_PARAMETER if ratio == 1 else \
             f"{SPEED_PARAMETER}*{ratio.numerator}/{ratio.denominator}"
-        lines.append(f"  GearDiag.GearPair {inst}(Np={s.pinion_teeth}, Ng={s.gear_teeth}, "
+        cls = _stage_class(machine, k, modelica_root, nested)
+        params, values = _effect_parameters(machine, k, inst)
+        effect_parameters += params
+        fixed.update(values)
+        lines.append(f"  {cls} {inst}(Np={s.pinion_teeth}, Ng={s.gear_teeth}, "
                      f"f_pinion={speed}) \"{s.name}: {s.pinion_teeth}/{s.gear_teeth} teeth, "
                      f"shafts {machine.shafts[k]} and {machine.shafts[k + 1]}\";")
     sensors = [(s.channel, s.output, s.near_stage or 0) for s in machine.sensors] or \
@@ -144,15 +223,20 @@ def machine_model(machine: Machine) -> MachineModel:
                      + " + ".join(terms) + f" \"{channel or 'the sensor'}: every stage, "
                      f"{machine.stages[near].name} its own\";")
         outputs.append(SensorOutput(name, channel, quantity, near, levels))
-    name = _identifier(f"Machine_{machine.name}", "Machine", set())
+    # a name for each set of effects, so that each model's source has a file of its own
+    effects = "" if not machine.effects else "_{}effects_{}".format(
+        len(machine.effects), hashlib.sha256(repr(sorted((e.stage, e.key) for e in
+                                                         machine.effects)).encode()).hexdigest()[:6])
+    name = _identifier(f"Machine_{machine.name}{effects}", "Machine", set())
     source = ("within GearDiag;\n"
               f"model {name} \"{machine.name}: every stage, as each sensor sees them\"\n"
               f"  // Written by pydiag from {Path(machine.source).name} "
               "(pydiag/loop/machine_model.py).\n"
+              + "".join(f"{text}\n" for text in nested.values())
               + "\n".join(lines) + f"\nend {name};\n")
     first = machine.stages[0]
     return MachineModel(name, source, stages, tuple(outputs),
-                        (first.pinion_teeth, first.gear_teeth))
+                        (first.pinion_teeth, first.gear_teeth), tuple(effect_parameters), fixed)
 
 
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
@@ -170,13 +254,72 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
         fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
     parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
     return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
+                         fixed_values=model.fixed_values,
                          kinematics=machine.model_kinematics(speed.speed_hz),
                          feature_mode=feature_mode, fit_gain=fit_gain, speed_estimate=speed)
 
 
-def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path) -> tuple[MachineModel, Path]:
+def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
+                effect_estimator: FaultEstimator | None = None) -> FitResult:
+    """The fit of a machine's model with its effects, in steps: the stages alone (every
+    effect off), then the effects' parameters with the stages held there
+    (``effect_estimator``, default ``estimator``), then every parameter polished from the
+    better of the two. Its error is never above that of the stages alone, which one swarm
+    over every parameter at once does not promise (more parameters, the same budget)."""
+    names = {p.name for p in model.effect_parameters}
+    own = tuple(p for p in problem.parameters if p.name not in names)
+    added = tuple(p for p in problem.parameters if p.name in names)
+    if not added:
+        return estimator.fit(problem)
+    off = {p.name: p.low for p in added}
+    base = estimator.fit(problem.derive(parameters=own, fixed_values=fmu_values(added, off)))
+    later = effect_estimator or estimator
+    effects = later.fit(problem.derive(parameters=added,
+                                       fixed_values=fmu_values(own, base.parameters)))
+    start = {**base.parameters, **(effects.parameters if effects.error < base.error else off)}
+    return later.refine(problem, start)
+
+
+def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
+                ) -> tuple[MachineModel, BuiltModel]:
     """The model of ``machine`` and its FMU, built unless one of the same source exists;
-    the source is ``<build_dir>/machines/<name>.mo``."""
-    model = machine_model(machine)
+    the source is ``<build_dir>/machines/<name>.mo`` (an edit of it wins:
+    :func:`~pydiag.loop.compose.built_fmu`)."""
+    model = machine_model(machine, modelica_root)
     return model, built_fmu(model.name, model.source, modelica_root,
                             Path(build_dir) / "machines")
+
+
+def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
+    """Give the machine of the file ``path`` the effect ``key`` on ``stage`` (its name or
+    number; may be left out for a machine of one stage): an ``[[effects]]`` table added at
+    the end of the file, the rest of it (comments too) as it was. The file is checked as
+    it would be read first and replaced whole, so a refused or failed edit leaves it as
+    it was. Returns the machine it now describes."""
+    path = Path(path)
+    machine = load_machine(path)
+    if key not in EFFECTS:
+        raise UsageError(f"no effect {key!r} in the catalogue ({', '.join(EFFECTS)})")
+    if not on_a_stage(EFFECTS[key]):
+        raise UsageError(f"{key} is not a stage's in a machine's model yet (a bearing's or a "
+                         "ripple's lines do not repeat with the machine; the housing is a "
+                         "sensor's path)")
+    if stage is None and len(machine.stages) > 1:
+        raise UsageError(f"{path}: {len(machine.stages)} stages: give the stage the effect "
+                         "is on (" + ", ".join(f"{k} or {s.name!r}" for k, s in
+                                               enumerate(machine.stages, 1)) + ")")
+    index = 0 if stage is None else machine.stage_index(stage)
+    name = machine.stages[index].name
+    if StageEffect(key, index) in machine.effects:
+        raise UsageError(f"{path}: {key} is on {name} already")
+    text = path.read_text(encoding="utf-8")
+    text += ("" if text.endswith("\n") or not text else "\n") + \
+        f'\n[[effects]]\nkey = "{key}"\nstage = {json.dumps(name)}\n'
+    edited = machine_from_dict(tomllib.loads(text), str(path))
+    partial = path.with_name(f".{path.name}.{os.getpid()}")
+    try:
+        partial.write_text(text, encoding="utf-8")
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
+    return edited

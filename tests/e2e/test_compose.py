@@ -61,3 +61,23 @@ def test_effects_that_cannot_share_a_model_are_refused_by_name(modelica_copy):
                                                "set t_angle|gear_eccentricity and "
                                                "speed_fluctuation both set t_angle"):
         compose(("gear_eccentricity", "speed_fluctuation"), modelica_copy)
+
+
+def test_an_edit_of_a_written_model_is_the_users_and_is_built(tmp_path):
+    """The source pydiag writes beside an FMU is the user's to edit: an edit is built and
+    kept (not written over), and said to be an edit; removed, pydiag's is written again."""
+    from pydiag.loop.compose import built_fmu
+    source = ("within GearDiag;\nmodel Tiny \"a pair at 30 Hz\"\n"
+              "  GearDiag.GearPair pair(f_pinion=30);\n"
+              "  output Real acc(unit=\"m/s2\") = pair.acc \"the mesh\";\nend Tiny;\n")
+    first = built_fmu("Tiny", source, MODELICA, tmp_path)
+    assert not first.edited and first.source.read_text() == source
+    edit = source.replace("f_pinion=30", "f_pinion=35")
+    first.source.write_text(edit)
+    second = built_fmu("Tiny", source, MODELICA, tmp_path)
+    assert second.edited and second.fmu != first.fmu and second.source.read_text() == edit
+    with FmuPlant(second.fmu, ("acc",), FS) as plant:
+        assert plant.parameters()["pair.f_pinion"] == 35
+    first.source.unlink()
+    third = built_fmu("Tiny", source, MODELICA, tmp_path)
+    assert not third.edited and third.fmu == first.fmu and third.source.read_text() == source

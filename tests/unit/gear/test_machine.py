@@ -76,6 +76,10 @@ def test_example_files_read_and_their_shafts_turn_as_the_teeth_say():
     ({"sensors": [{"channel": "ch1", "near_stage": "third"}]}, "sensors[0].near_stage"),
     ({"shafts": ["a", "b"]}, "shafts"),
     ({"tacho": {"channel": "ch3", "pulses_per_rev": 0}}, "tacho.pulses_per_rev"),
+    ({"effects": [{"key": "gear_wobble", "stage": "stage 1"}]}, "effects[0].key"),
+    ({"effects": [{"key": "backlash"}]}, "effects[0].stage"),
+    ({"effects": [{"key": "backlash", "stage": "third"}]}, "effects[0].stage"),
+    ({"effects": [{"key": "backlash", "stage": "stage 2"}] * 2}, "effects[1].key"),
 ])
 def test_a_bad_machine_file_is_refused_naming_the_file_and_the_key(tmp_path, change, key):
     path = tmp_path / "box.toml"
