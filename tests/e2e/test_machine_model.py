@@ -49,7 +49,16 @@ def test_the_machine_model_explains_the_second_stages_lines(tmp_path):
     assert -40 < both.parameters[level] < 40
 
 
-def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_path):
+def refused(capsys, *argv: str) -> str:
+    """The one-line error of the command line ``argv`` (run in this process), exit 2."""
+    from pydiag.app.cli import main
+    assert main(list(argv)) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    return err
+
+
+def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_path, capsys):
     """The command line: compare --machine without --fmu writes the model's source where it
     says (both stages in it) and fits every stage's parameters; `pydiag accept` adds an
     effect to a stage of the machine file (its comments kept), and compare then fits the
@@ -81,15 +90,14 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
              "machine's model yet"),
             (("gear_tooth_fault",), "2 stages: give the stage the effect is on (1 or "
              "'stage 1', 2 or 'stage 2')")):
-        r = run_cli("-m", "pydiag", "accept", *args, "--machine", str(machine))
-        assert r.returncode == 2 and message in r.stderr and machine.read_text() == text
+        assert message in refused(capsys, "accept", *args, "--machine", str(machine))
+        assert machine.read_text() == text
     r = run_cli("-m", "pydiag", "accept", "gear_tooth_fault", "--machine", str(machine),
                 "--stage", "2")
     assert r.returncode == 0 and "gear_tooth_fault on stage 2" in r.stdout, r.stderr
     assert machine.read_text().startswith(text)  # the user's text, comments kept
-    r = run_cli("-m", "pydiag", "accept", "gear_tooth_fault", "--machine", str(machine),
-                "--stage", "stage 2")
-    assert r.returncode == 2 and "gear_tooth_fault is on stage 2 already" in r.stderr
+    assert "gear_tooth_fault is on stage 2 already" in refused(
+        capsys, "accept", "gear_tooth_fault", "--machine", str(machine), "--stage", "stage 2")
     r = run_cli(*common, "--json", str(tmp_path / "1.json"))
     assert r.returncode == 0, r.stderr
     assert "GearDiag.Effects.GearToothFault stage_2(Np=20" in \
@@ -98,11 +106,10 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     assert 0 <= after["parameters"]["stage_2.d_g"] <= 0.6
     assert 0 <= after["parameters"]["stage_2.tooth_g"] <= 50  # the stage's gear's teeth
     assert after["fit_error"] <= before["fit_error"] + 1e-12
-    r = run_cli(*common, "--effect", "gear_eccentricity")
-    assert r.returncode == 2 and "--effect fits a pair's effect: give --stage" in r.stderr
-    r = run_cli("-m", "pydiag", "compare", "--measurement", str(rec), "--quiet",
-                "--sample-rate", "20000")
-    assert r.returncode == 2 and "give --fmu, or --machine FILE" in r.stderr
+    assert "--effect fits a pair's effect: give --stage" in refused(
+        capsys, *common[2:], "--effect", "gear_eccentricity")
+    assert "give --fmu, or --machine FILE" in refused(
+        capsys, "compare", "--measurement", str(rec), "--quiet", "--sample-rate", "20000")
 
 
 @pytest.mark.slow

@@ -171,7 +171,14 @@ def assert_discovered_first(found, effect):
     assert np.isfinite(found[0].held_out.delta_bic) and found[0].held_out.delta_bic < 0
 
 
-@pytest.mark.parametrize("effect", sorted(HIDDEN))
+#: Hidden effects whose discovery runs in make test-slow only: the outer race's is also
+#: ranked first in make test (tests/e2e/test_compare_loop.py), and confirmed on the
+#: envelope from the command line (below).
+SLOW_DISCOVERY = ("bearing_outer_race",)
+
+
+@pytest.mark.parametrize("effect", [pytest.param(e, marks=pytest.mark.slow)
+                                    if e in SLOW_DISCOVERY else e for e in sorted(HIDDEN)])
 def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, effect_fmu_of,
                                                      tmp_path, effect, effects_dir):
     """Seed 5: discover ranks the hidden effect first and alone, and compare's validation,
