@@ -103,7 +103,8 @@ def _loop_args(p: argparse.ArgumentParser) -> None:
                    "shaft, Z3 driving Z4: NP/NG*Z3/Z4): its orders are kinematic lines")
     p.add_argument("--stage", metavar="NAME|N", help="with a --machine of several stages: "
                    "the stage whose pair model is fitted (its name, or its number from 1 at "
-                   "the input); every stage's lines are named")
+                   "the input); every stage's lines are named. compare without it and "
+                   "without --fmu fits the machine's own model of every stage")
     p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
     p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
                    "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")

@@ -75,7 +75,8 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
     lines.append("suggested  : " + ("none" if not shown else ""))
     for s in shown:
         flag = f"CONFIDENT, {s.message}" if s.confident else s.message
-        lines.append(f"  {s.effect:<26} score {s.score:.2f}: {flag}")
+        name = s.effect if s.stage is None else f"{s.effect} on {s.stage}"
+        lines.append(f"  {name:<26} score {s.score:.2f}: {flag}")
         if s.evidence:
             lines.append(f"  {'':<26} {s.evidence[0]}")
         if s.competing:

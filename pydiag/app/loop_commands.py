@@ -26,7 +26,7 @@ from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import BuiltModel, composed_fmu
 from pydiag.loop.machine_model import (MachineModel, accept, fit_machine, machine_fmu,
-                                       machine_problem)
+                                       machine_problem, validate_machine)
 from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
                                   default_build_dir, discover, effect_fmu)
@@ -101,7 +101,7 @@ def cmd_compare(args) -> int:
         models = None if args.no_validate else _effect_models(args)
         # with an effect model, the base fit runs with the effect switched off (lower bounds)
         problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
-    else:  # the catalogue's effects are a pair's: not tried on a machine's model yet
+    else:  # the machine's own model, its effects tried stage by stage (below)
         (problem, machine_model), models = _machine_problem(args, m), None
     update, close = progress_bar(args.quiet, "compare")
     try:
@@ -118,6 +118,13 @@ def cmd_compare(args) -> int:
             problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
     finally:
         close()
+    if machine_model is not None and not args.no_validate:
+        root, build = _library(args)
+        c = validate_machine(problem, args.machine_description, machine_model[0], c,
+                             lambda machine: str(machine_fmu(machine, root, build)[1].fmu),
+                             _effect_estimator(args), None if args.quiet else
+                             (lambda key: print(f"validating {key} held out ...",
+                                                file=sys.stderr)))
     if models is not None:
         c = validate(problem, c, models[0], _effect_estimator(args),
                      present=(args.effect,) if args.effect else (), composed=models[1],
@@ -131,8 +138,8 @@ def cmd_compare(args) -> int:
         built = machine_model[1]
         facts["model"] = (f"{built.source} (every stage of {args.machine}, "
                           + ("your edit of what pydiag wrote" if built.edited else
-                             "written by pydiag") +
-                          "; effects are tried on one stage's pair: --stage, --fmu)")
+                             "written by pydiag") + "; pydiag accept EFFECT --stage S "
+                          "gives a stage an effect)")
     warnings = (fit_warnings(problem, c.fit_error, c.gains, c.parameters)
                 if c.fit_error is not None else [])
     # the run is recorded when its outputs are written (history.recording)

@@ -204,14 +204,16 @@ class Machine:
                            out.denominator * hunting.denominator)
         return out
 
-    def model_kinematics(self, input_hz: float) -> GearKinematics:
-        """The first stage's kinematics (:meth:`stage_kinematics`) for a model that
+    def model_kinematics(self, input_hz: float, stage: int = 0) -> GearKinematics:
+        """Stage ``stage``'s kinematics (:meth:`stage_kinematics`) for a model that
         simulates every stage: the machine's fundamental period, every stage's bands
-        (:attr:`~pydiag.gear.kinematics.GearKinematics.modelled_machine`)."""
-        kin = self.stage_kinematics(0, input_hz)
+        (:attr:`~pydiag.gear.kinematics.GearKinematics.modelled_machine`); each stage's
+        names the same lines from its own shafts."""
+        kin = self.stage_kinematics(stage, input_hz)
         context = kin.machine or MachineContext()
         return dataclasses.replace(kin, machine=dataclasses.replace(
-            context, fundamental_order=float(self.fundamental_order())))
+            context, fundamental_order=float(self.fundamental_order()
+                                             / self.shaft_ratio(stage))))
 
     def stage_lines(self, stage: int, input_hz: float, max_freq_hz: float
                     ) -> tuple[float, ...]:

@@ -27,6 +27,7 @@ bins; ``error_raw`` is the same without the noise correction, which has a noise 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -46,11 +47,15 @@ from pydiag.signal.spectra import local_maxima
 def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
             false_alarm_rate: float = 0.01,
             max_periods: int | None = None, parameters: dict[str, float] | None = None,
-            measured: MeasuredSpectra | None = None) -> Comparison:
+            measured: MeasuredSpectra | None = None,
+            effects: Mapping[str, Effect] | None = None) -> Comparison:
     """Fit (unless ``parameters`` are given, by name) and compare; see the module docstring.
 
     ``measured``: the measurement's spectra when already computed for the same
-    false-alarm rate and periods (they depend on the measurement alone)."""
+    false-alarm rate and periods (they depend on the measurement alone); ``effects``: the
+    catalogue the residual points into (default :data:`~pydiag.gear.effects.EFFECTS`; a
+    machine's model names them for one of its stages)."""
+    effects = EFFECTS if effects is None else effects
     measured = measured or measured_spectra(problem, false_alarm_rate, max_periods)
     fit_error = None
     if parameters is None:
@@ -93,7 +98,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                   line.label if line else describe_non_kinematic(f, kin, bin_hz), p / total)
              for ch, p, line, f, m, s in candidates]
     suggestions, claims = [], {}
-    for effect in EFFECTS.values():
+    for effect in effects.values():
         weight = effect.weight
         changed = evidence_channels(problem, effect)
         support = [(weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
@@ -107,7 +112,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                     for _, _, pk in sorted(support, key=lambda t: -t[0])[:3]]
         suggestions.append(Suggestion(effect.key, score, evidence))
     for s in suggestions:
-        s.competing = [o for o in EFFECTS if o != s.effect and claims[o] & claims[s.effect]]
+        s.competing = [o for o in effects if o != s.effect and claims[o] & claims[s.effect]]
     suggestions.sort(key=lambda s: -s.score)
     # the plots' cursors: every stage's mesh harmonics, low shaft orders and their mesh
     # sidebands, bearings

@@ -21,14 +21,23 @@ above the stages' alone. An effect whose lines do not repeat with the machine (a
 bearing's, a ripple's) or that is a sensor's path (the housing) is not a stage's in this
 model yet.
 
+What the residual points to on each stage is tried held out as on a pair
+(:func:`validate_machine`): the model's problem seen from that stage's shafts
+(:func:`stage_view`: its kinematics name the lines), the catalogue named for the stage
+(:func:`stage_effect`), the model with the effect on the stage built for it.
+
 The stages are not coupled: each mesh turns at its constant speed, as the pair model's
 does. What couples them in a gearbox (the shafts' torsion, one stage's transmission error
 in the other's load) is not modelled.
+
+One concern: the machine's model (written, built, fitted, its effects tried and
+accepted); the pair's loop is the rest of this package, which it calls.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import os
@@ -36,6 +45,9 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
+
+import numpy as np
 
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
@@ -47,7 +59,10 @@ from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.machine import Machine, StageEffect, load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
+from pydiag.loop.compare import compare
 from pydiag.loop.compose import BuiltModel, built_fmu, compose
+from pydiag.loop.results import Comparison
+from pydiag.loop.validate import validate
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
 from pydiag.model.simulate import SIMULATED_SOURCE
 
@@ -134,6 +149,12 @@ def on_a_stage(effect: Effect) -> bool:
     return effect.synchronous and effect.transfer is None
 
 
+def not_on_a_stage(key: str) -> str:
+    """Why the effect ``key`` cannot be a stage's (one that :func:`on_a_stage` refuses)."""
+    return (f"{key} is not a stage's in a machine's model yet (a bearing's or a ripple's "
+            "lines do not repeat with the machine; the housing is a sensor's path)")
+
+
 def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
                  nested: dict[str, str]) -> str:
     """The Modelica class of stage ``k`` with its effects (a composed one declared in
@@ -141,10 +162,8 @@ def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
     keys = [e.key for e in machine.effects if e.stage == k]
     for key in keys:
         if not on_a_stage(EFFECTS[key]):
-            raise UsageError(f"{machine.source}: effects: {key} is not a stage's in a "
-                             "machine's model yet (a bearing's or a ripple's lines do not "
-                             "repeat with the machine; the housing is a sensor's path)")
-    own = tuple(k for k in keys if EFFECTS[k].own_fmu)
+            raise UsageError(f"{machine.source}: effects: {not_on_a_stage(key)}")
+    own = tuple(key for key in keys if EFFECTS[key].own_fmu)
     if not own:
         return "GearDiag.GearPair"
     if len(own) == 1:
@@ -165,18 +184,18 @@ def _effect_parameters(machine: Machine, k: int, instance: str
     machine's)."""
     kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
     fitted, fixed = [], {}
-    for e in (EFFECTS[s.key] for s in machine.effects if s.stage == k):
+    for e in (stage_effect(EFFECTS[s.key], instance, ()) for s in machine.effects
+              if s.stage == k):
         chosen = e.bounds([], 0.0, kin)
         if e.parameters and not chosen:
             raise UsageError(f"{machine.source}: effects: {e.key} has nothing to fit on "
                              f"{machine.stages[k].name} (its lines are all another's of the "
                              "stage's)")
         names = {p.fmu_variable for p in chosen}
-        fixed.update({f"{instance}.{name}": value for name, value in e.neutral_values().items()
+        fixed.update({name: value for name, value in e.neutral_values().items()
                       if name not in names})
-        fixed.update({f"{instance}.{name}": value for name, value in e.values_from(kin).items()})
-        fitted += [dataclasses.replace(p, name=f"{instance}.{p.name}",
-                                       variable=f"{instance}.{p.fmu_variable}") for p in chosen]
+        fixed.update(e.values_from(kin))
+        fitted += chosen
     return fitted, fixed
 
 
@@ -301,9 +320,7 @@ def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
     if key not in EFFECTS:
         raise UsageError(f"no effect {key!r} in the catalogue ({', '.join(EFFECTS)})")
     if not on_a_stage(EFFECTS[key]):
-        raise UsageError(f"{key} is not a stage's in a machine's model yet (a bearing's or a "
-                         "ripple's lines do not repeat with the machine; the housing is a "
-                         "sensor's path)")
+        raise UsageError(not_on_a_stage(key))
     if stage is None and len(machine.stages) > 1:
         raise UsageError(f"{path}: {len(machine.stages)} stages: give the stage the effect "
                          "is on (" + ", ".join(f"{k} or {s.name!r}" for k, s in
@@ -323,3 +340,83 @@ def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
     finally:
         partial.unlink(missing_ok=True)
     return edited
+
+
+def _prefixed(instance: str, values: dict) -> dict:
+    return {f"{instance}.{name}": value for name, value in values.items()}
+
+
+def _hint(effect: Effect, instance: str, peaks, bin_hz, kinematics) -> dict:
+    return _prefixed(instance, effect.hint(peaks, bin_hz, kinematics))
+
+
+def _machine_values(effect: Effect, instance: str, kinematics) -> dict:
+    return _prefixed(instance, effect.machine_values(kinematics))
+
+
+def _free_start(effect: Effect, instance: str, top_hz: float) -> dict:
+    return _prefixed(instance, effect.free_start(top_hz))
+
+
+def stage_effect(effect: Effect, instance: str, outputs: tuple[SensorOutput, ...]) -> Effect:
+    """``effect`` as the stage ``instance`` of a machine's model has it: its parameters, and
+    the values its hint, the kinematics and its free start give, named
+    ``<instance>.<name>``; the outputs it changes, the sensors' that measure them."""
+    def renamed(p: Parameter) -> Parameter:
+        return dataclasses.replace(p, name=f"{instance}.{p.name}",
+                                   variable=f"{instance}.{p.fmu_variable}")
+    return dataclasses.replace(
+        effect, parameters=tuple(renamed(p) for p in effect.parameters),
+        hint=None if effect.hint is None else functools.partial(_hint, effect, instance),
+        machine_values=None if effect.machine_values is None else
+        functools.partial(_machine_values, effect, instance),
+        free_start=None if effect.free_start is None else
+        functools.partial(_free_start, effect, instance),
+        outputs=None if effect.outputs is None else
+        tuple(o.name for o in outputs if o.quantity in effect.outputs))
+
+
+def stage_effects(model: MachineModel, stage: int) -> dict[str, Effect]:
+    """The catalogue as stage ``stage`` of ``model`` has it: the effects a stage can have
+    (:func:`on_a_stage`), named for it (:func:`stage_effect`)."""
+    return {key: stage_effect(e, model.stages[stage], model.outputs)
+            for key, e in EFFECTS.items() if on_a_stage(e)}
+
+
+def stage_view(problem: FitProblem, machine: Machine, stage: int) -> FitProblem:
+    """The machine model's ``problem`` seen from stage ``stage``: the same record, model and
+    features, the kinematics (which name the lines, and say which are an effect's) the
+    stage's, over the machine's period."""
+    input_hz = problem.kinematics.f_pinion_hz  # the first stage's pinion: the input shaft
+    return dataclasses.replace(problem, kinematics=machine.model_kinematics(input_hz, stage))
+
+
+def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
+                     comparison: Comparison, effect_model: Callable[[Machine], str],
+                     estimator: FaultEstimator | None = None,
+                     progress: Callable[[str], None] | None = None) -> Comparison:
+    """``comparison`` (of ``problem``, the machine's model at its fit) with the effects
+    its residual points to on each stage tried held out (:func:`pydiag.loop.validate.
+    validate`, on :func:`stage_view`), every stage's suggestions in one list, each with its
+    stage; ``effect_model``: the FMU of a machine (the machine with one more effect)."""
+    found = []
+    for k, stage in enumerate(machine.stages):
+        view = stage_view(problem, machine, k)
+        effects = stage_effects(model, k)
+        seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
+                       parameters=comparison.parameters, effects=effects)
+
+        def fmu(effect: Effect, k: int = k) -> str:
+            return effect_model(dataclasses.replace(
+                machine, effects=machine.effects + (StageEffect(effect.key, k),)))
+        checked = validate(view, seen, fmu, estimator, effects=effects,
+                           progress=None if progress is None else
+                           functools.partial(_said, progress, stage.name))
+        found += [dataclasses.replace(s, stage=stage.name) for s in checked.suggested_effects]
+    found.sort(key=lambda s: (not s.confident, -(s.held_out.z if s.held_out else -np.inf),
+                              -s.score))
+    return dataclasses.replace(comparison, suggested_effects=found)
+
+
+def _said(progress: Callable[[str], None], stage: str, key: str) -> None:
+    progress(f"{key} on {stage}")

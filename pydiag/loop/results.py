@@ -118,7 +118,8 @@ class Suggestion:
     peak energy its signature covers; ``confident`` only once held-out validation
     (:mod:`pydiag.loop.validate`) confirmed it and no competitor explains its lines as
     well; ``status`` and ``message`` say where it stands; ``competing``: the effects whose
-    signatures claim some of the same peaks."""
+    signatures claim some of the same peaks; ``stage``: the stage of a machine's model it
+    would go on (None: the model's own pair)."""
 
     effect: str
     score: float
@@ -128,6 +129,7 @@ class Suggestion:
     confident: bool = False
     competing: list[str] = field(default_factory=list)
     held_out: HeldOut | None = None
+    stage: str | None = None
 
     @property
     def shown(self) -> bool:
@@ -139,7 +141,8 @@ class Suggestion:
         return {"effect": self.effect, "score": self.score, "evidence": self.evidence,
                 "status": self.status.value, "message": self.message,
                 "confident": self.confident, "competing": self.competing,
-                "held_out": self.held_out.to_dict() if self.held_out else None}
+                "held_out": self.held_out.to_dict() if self.held_out else None,
+                "stage": self.stage}
 
 
 @dataclass

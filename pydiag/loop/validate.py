@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Mapping
 from typing import Callable
 
 from fmu_build import ModelicaBuildError as BuildError
@@ -44,7 +45,8 @@ def validate(problem: FitProblem, comparison: Comparison,
              false_alarm_rate: float = FALSE_ALARM_RATE, present: tuple[str, ...] = (),
              progress: Callable[[str], None] | None = None,
              tried: dict[str, HeldOut] | None = None,
-             composed: Callable[[tuple[str, ...]], str] | None = None) -> Comparison:
+             composed: Callable[[tuple[str, ...]], str] | None = None,
+             effects: Mapping[str, Effect] | None = None) -> Comparison:
     """The comparison with its suggestions tried held out (module docstring).
 
     ``effect_fmu``: the FMU of an effect, called only for an effect that is fitted (one
@@ -55,9 +57,11 @@ def validate(problem: FitProblem, comparison: Comparison,
     effect again; ``composed``: the FMU of a model with several effects (their keys), for
     an effect tried beside those ``present`` (without it, such an effect is not
     validated). An FMU that is not a GearDiag.GearPair model gets every suggestion
-    "not validated": the effects extend it."""
+    "not validated": the effects extend it. ``effects``: the catalogue as the model names
+    it (a stage of a machine's model: :func:`pydiag.loop.machine_model.stage_effect`; its
+    FMU is then not checked to be a GearPair), default the catalogue itself."""
     model = read_model_description(problem.spec.fmu_path)[0]
-    if not GEARPAIR_PARAMETERS <= {v.name for v in model.modelVariables}:
+    if effects is None and not GEARPAIR_PARAMETERS <= {v.name for v in model.modelVariables}:
         return not_validated(comparison, f"the catalogue's effects extend GearDiag.GearPair, "
                                          f"and {model.modelName} is not one of its models")
     suggestions = [dataclasses.replace(s) for s in comparison.suggested_effects]
@@ -68,7 +72,7 @@ def validate(problem: FitProblem, comparison: Comparison,
         s.status, s.message = status, f"{status.value}: {message}"
 
     for s in suggestions:
-        effect = EFFECTS[s.effect]
+        effect = (effects or EFFECTS)[s.effect]
         if s.score < min_score and not (effect.envelope or effect.affine):  # MIN_SCORE
             mark(s, Status.NOT_TRIED, f"its lines hold {100 * s.score:.0f} % of the "
                                       "unexplained energy")
