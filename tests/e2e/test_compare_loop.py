@@ -110,7 +110,8 @@ def test_cli_compare_json_and_history(gear_fmu, effect_fmus, tmp_path, effects_d
     assert data["suggested_effects"][0]["effect"] == "gear_eccentricity"
     top = data["suggested_effects"][0]
     assert set(top) == {"effect", "score", "evidence", "status", "message", "confident",
-                        "competing", "held_out"}
+                        "competing", "held_out", "stage"}
+    assert top["stage"] is None  # the pair's own
     assert top["status"] == "confirmed" and top["held_out"]["status"] == "confirmed"
     assert top["confident"] and top["held_out"]["z"] > top["held_out"]["threshold"]
     assert {"freq_hz", "amplitude", "family", "energy_fraction"} <= set(data["peaks"][0])
