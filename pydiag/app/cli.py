@@ -240,7 +240,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("loop", help="compare, accept the one confident effect, compare the "
                        "model with it, and again until nothing is confident")
-    p.add_argument("--fmu", required=True, help="the base model FMU")
+    p.add_argument("--fmu", help="the base model FMU; with --machine of several stages and no "
+                   "--stage, none: the machine's own model, its accepted effects written "
+                   "into a copy of the machine file (<name>.loop.toml)")
     _measurement_args(p)
     _loop_args(p)
     p.add_argument("--max-steps", type=number(int, 1), default=4,

@@ -18,13 +18,14 @@ from pydiag.fit.problem import FitProblem
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
-from pydiag.io.outputs import write_text
+from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import history
 from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import BuiltModel, composed_fmu
+from pydiag.loop.machine_loop import machine_loop
 from pydiag.loop.machine_model import (MachineModel, accept, fit_machine, machine_fmu,
                                        machine_problem, validate_machine)
 from pydiag.loop.stages import machine_speed
@@ -182,16 +183,20 @@ def cmd_loop(args) -> int:
     check_outputs(args, "json")
     args.history = str(history.resolve(args.history))
     history.check(args.history)
-    effect_model, composed_model = _effect_models(args)
-    problem = problem_of(args, read_input(args))
-    facts = format_facts(_stage_fact(args))
-    if facts:
-        print(facts)
-    steps, final = accumulate(
-        problem, effect_model, composed_model, args.max_steps,
-        FaultEstimator(**estimator_settings(args)), _effect_estimator(args),
-        lambda step: print(format_loop_step(step), flush=True))
-    print(f"model      : {final.spec.fmu_path}")
+    if not args.fmu:
+        steps, model = _machine_loop(args)
+    else:
+        effect_model, composed_model = _effect_models(args)
+        problem = problem_of(args, read_input(args))
+        facts = format_facts(_stage_fact(args))
+        if facts:
+            print(facts)
+        steps, final = accumulate(
+            problem, effect_model, composed_model, args.max_steps,
+            FaultEstimator(**estimator_settings(args)), _effect_estimator(args),
+            lambda step: print(format_loop_step(step), flush=True))
+        model = str(final.spec.fmu_path)
+    print(f"model      : {model}")
     ids = []
     for step in steps:  # every step a run of the history, its model named by its FMU
         name = read_model_description(step.comparison.fmu)[0].modelName
@@ -201,7 +206,9 @@ def cmd_loop(args) -> int:
           f"recorded as runs {ids[0]}-{ids[-1]} in {args.history}")
     if args.json:
         write_text(args.json, json.dumps({"steps": [s.to_dict() for s in steps],
-                                          "model_fmu": str(final.spec.fmu_path)},
+                                          "model_fmu": model if args.fmu
+                                          else steps[-1].comparison.fmu,
+                                          "machine": None if args.fmu else model},
                                          indent=2) + "\n", args.force)
     return 0
 
@@ -213,6 +220,33 @@ def cmd_accept(args) -> int:
     print(f"{args.machine}: {args.effect} on {stage}; `pydiag compare --machine "
           f"{args.machine} --measurement RECORD` fits the machine's model with it")
     return 0
+
+
+def _machine_loop(args) -> tuple[list, str]:
+    """pydiag loop --machine FILE without --fmu: the loop on the machine's own model
+    (:mod:`pydiag.loop.machine_loop`), on a copy of FILE (``<stem>.loop.toml`` beside it,
+    refused if it exists, unless --force) that gets every accepted effect. Returns the
+    steps and the copy's path."""
+    machine = getattr(args, "machine_description", None)
+    if machine is None:
+        raise UsageError("give --fmu, or --machine FILE to loop on the machine's own model")
+    source = Path(args.machine)
+    copy = source.with_name(f"{source.stem}.loop.toml")
+    check_output(str(copy), args.force)
+    m = read_input(args)
+    root, build = _library(args)
+    settings = problem_settings(args)
+    speed = settings["speed"]
+    drop = (speed.tacho,) if speed.tacho else ()
+    found = machine_speed(m, machine, args.rpm / 60.0, speed)
+    write_text(str(copy), source.read_text(encoding="utf-8"), True)
+    print(f"machine    : {copy} (a copy of {source}; every effect accepted goes into it)")
+    steps = machine_loop(copy, m, found, lambda mm: machine_fmu(mm, root, build),
+                         args.max_steps, FaultEstimator(**estimator_settings(args)),
+                         _effect_estimator(args), settings["fit_gain"],
+                         settings["feature_mode"], drop,
+                         lambda step: print(format_loop_step(step), flush=True))
+    return steps, str(copy)
 
 
 def cmd_history(args) -> int:

@@ -279,24 +279,37 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
 
 
 def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
-                effect_estimator: FaultEstimator | None = None) -> FitResult:
+                effect_estimator: FaultEstimator | None = None,
+                start: dict[str, float] | None = None) -> FitResult:
     """The fit of a machine's model with its effects, in steps: the stages alone (every
     effect off), then the effects' parameters with the stages held there
     (``effect_estimator``, default ``estimator``), then every parameter polished from the
     better of the two. Its error is never above that of the stages alone, which one swarm
-    over every parameter at once does not promise (more parameters, the same budget)."""
+    over every parameter at once does not promise (more parameters, the same budget).
+
+    ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
+    effect and the effect's held-out fit; every parameter is polished from there as well
+    (one missing starts off), and the better fit is kept: the error is then not above that
+    fit's either."""
     names = {p.name for p in model.effect_parameters}
     own = tuple(p for p in problem.parameters if p.name not in names)
     added = tuple(p for p in problem.parameters if p.name in names)
-    if not added:
-        return estimator.fit(problem)
-    off = {p.name: p.low for p in added}
-    base = estimator.fit(problem.derive(parameters=own, fixed_values=fmu_values(added, off)))
     later = effect_estimator or estimator
-    effects = later.fit(problem.derive(parameters=added,
-                                       fixed_values=fmu_values(own, base.parameters)))
-    start = {**base.parameters, **(effects.parameters if effects.error < base.error else off)}
-    return later.refine(problem, start)
+    if not added:
+        best = estimator.fit(problem)
+    else:
+        off = {p.name: p.low for p in added}
+        base = estimator.fit(problem.derive(parameters=own,
+                                            fixed_values=fmu_values(added, off)))
+        effects = later.fit(problem.derive(parameters=added,
+                                           fixed_values=fmu_values(own, base.parameters)))
+        best = later.refine(problem, {**base.parameters, **(
+            effects.parameters if effects.error < base.error else off)})
+    if start is not None:
+        again = later.refine(problem, {p.name: start.get(p.name, p.low)
+                                       for p in problem.parameters})
+        best = again if again.error < best.error else best
+    return best
 
 
 def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path

@@ -11,6 +11,7 @@ from truth.gearbox import INPUT_HZ, SHORT_MACHINE, gearbox_record
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.speed import SpeedSettings
+from pydiag.gear.machine import load_machine
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare
 from pydiag.loop.machine_model import machine_fmu, machine_model, machine_problem
@@ -138,7 +139,6 @@ def test_an_effect_the_box_has_lowers_the_error_more_than_one_it_lacks(tmp_path)
 def test_the_model_source_names_each_sensors_view_of_each_stage():
     """A sensor near a stage sees it as its own, every other stage through a level of its
     own (a parameter only a fit of that sensor estimates)."""
-    from pydiag.gear.machine import load_machine
     model = machine_model(load_machine(ROOT / "examples" / "phm09_spur.toml"))
     assert model.stages == ("input_stage", "output_stage")
     assert [(o.name, o.near, tuple(o.levels.values())) for o in model.outputs] == [
@@ -162,7 +162,7 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     import dataclasses
 
     from pydiag.core.errors import UsageError
-    from pydiag.gear.machine import StageEffect, load_machine
+    from pydiag.gear.machine import StageEffect
     phm = load_machine(ROOT / "examples" / "phm09_spur.toml")
     machine = dataclasses.replace(phm, effects=(
         StageEffect("gear_tooth_fault", 0), StageEffect("gear_eccentricity", 0),
@@ -187,7 +187,6 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
 
     from pydiag.gear.effects import EFFECTS
     from pydiag.gear.kinematic_map import kinematic_map, match
-    from pydiag.gear.machine import load_machine
     from pydiag.loop.machine_model import stage_effect, stage_effects
     phm = load_machine(ROOT / "examples" / "phm09_spur.toml")
     model = machine_model(phm)
@@ -227,3 +226,31 @@ def test_the_effect_the_box_has_is_confirmed_held_out_on_each_stage(tmp_path):
     assert sorted((s["effect"], s["stage"]) for s in found if s["confident"]) == [
         ("mesh_stiffness_shape", "stage 1"), ("mesh_stiffness_shape", "stage 2")]
     assert "mesh_stiffness_shape on stage 2" in r.stdout
+
+
+@pytest.mark.slow
+def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
+    """pydiag loop --machine without --fmu: the stiffness wave's even harmonics accepted on
+    one stage, then on the other, each confirmed held out, the error falling at every step,
+    nothing confident after; both written into the copy of the machine file, the file
+    given unchanged (measured: 0.202 -> 0.164 -> 0.129, 4.5 min on 2 cores)."""
+    import json
+    rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
+    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
+    text = ('name = "short box"\ninput_rpm = 1500\n[[stages]]\npinion_teeth = 18\n'
+            'gear_teeth = 36\n[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
+    machine.write_text(text)
+    r = run_cli("-m", "pydiag", "loop", "--measurement", str(rec), "--machine", str(machine),
+                "--build-dir", str(tmp_path / "build"), "--history", str(tmp_path / "h.sqlite"),
+                "--quiet", "--speed", "mesh", "--json", str(tmp_path / "loop.json"))
+    assert r.returncode == 0, r.stderr
+    steps = json.loads((tmp_path / "loop.json").read_text())["steps"]
+    assert [s["effect"] for s in steps] == ["mesh_stiffness_shape on stage 1",
+                                            "mesh_stiffness_shape on stage 2", None]
+    errors = [s["error"] for s in steps]
+    assert errors[2] < errors[1] < errors[0], errors
+    assert all(s["held_out_error_with"] < s["held_out_error_base"] for s in steps[:2])
+    assert machine.read_text() == text
+    copy = load_machine(tmp_path / "box.loop.toml")
+    assert [(e.key, e.stage) for e in copy.effects] == [("mesh_stiffness_shape", 0),
+                                                        ("mesh_stiffness_shape", 1)]

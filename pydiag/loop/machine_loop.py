@@ -1,0 +1,73 @@
+"""The loop on a machine's own model: compare (its stages fitted, then its effects), try
+what the residual points to on each stage held out, accept the one confident effect on
+its stage, and again with the model that has it, until nothing is confident.
+
+Each step's fit also starts from the step before's, with the accepted effect at its
+held-out fit (:func:`pydiag.loop.machine_model.fit_machine`), so the error it fits does
+not rise from step to step. Every accepted effect is written into a copy of the machine
+file (:func:`pydiag.loop.
+machine_model.accept`), so the loop ends with a machine file the user can read, compare
+with another record, edit, and loop on again; each step's model is built from that file
+(:func:`pydiag.loop.machine_model.machine_fmu`). The steps are the pair loop's
+(:class:`pydiag.loop.accumulate.LoopStep`), an effect named with its stage.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Callable
+
+from pydiag.core.measurement import Measurement
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.gear.machine import Machine, load_machine
+from pydiag.gear.speed import SpeedEstimate
+from pydiag.loop.accumulate import LoopStep
+from pydiag.loop.compare import compare
+from pydiag.loop.compose import BuiltModel
+from pydiag.loop.effect_fit import EFFECT_REFIT
+from pydiag.loop.machine_model import (MachineModel, accept, fit_machine, machine_problem,
+                                       validate_machine)
+
+
+def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,
+                 build: Callable[[Machine], tuple[MachineModel, BuiltModel]],
+                 max_steps: int = 4, estimator: FaultEstimator | None = None,
+                 refit: FaultEstimator | None = None, fit_gain: bool | None = None,
+                 feature_mode: str = "lines", drop: tuple[str, ...] = (),
+                 progress: Callable[[LoopStep], None] | None = None) -> list[LoopStep]:
+    """The loop (module docstring) on the machine file ``path``, which gets every accepted
+    effect: its steps, the last the comparison nothing more was accepted after (or the
+    ``max_steps``-th). ``speed``: the input shaft's in ``measurement``; ``build``: a
+    machine's model and its FMU; ``estimator``: the stages' fit; ``refit``: the effects'
+    (default EFFECT_REFIT's); ``drop``: channels that are not sensors (the tacho)."""
+    estimator = estimator or FaultEstimator()
+    refit = refit or FaultEstimator(**EFFECT_REFIT)
+    steps: list[LoopStep] = []
+    start = None  # the fit before, and the accepted effect's held-out fit
+    while True:
+        machine = load_machine(path)
+        model, built = build(machine)
+        problem = machine_problem(built.fmu, model, measurement, machine, speed, fit_gain,
+                                  feature_mode, drop)
+        fit = fit_machine(problem, model, estimator, refit, start)
+        c = dataclasses.replace(compare(problem, None, parameters=fit.parameters),
+                                fit_error=fit.error)
+        c = validate_machine(problem, machine, model, c,
+                             lambda other: str(build(other)[1].fmu), refit)
+        effects = tuple(f"{e.key} on {machine.stages[e.stage].name}" for e in machine.effects)
+        confident = sorted((s for s in c.suggested_effects if s.confident),
+                           key=lambda s: -s.held_out.z)
+        if not confident or len(steps) + 1 >= max_steps:
+            steps.append(LoopStep(effects, c.error, None, None, None, None, c))
+        else:
+            best = confident[0]
+            h = best.held_out
+            steps.append(LoopStep(effects, c.error, f"{best.effect} on {best.stage}",
+                                  h.error_base, h.error_effect, h.z, c))
+        if progress:
+            progress(steps[-1])
+        if steps[-1].accepted is None:
+            return steps
+        accept(path, best.effect, best.stage)
+        start = {**c.parameters, **h.parameters}
