@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import platform
 import re
 import sys
@@ -85,8 +86,8 @@ def main() -> int:
     if not files:
         print(f"no record of that name in {args.folder}", file=sys.stderr)
         return 2
-    print(f"machine: {platform.machine()}, {platform.processor() or 'cpu'}, "
-          f"Python {platform.python_version()}; channel {args.channel}; effects: "
+    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}; channel {args.channel}; effects: "
           + (", ".join(f"{e.key} on stage {e.stage + 1}" for e in effects) or "none"))
     print("| record | first stage alone | every stage | with the effects | s |")
     print("|---|---|---|---|---|")

@@ -14,9 +14,10 @@ from pydiag.app.formatting import (format_comparison, format_discovery, format_f
                                    format_history, format_loop_step)
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.fit.problem import FitProblem
 from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
+from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import history
@@ -68,13 +69,19 @@ def _machine_problem(args, m: Measurement
                          + ") and --fmu")
     root, build = _library(args)
     model, built = machine_fmu(machine, root, build)
+    found, settings, drop = _machine_record(args, m)
+    problem = machine_problem(built.fmu, model, m, machine, found, settings["fit_gain"],
+                              settings["feature_mode"], drop)
+    return problem, (model, built)
+
+
+def _machine_record(args, m: Measurement) -> tuple[SpeedEstimate, dict, tuple[str, ...]]:
+    """How the machine's own model sees the record ``m``: its input speed (from the tacho,
+    else from every mesh), the problem's settings, the channels that are no sensor's."""
     settings = problem_settings(args)
     speed = settings["speed"]
-    drop = (speed.tacho,) if speed.tacho else ()
-    problem = machine_problem(built.fmu, model, m, machine,
-                              machine_speed(m, machine, args.rpm / 60.0, speed),
-                              settings["fit_gain"], settings["feature_mode"], drop)
-    return problem, (model, built)
+    return (machine_speed(m, args.machine_description, args.rpm / 60.0, speed), settings,
+            (speed.tacho,) if speed.tacho else ())
 
 
 def _stage_fact(args) -> dict:
@@ -235,10 +242,7 @@ def _machine_loop(args) -> tuple[list, str]:
     check_output(str(copy), args.force)
     m = read_input(args)
     root, build = _library(args)
-    settings = problem_settings(args)
-    speed = settings["speed"]
-    drop = (speed.tacho,) if speed.tacho else ()
-    found = machine_speed(m, machine, args.rpm / 60.0, speed)
+    found, settings, drop = _machine_record(args, m)
     write_text(str(copy), source.read_text(encoding="utf-8"), True)
     print(f"machine    : {copy} (a copy of {source}; every effect accepted goes into it)")
     steps = machine_loop(copy, m, found, lambda mm: machine_fmu(mm, root, build),
