@@ -72,8 +72,12 @@ def _stage_of(args, machine: Machine) -> int | None:
         return 0 if stage is None else machine.stage_index(stage)
     if args.command in ("diagnose", "batch"):
         return None
-    if stage is None and args.command in ("compare", "loop") and not args.fmu:
-        return None  # the machine's own model, every stage
+    if args.command in ("compare", "loop") and not args.fmu:
+        if stage is None:
+            return None  # the machine's own model, every stage
+        raise UsageError(f"--stage {stage}: {args.command} fits that stage's pair model: give "
+                         "it with --fmu (without --stage and --fmu it fits the machine's own "
+                         "model of every stage)")
     if stage is None:
         raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
                          "one stage's pair model: give --stage (" + ", ".join(

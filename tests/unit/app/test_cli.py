@@ -99,6 +99,18 @@ def test_compare_on_a_machine_of_several_stages_fits_the_stage_named(capsys, ext
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
 
 
+@pytest.mark.parametrize("command", ["compare", "loop"])
+def test_a_stage_without_its_fmu_is_refused_not_ignored(capsys, command):
+    """--stage names a stage's pair fit; without --fmu the machine's own model of every
+    stage would be fitted instead, and the --stage given ignored."""
+    from pathlib import Path
+    machine = Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml"
+    code, err = run([command, "--measurement", "m.csv", "--machine", str(machine),
+                     "--stage", "2"], capsys)
+    assert code == 2 and "--stage 2: " + command + " fits that stage's pair model: give it " \
+        "with --fmu" in err and len(err.strip().splitlines()) == 1, err
+
+
 def test_a_machine_files_sensors_apply_to_the_channels_chosen_only():
     """--channel ch1 on a machine file that gives ch1 and ch2 in volts: ch1's unit is
     taken, ch2's is not (a unit for a channel not read was refused as if the user had
@@ -107,12 +119,12 @@ def test_a_machine_files_sensors_apply_to_the_channels_chosen_only():
 
     from pydiag.app.machine_options import apply_machine
     machine = Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml"
-    args = cli.build_parser().parse_args(["compare", "--measurement", "m.csv", "--machine",
-                                          str(machine), "--stage", "1", "--channel",
-                                          "ch1=acc"])
+    args = cli.build_parser().parse_args(["compare", "--fmu", "x.fmu", "--measurement", "m.csv",
+                                          "--machine", str(machine), "--stage", "1",
+                                          "--channel", "ch1=acc"])
     apply_machine(args)
     assert args.unit == ["ch1=V"] and args.channel == ["ch1=acc"]
-    args = cli.build_parser().parse_args(["compare", "--measurement", "m.csv", "--machine",
-                                          str(machine), "--stage", "1"])
+    args = cli.build_parser().parse_args(["compare", "--fmu", "x.fmu", "--measurement", "m.csv",
+                                          "--machine", str(machine), "--stage", "1"])
     apply_machine(args)
     assert args.unit == ["ch1=V", "ch2=V"]
