@@ -61,7 +61,14 @@ def record(fmu, seed=5, periods=20):
                        10_000.0)
 
 
-@pytest.mark.parametrize("effect", sorted(HIDDEN))
+#: Hidden effects ranked in make test-slow only: their records are made by the catalogue's
+#: own models (plumbing), and the independent simulator's records of the same effects are
+#: discovered in make test (tests/e2e/test_truth_loop.py).
+SLOW_RANKING = ("bearing_outer_race", "load_fluctuation")
+
+
+@pytest.mark.parametrize("effect", [pytest.param(e, marks=pytest.mark.slow)
+                                    if e in SLOW_RANKING else e for e in sorted(HIDDEN)])
 def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect_fmu_of, effect):
     problem = problem_of(gear_fmu, record(effect_fmus[effect]))
     c = compare(problem, FaultEstimator(**FAST))

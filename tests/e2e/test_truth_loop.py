@@ -171,10 +171,11 @@ def assert_discovered_first(found, effect):
     assert np.isfinite(found[0].held_out.delta_bic) and found[0].held_out.delta_bic < 0
 
 
-#: Hidden effects whose discovery runs in make test-slow only: the outer race's is also
-#: ranked first in make test (tests/e2e/test_compare_loop.py), and confirmed on the
-#: envelope from the command line (below).
-SLOW_DISCOVERY = ("bearing_outer_race",)
+#: Hidden effects whose discovery runs in make test-slow only (make test stays under its
+#: budget): the outer race's is confirmed on the envelope from the command line in make
+#: test (below); the speed fluctuation's (the slowest: simulated whole) has seeds 6 and 7
+#: in make test-slow too, and its refit in make test-slow frees the base it bent.
+SLOW_DISCOVERY = ("bearing_outer_race", "speed_fluctuation")
 
 
 @pytest.mark.parametrize("effect", [pytest.param(e, marks=pytest.mark.slow)
