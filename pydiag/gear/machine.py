@@ -194,8 +194,8 @@ class Machine:
                               else None)
 
     def fundamental_order(self) -> Fraction:
-        """The machine's fundamental frequency in input-shaft orders: the largest with which
-        every stage's hunting-tooth frequency repeats (exact)."""
+        """The machine's fundamental frequency in input-shaft orders: the largest of which
+        every stage's hunting-tooth frequency is a whole multiple (exact)."""
         out = Fraction(0)
         for k, s in enumerate(self.stages):
             hunting = self.mesh_order(k) / math.lcm(s.pinion_teeth, s.gear_teeth)
