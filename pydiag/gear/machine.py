@@ -236,6 +236,12 @@ def _check_keys(data: dict, allowed: set[str], source: str, table: str) -> None:
                            f"{', '.join(sorted(allowed))})")
 
 
+def _require(table: dict, key: str, source: str, where: str) -> None:
+    """A :class:`MachineError` naming the file and the key unless ``table`` has ``key``."""
+    if key not in table:
+        raise MachineError(f"{_where(source, where, key)}: missing")
+
+
 def _teeth(value, source: str, table: str, key: str) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
             or value != int(value) or value < 1:
@@ -285,8 +291,7 @@ def _stage(table: dict, k: int, source: str) -> Stage:
         raise MachineError(f"{_where(source, where, 'type')}: unknown stage type '{kind}' "
                            f"(known: {', '.join(PARALLEL_TYPES + LATER_TYPES)})")
     for key in ("pinion_teeth", "gear_teeth"):
-        if key not in table:
-            raise MachineError(f"{_where(source, where, key)}: missing")
+        _require(table, key, source, where)
     return Stage(_teeth(table["pinion_teeth"], source, where, "pinion_teeth"),
                  _teeth(table["gear_teeth"], source, where, "gear_teeth"),
                  _text(table.get("name", f"stage {k + 1}"), source, where, "name"), kind)
@@ -332,8 +337,7 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
         where = f"bearings[{i}]"
         _check_keys(t, _BEARING_KEYS, source, where)
         for key in ("n_balls", "ball_diameter_mm", "pitch_diameter_mm"):
-            if key not in t:
-                raise MachineError(f"{_where(source, where, key)}: missing")
+            _require(t, key, source, where)
         n = _teeth(t["n_balls"], source, where, "n_balls")
         d = _positive(t["ball_diameter_mm"], source, where, "ball_diameter_mm")
         pitch = _positive(t["pitch_diameter_mm"], source, where, "pitch_diameter_mm")
@@ -353,8 +357,7 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
     for i, t in enumerate(_tables(data, "sensors", source)):
         where = f"sensors[{i}]"
         _check_keys(t, _SENSOR_KEYS, source, where)
-        if "channel" not in t:
-            raise MachineError(f"{_where(source, where, 'channel')}: missing")
+        _require(t, "channel", source, where)
         near = None
         if "near_stage" in t:
             if t["near_stage"] not in names:
@@ -375,8 +378,7 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
         if not isinstance(t, dict):
             raise MachineError(f"{source}: tacho: must be a table ([tacho])")
         _check_keys(t, _TACHO_KEYS, source, "tacho")
-        if "channel" not in t:
-            raise MachineError(f"{_where(source, 'tacho', 'channel')}: missing")
+        _require(t, "channel", source, "tacho")
         tacho = Tacho(_text(t["channel"], source, "tacho", "channel"),
                       _teeth(t.get("pulses_per_rev", 1), source, "tacho", "pulses_per_rev"),
                       shaft_of(t, "tacho", 0))
@@ -387,8 +389,7 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
     for i, t in enumerate(_tables(data, "effects", source)):
         where = f"effects[{i}]"
         _check_keys(t, _EFFECT_KEYS, source, where)
-        if "key" not in t:
-            raise MachineError(f"{_where(source, where, 'key')}: missing")
+        _require(t, "key", source, where)
         key = _text(t["key"], source, where, "key")
         if key not in EFFECTS:
             raise MachineError(f"{_where(source, where, 'key')}: no effect {key!r} in the "

@@ -225,7 +225,8 @@ def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Buil
     ``folder``. The source is kept there as ``<name>.mo``, readable and editable: an edit
     of it is the user's and wins (the FMU is built from it; ``edited``), told from pydiag's
     own earlier text by the hash of what pydiag last wrote (``.<name>.mo.written``), so a
-    source pydiag writes differently replaces only its own."""
+    source pydiag writes differently replaces only its own (and one without that record,
+    from before edits were kept)."""
     from fmu_build import build_fmu
 
     folder = Path(folder)
@@ -233,10 +234,9 @@ def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Buil
     path = folder / f"{name}.mo"
     written = folder / f".{name}.mo.written"
     edited = False
-    if path.exists():
-        text = path.read_text()
-        mine = written.exists() and written.read_text() == _digest(text)
-        edited = not mine and text != source
+    if path.exists() and written.exists():  # without a record of what pydiag wrote: its
+        text = path.read_text()                # own, from before edits were kept
+        edited = written.read_text() != _digest(text) and text != source
         if edited:
             source = text
     if not edited and (not path.exists() or path.read_text() != source):

@@ -8,16 +8,17 @@ every other stage through a level of its own relative to it, in dB
 (``<output>_<stage>_dB``): a housing passes each mesh to a sensor differently. These
 levels are fitted with the stages' fault parameters; the channel's overall level is the
 fit's gain, as for a pair. A sensor's output adds the stages' signals as they are
-simulated, so a line two stages share has the level their phases give: the stages start
-with their faulty teeth in mesh together, and that relative phase is not fitted.
+simulated, so a line two stages share has the level their phases give: each stage after
+the first meshes at a phase of its own relative to the first's (``<stage>_mesh_phase``, a
+share of its mesh cycle by which its ``t_angle`` is ahead), fitted too.
 
 A stage carries the catalogue effects the machine file gives it (``[[effects]]``, which
 ``pydiag accept`` writes): one with a model of its own makes the stage that model
 (``GearDiag.Effects.GearToothFault input_stage(...)``), several make it their composed
 model (:mod:`pydiag.loop.compose`, declared inside the machine's), one of the base
 model's own parameters frees them; their parameters are fitted as ``<stage>.<name>``. They
-are fitted after the stages (:func:`fit_machine`), so an effect never leaves the error
-above the stages' alone. An effect whose lines do not repeat with the machine (a
+are fitted after the stages (:func:`fit_machine`), from the stages' fit, so an effect
+never leaves the error above that fit. An effect whose lines do not repeat with the machine (a
 bearing's, a ripple's) or that is a sensor's path (the housing) is not a stage's in this
 model yet.
 
@@ -208,6 +209,7 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     lines = [f"  parameter Real {SPEED_PARAMETER}(unit=\"Hz\") = "
              f"{machine.input_hz or 25.0:.12g} \"Input shaft speed\";"]
     nested: dict[str, str] = {}
+    phases: list[Parameter] = []
     effect_parameters: list[Parameter] = []
     fixed: dict[str, float] = {}
     for k, (s, inst) in enumerate(zip(machine.stages, stages)):
@@ -218,9 +220,16 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
         params, values = _effect_parameters(machine, k, inst)
         effect_parameters += params
         fixed.update(values)
+        phase = ""
+        if k > 0:  # its meshing relative to the first stage's: a fraction of its mesh cycle
+            name = _identifier(f"{inst}_mesh_phase", f"stage{k + 1}_mesh_phase", taken)
+            lines.append(f"  parameter Real {name} = 0 \"{s.name}'s mesh relative to "
+                         f"{machine.stages[0].name}'s, a share of its mesh cycle\";")
+            phase = f", t_angle=time + {name}/({s.pinion_teeth}*{speed})"
+            phases.append(Parameter(name, 0.0, 1.0, periodic=True))
         lines.append(f"  {cls} {inst}(Np={s.pinion_teeth}, Ng={s.gear_teeth}, "
-                     f"f_pinion={speed}) \"{s.name}: {s.pinion_teeth}/{s.gear_teeth} teeth, "
-                     f"shafts {machine.shafts[k]} and {machine.shafts[k + 1]}\";")
+                     f"f_pinion={speed}{phase}) \"{s.name}: {s.pinion_teeth}/{s.gear_teeth} "
+                     f"teeth, shafts {machine.shafts[k]} and {machine.shafts[k + 1]}\";")
     sensors = [(s.channel, s.output, s.near_stage or 0) for s in machine.sensors] or \
         [(None, DEFAULT_OUTPUT, 0)]
     outputs = []
@@ -255,7 +264,8 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
               + "\n".join(lines) + f"\nend {name};\n")
     first = machine.stages[0]
     return MachineModel(name, source, stages, tuple(outputs),
-                        (first.pinion_teeth, first.gear_teeth), tuple(effect_parameters), fixed)
+                        (first.pinion_teeth, first.gear_teeth),
+                        tuple(phases) + tuple(effect_parameters), fixed)
 
 
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
@@ -284,8 +294,9 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     """The fit of a machine's model with its effects, in steps: the stages alone (every
     effect off), then the effects' parameters with the stages held there
     (``effect_estimator``, default ``estimator``), then every parameter polished from the
-    better of the two. Its error is never above that of the stages alone, which one swarm
-    over every parameter at once does not promise (more parameters, the same budget).
+    better of the two. Its error is never above the stages' fit it starts from, which one
+    swarm over every parameter at once does not promise (more parameters, the same budget;
+    a swarm run on another model, even one that adds nothing, may land elsewhere).
 
     ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
     effect and the effect's held-out fit; every parameter is polished from there as well
