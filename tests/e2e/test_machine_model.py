@@ -121,7 +121,7 @@ def test_an_effect_the_box_has_lowers_the_error_more_than_one_it_lacks(tmp_path)
     """Every mesh of the box has harmonics 1, 1/2, 1/3 at phases of their own, which the
     pair's stiffness wave cannot make: the even harmonics of the wave (mesh_stiffness_shape)
     on the second stage lower the error; a gear runout (which the box lacks) does not, fitted
-    the same way; measured 0.202 -> 0.169 and 0.202 -> 0.20."""
+    the same way."""
     import dataclasses
 
     from pydiag.gear.machine import StageEffect
@@ -214,7 +214,7 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
 def test_the_effect_the_box_has_is_confirmed_held_out_on_each_stage(tmp_path):
     """compare --machine tries what the residual points to on each stage held out: the
     stiffness wave's even harmonics (the box's meshes have harmonics 1, 1/2, 1/3 at phases
-    of their own) confirmed on both stages, nothing else confident (measured: z 79, 59)."""
+    of their own) confirmed on both stages, nothing else confident."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
     write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
@@ -237,7 +237,7 @@ def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
     """pydiag loop --machine without --fmu: the stiffness wave's even harmonics accepted on
     one stage, then on the other, each confirmed held out, the error falling at every step,
     nothing confident after; both written into the copy of the machine file, the file
-    given unchanged (measured: 0.202 -> 0.164 -> 0.129, 4.5 min on 2 cores)."""
+    given unchanged (measured: 0.193 -> 0.167 -> 0.148, 4.5 min on 2 cores)."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
     write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
