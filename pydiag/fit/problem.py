@@ -251,10 +251,14 @@ class ProblemObjective:
         self.problem = problem
         self._plant: FmuPlant | None = None
 
-    def residuals(self, x: np.ndarray) -> np.ndarray:
-        """Residuals at ``x``; a failed simulation raises PlantError with its cause."""
+    def prepare(self) -> None:
+        """Open the plant now (a worker process, before its first evaluation is timed)."""
         if self._plant is None:
             self._plant = self.problem.spec.open()
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """Residuals at ``x``; a failed simulation raises PlantError with its cause."""
+        self.prepare()
         return self.problem.residuals(self._plant, x)
 
     def residuals_or_none(self, x: np.ndarray) -> np.ndarray | None:

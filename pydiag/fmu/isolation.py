@@ -20,6 +20,12 @@ is removed by the next pool that starts (:func:`pydiag.core.leftovers.reclaim`).
 
 A pool whose first evaluations all time out (a hanging FMU, or a warm-up far too long)
 stops after one timeout per worker instead of after ``max_consecutive_failures`` of them.
+
+An evaluation's time starts when its worker is ready: a new worker first prepares its
+objective (``objective.prepare()`` if it has one: the FMU extracted and loaded) and says
+so, within :data:`STARTUP_S`. Timed from the moment a task was sent, a replaced worker's
+first evaluation carried the FMU's loading, and on a loaded machine a good evaluation
+exceeded a short timeout: the verdict hung on the machine's load.
 """
 
 from __future__ import annotations
@@ -42,6 +48,8 @@ from pydiag.core.leftovers import owner_tag, reclaim
 
 #: The run folders' names begin with this, then their owner (:mod:`pydiag.core.leftovers`).
 RUN_PREFIX = "pydiag_run_"
+#: Wall time a new worker has to prepare its objective (load its FMU) before it is failed.
+STARTUP_S = 120.0
 
 
 @dataclass
@@ -93,6 +101,13 @@ def _worker_loop(conn, objective, inherited: list[int], folder: str) -> None:
 
 
 def _serve(conn, objective) -> None:
+    prepare = getattr(objective, "prepare", None)
+    if prepare is not None:
+        try:
+            prepare()
+        except Exception:  # noqa: BLE001 (the first evaluation meets it again, and says so)
+            pass
+    conn.send(("ready", None))
     while True:
         try:
             task = conn.recv()
@@ -171,6 +186,7 @@ class IsolatedPool:
         reclaim(tempfile.gettempdir(), RUN_PREFIX)  # folders of runs killed outright
         self.folder = tempfile.mkdtemp(prefix=f"{RUN_PREFIX}{owner_tag()}_")
         self.workers: list[tuple[Any, Any]] = []
+        self.starting: dict[int, float] = {}  # worker -> when it was started, until ready
         self._janitor_fd = -1
         self._janitor = None
         try:
@@ -179,8 +195,9 @@ class IsolatedPool:
                 read_fd, [self._janitor_fd], self.folder))
             self._janitor.start()
             os.close(read_fd)
-            for _ in range(max(1, n_workers)):
+            for i in range(max(1, n_workers)):
                 self.workers.append(self._spawn())
+                self.starting[i] = time.monotonic()
         except BaseException:
             self.close()
             raise
@@ -214,6 +231,7 @@ class IsolatedPool:
     def _replace(self, i: int) -> None:
         self._reap(*self.workers[i])
         self.workers[i] = self._spawn()
+        self.starting[i] = time.monotonic()
 
     def map(self, xs: np.ndarray) -> list[np.ndarray | None]:
         xs = list(xs)
@@ -222,16 +240,20 @@ class IsolatedPool:
         busy: dict[int, tuple[int, float]] = {}  # worker -> (task, started)
         while pending or busy:
             for w in range(len(self.workers)):
-                if w not in busy and pending:
+                if w not in busy and w not in self.starting and pending:
                     task = pending.pop(0)
                     self.workers[w][1].send(xs[task])
                     busy[w] = (task, time.monotonic())
-            conns = {self.workers[w][1]: w for w in busy}
+            conns = {self.workers[w][1]: w for w in list(busy) + list(self.starting)}
             now = time.monotonic()
-            deadline = min(started + self.timeout_s for _, started in busy.values())
+            deadline = min([started + self.timeout_s for _, started in busy.values()]
+                           + [began + STARTUP_S for began in self.starting.values()])
             ready = wait(list(conns), timeout=max(0.0, deadline - now))
             for conn in ready:
                 w = conns[conn]
+                if w in self.starting:  # its "ready", or its death while preparing
+                    self._started(w)
+                    continue
                 task, _ = busy.pop(w)
                 try:
                     status, payload = conn.recv()
@@ -254,7 +276,22 @@ class IsolatedPool:
                     self.timeouts += 1
                     self._replace(w)
                     self._fail(f"evaluation exceeded {self.timeout_s:g} s")
+            for w, began in list(self.starting.items()):
+                if now - began > STARTUP_S and self.workers[w][1] not in ready:
+                    self._replace(w)
+                    self._fail(f"a worker took over {STARTUP_S:g} s to load its model")
         return results
+
+    def _started(self, w: int) -> None:
+        """Worker ``w`` said it is ready, or died preparing (then it is replaced)."""
+        try:
+            self.workers[w][1].recv()
+            del self.starting[w]
+        except (EOFError, OSError):
+            self.workers[w][0].join(1)
+            why = _describe_exit(self.workers[w][0].exitcode)
+            self._replace(w)
+            self._fail(f"{why} while loading its model")
 
     def _fail(self, reason: str) -> None:
         self.failures.add(reason)

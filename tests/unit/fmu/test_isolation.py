@@ -162,3 +162,32 @@ def test_two_thousand_hostile_evaluations_leave_no_process_folder_or_descriptor(
     assert children(os.getpid()) == before_children
     assert _open_fds() == before_fds
     assert not any(scratch.iterdir()), list(scratch.rglob("*"))[:10]
+
+
+class SlowToLoad:
+    """An objective whose loading takes longer than an evaluation's time limit (an FMU on
+    a loaded machine), whose evaluations are quick, and which crashes its worker at x < 0."""
+
+    def __init__(self, load_s: float) -> None:
+        self.load_s = load_s
+        self.loaded = False
+
+    def prepare(self) -> None:  # loads once, as ProblemObjective opens its plant
+        if not self.loaded:
+            time.sleep(self.load_s)
+            self.loaded = True
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        self.prepare()
+        if x[0] < 0:
+            os._exit(1)
+        return np.asarray(x, dtype=float)
+
+
+def test_an_evaluation_is_timed_from_when_its_worker_has_loaded_its_model():
+    """A worker's loading is not its first evaluation's time: with loading three times the
+    limit, every evaluation gives its answer, the first workers' and a replaced one's."""
+    with IsolatedPool(SlowToLoad(0.6), n_workers=2, timeout_s=0.2) as pool:
+        results = pool.map(np.array([[1.0], [2.0], [-1.0], [3.0], [4.0]]))
+        assert [None if r is None else float(r[0]) for r in results] == [1.0, 2.0, None, 3.0, 4.0]
+        assert pool.timeouts == 0 and pool.failures.count == 1  # the crash alone
