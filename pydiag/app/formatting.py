@@ -75,7 +75,7 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
     lines.append("suggested  : " + ("none" if not shown else ""))
     for s in shown:
         flag = f"CONFIDENT, {s.message}" if s.confident else s.message
-        lines.append(f"  {_named(s):<26} score {s.score:.2f}: {flag}")
+        lines.append(f"  {s.label:<26} score {s.score:.2f}: {flag}")
         if s.evidence:
             lines.append(f"  {'':<26} {s.evidence[0]}")
         if s.competing:
@@ -115,14 +115,9 @@ def format_loop_step(step: LoopStep) -> str:
     confident = sorted((s for s in suggestions if s.confident), key=lambda s: -s.held_out.z)
     if confident:
         return (f"{text}; stopped at the step limit, confident: "
-                + ", ".join(f"{_named(s)} (z {s.held_out.z:.1f})" for s in confident))
-    tried = [f"{_named(s)}: {s.status.value}" for s in suggestions if s.held_out is not None]
+                + ", ".join(f"{s.label} (z {s.held_out.z:.1f})" for s in confident))
+    tried = [f"{s.label}: {s.status.value}" for s in suggestions if s.held_out is not None]
     return f"{text}; nothing confident" + (f" ({'; '.join(tried)})" if tried else "")
-
-
-def _named(s) -> str:
-    """A suggestion's effect, with its stage on a machine's model."""
-    return s.effect if s.stage is None else f"{s.effect} on {s.stage}"
 
 
 def format_history(rows: list[dict]) -> str:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -17,8 +16,9 @@ from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
-from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.machine import Machine
+from pydiag.gear.speed import SpeedEstimate
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import history
 from pydiag.loop.accumulate import accumulate
@@ -27,7 +27,7 @@ from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import BuiltModel, composed_fmu
 from pydiag.loop.machine_loop import machine_loop
-from pydiag.loop.machine_model import (MachineModel, accept, fit_machine, machine_fmu,
+from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_fmu,
                                        machine_problem, validate_machine)
 from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
@@ -56,19 +56,32 @@ def _effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, 
             lambda keys: str(composed_fmu(keys, root, build)))
 
 
-def _machine_problem(args, m: Measurement
+def _machine_models(args) -> Callable[[Machine], tuple[MachineModel, BuiltModel]]:
+    """A machine's own model, as written and as built (:func:`_library`)."""
+    root, build = _library(args)
+    return lambda machine: machine_fmu(machine, root, build)
+
+
+def _machine(args) -> Machine:
+    """The machine compare or loop fit the own model of without --fmu (--machine)."""
+    machine = getattr(args, "machine_description", None)
+    if machine is None:
+        raise UsageError(f"give --fmu, or --machine FILE to {args.command} the machine's own "
+                         "model")
+    return machine
+
+
+def _machine_problem(args, m: Measurement, build: Callable[[Machine], tuple[MachineModel,
+                                                                             BuiltModel]]
                      ) -> tuple[FitProblem, tuple[MachineModel, BuiltModel]]:
     """compare without --fmu: the fit problem of the machine's own model of every stage
     (:mod:`pydiag.loop.machine_model`), and that model, as written and as built."""
-    machine = getattr(args, "machine_description", None)
-    if machine is None:
-        raise UsageError("give --fmu, or --machine FILE to fit the machine's own model")
+    machine = _machine(args)
     if args.effect:
         raise UsageError(f"--effect fits a pair's effect: give --stage (the stages of "
                          f"{args.machine}: " + ", ".join(s.name for s in machine.stages)
                          + ") and --fmu")
-    root, build = _library(args)
-    model, built = machine_fmu(machine, root, build)
+    model, built = build(machine)
     found, settings, drop = _machine_record(args, m)
     problem = machine_problem(built.fmu, model, m, machine, found, settings["fit_gain"],
                               settings["feature_mode"], drop)
@@ -110,26 +123,25 @@ def cmd_compare(args) -> int:
         # with an effect model, the base fit runs with the effect switched off (lower bounds)
         problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
     else:  # the machine's own model, its effects tried stage by stage (below)
-        (problem, machine_model), models = _machine_problem(args, m), None
+        machines = _machine_models(args)
+        (problem, machine_model), models = _machine_problem(args, m, machines), None
     update, close = progress_bar(args.quiet, "compare")
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
         if machine_model is None:
             c = compare(problem, estimator, args.false_alarm_rate)
         else:  # the machine's model: its effects fitted after its stages
-            fit = fit_machine(problem, machine_model[0], estimator,
-                              _effect_estimator(args).replace(progress=update))
-            c = dataclasses.replace(compare(problem, None, args.false_alarm_rate,
-                                            parameters=fit.parameters), fit_error=fit.error)
+            c = compare_machine(problem, machine_model[0], estimator,
+                                _effect_estimator(args).replace(progress=update),
+                                args.false_alarm_rate)
         if effect is not None:
             base, c = c, refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args))
             problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
     finally:
         close()
     if machine_model is not None and not args.no_validate:
-        root, build = _library(args)
         c = validate_machine(problem, args.machine_description, machine_model[0], c,
-                             lambda machine: str(machine_fmu(machine, root, build)[1].fmu),
+                             lambda machine: str(machines(machine)[1].fmu),
                              _effect_estimator(args), None if args.quiet else
                              (lambda key: print(f"validating {key} held out ...",
                                                 file=sys.stderr)))
@@ -234,18 +246,16 @@ def _machine_loop(args) -> tuple[list, str]:
     (:mod:`pydiag.loop.machine_loop`), on a copy of FILE (``<stem>.loop.toml`` beside it,
     refused if it exists, unless --force) that gets every accepted effect. Returns the
     steps and the copy's path."""
-    machine = getattr(args, "machine_description", None)
-    if machine is None:
-        raise UsageError("give --fmu, or --machine FILE to loop on the machine's own model")
+    _machine(args)
     source = Path(args.machine)
     copy = source.with_name(f"{source.stem}.loop.toml")
     check_output(str(copy), args.force)
     m = read_input(args)
-    root, build = _library(args)
+    machines = _machine_models(args)
     found, settings, drop = _machine_record(args, m)
     write_text(str(copy), source.read_text(encoding="utf-8"), True)
     print(f"machine    : {copy} (a copy of {source}; every effect accepted goes into it)")
-    steps = machine_loop(copy, m, found, lambda mm: machine_fmu(mm, root, build),
+    steps = machine_loop(copy, m, found, machines,
                          args.max_steps, FaultEstimator(**estimator_settings(args)),
                          _effect_estimator(args), settings["fit_gain"],
                          settings["feature_mode"], drop,

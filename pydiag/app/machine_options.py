@@ -80,9 +80,8 @@ def _stage_of(args, machine: Machine) -> int | None:
                          "model of every stage)")
     if stage is None:
         raise UsageError(f"{args.machine}: {len(machine.stages)} stages; {args.command} fits "
-                         "one stage's pair model: give --stage (" + ", ".join(
-                             f"{k} or {s.name!r}" for k, s in enumerate(machine.stages, 1))
-                         + "); `pydiag diagnose --machine` fits every stage, `pydiag "
+                         f"one stage's pair model: give --stage ({machine.stage_choices()}"
+                         "); `pydiag diagnose --machine` fits every stage, `pydiag "
                          "compare --machine` without --fmu the machine's model of them all")
     if args.other_shaft is not None or args.bearing is not None:
         raise UsageError(f"--other-shaft and --bearing describe a pair's surroundings; "

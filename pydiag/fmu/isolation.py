@@ -23,9 +23,8 @@ stops after one timeout per worker instead of after ``max_consecutive_failures``
 
 An evaluation's time starts when its worker is ready: a new worker first prepares its
 objective (``objective.prepare()`` if it has one: the FMU extracted and loaded) and says
-so, within :data:`STARTUP_S`. Timed from the moment a task was sent, a replaced worker's
-first evaluation carried the FMU's loading, and on a loaded machine a good evaluation
-exceeded a short timeout: the verdict hung on the machine's load.
+so, within :data:`STARTUP_S`, so that loading, which a busy machine stretches, never counts
+against an evaluation's limit.
 """
 
 from __future__ import annotations

@@ -161,6 +161,10 @@ class Machine:
         raise MachineError(f"{self.source}: no stage {text!r}; the stages are "
                            + ", ".join(f"{k} ({n})" for k, n in enumerate(names, 1)))
 
+    def stage_choices(self) -> str:
+        """How a stage may be named, for a message: "1 or 'first', 2 or 'second'"."""
+        return ", ".join(f"{k} or {s.name!r}" for k, s in enumerate(self.stages, 1))
+
     def mesh_order(self, stage: int) -> Fraction:
         """Stage ``stage``'s mesh frequency in orders of the input shaft."""
         return self.stages[stage].pinion_teeth * self.shaft_ratio(stage)

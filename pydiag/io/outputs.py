@@ -87,7 +87,8 @@ def _umask() -> int:
 
 
 def write_text(path: str | Path, text: str, force: bool = False) -> Path:
-    """Write ``text`` to ``path`` under the output policy."""
+    """Write ``text`` to ``path`` under the output policy, as UTF-8 (what every reader of
+    pydiag's text files takes, whatever the locale)."""
     with atomic_output(path, force) as tmp:
-        tmp.write_text(text)
+        tmp.write_text(text, encoding="utf-8")
     return Path(path)

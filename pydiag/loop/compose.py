@@ -233,13 +233,14 @@ def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Buil
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{name}.mo"
     written = folder / f".{name}.mo.written"
-    edited = False
-    if path.exists() and written.exists():  # without a record of what pydiag wrote: its
-        text = path.read_text()                # own, from before edits were kept
-        edited = written.read_text() != _digest(text) and text != source
-        if edited:
-            source = text
-    if not edited and (not path.exists() or path.read_text() != source):
+    text = path.read_text() if path.exists() else None
+    # without a record of what pydiag wrote, the file is pydiag's own (from before edits
+    # were kept)
+    edited = (text is not None and text != source and written.exists()
+              and written.read_text() != _digest(text))
+    if edited:
+        source = text
+    elif text != source:
         path.write_text(source)
         written.write_text(_digest(source))
     tag = _digest(source + library_hash(modelica_root))[:12]

@@ -14,7 +14,6 @@ with another record, edit, and loop on again; each step's model is built from th
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Callable
 
@@ -23,10 +22,9 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.machine import Machine, load_machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.accumulate import LoopStep
-from pydiag.loop.compare import compare
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.effect_fit import EFFECT_REFIT
-from pydiag.loop.machine_model import (MachineModel, accept, fit_machine, machine_problem,
+from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem,
                                        validate_machine)
 
 
@@ -50,9 +48,7 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
         model, built = build(machine)
         problem = machine_problem(built.fmu, model, measurement, machine, speed, fit_gain,
                                   feature_mode, drop)
-        fit = fit_machine(problem, model, estimator, refit, start)
-        c = dataclasses.replace(compare(problem, None, parameters=fit.parameters),
-                                fit_error=fit.error)
+        c = compare_machine(problem, model, estimator, refit, start=start)
         c = validate_machine(problem, machine, model, c,
                              lambda other: str(build(other)[1].fmu), refit)
         effects = tuple(f"{e.key} on {machine.stages[e.stage].name}" for e in machine.effects)
@@ -63,8 +59,8 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
         else:
             best = confident[0]
             h = best.held_out
-            steps.append(LoopStep(effects, c.error, f"{best.effect} on {best.stage}",
-                                  h.error_base, h.error_effect, h.z, c))
+            steps.append(LoopStep(effects, c.error, best.label, h.error_base,
+                                  h.error_effect, h.z, c))
         if progress:
             progress(steps[-1])
         if steps[-1].accepted is None:

@@ -41,14 +41,12 @@ import dataclasses
 import functools
 import hashlib
 import json
-import os
+import math
 import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
-
-import numpy as np
 
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
@@ -60,6 +58,7 @@ from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.machine import Machine, StageEffect, load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
+from pydiag.io.outputs import write_text
 from pydiag.loop.compare import compare
 from pydiag.loop.compose import BuiltModel, built_fmu, compose
 from pydiag.loop.results import Comparison
@@ -323,6 +322,17 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     return best
 
 
+def compare_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
+                    effect_estimator: FaultEstimator | None = None,
+                    false_alarm_rate: float = 0.01,
+                    start: dict[str, float] | None = None) -> Comparison:
+    """compare (:func:`pydiag.loop.compare.compare`) of the machine's model at its fit
+    (:func:`fit_machine`), whose error the comparison reports as its fit error."""
+    fit = fit_machine(problem, model, estimator, effect_estimator, start)
+    return dataclasses.replace(compare(problem, None, false_alarm_rate,
+                                       parameters=fit.parameters), fit_error=fit.error)
+
+
 def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
                 ) -> tuple[MachineModel, BuiltModel]:
     """The model of ``machine`` and its FMU, built unless one of the same source exists;
@@ -347,8 +357,7 @@ def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
         raise UsageError(not_on_a_stage(key))
     if stage is None and len(machine.stages) > 1:
         raise UsageError(f"{path}: {len(machine.stages)} stages: give the stage the effect "
-                         "is on (" + ", ".join(f"{k} or {s.name!r}" for k, s in
-                                               enumerate(machine.stages, 1)) + ")")
+                         f"is on ({machine.stage_choices()})")
     index = 0 if stage is None else machine.stage_index(stage)
     name = machine.stages[index].name
     if StageEffect(key, index) in machine.effects:
@@ -357,12 +366,7 @@ def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
     text += ("" if text.endswith("\n") or not text else "\n") + \
         f'\n[[effects]]\nkey = "{key}"\nstage = {json.dumps(name)}\n'
     edited = machine_from_dict(tomllib.loads(text), str(path))
-    partial = path.with_name(f".{path.name}.{os.getpid()}")
-    try:
-        partial.write_text(text, encoding="utf-8")
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
+    write_text(path, text, force=True)
     return edited
 
 
@@ -437,7 +441,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                            progress=None if progress is None else
                            functools.partial(_said, progress, stage.name))
         found += [dataclasses.replace(s, stage=stage.name) for s in checked.suggested_effects]
-    found.sort(key=lambda s: (not s.confident, -(s.held_out.z if s.held_out else -np.inf),
+    found.sort(key=lambda s: (not s.confident, -(s.held_out.z if s.held_out else -math.inf),
                               -s.score))
     return dataclasses.replace(comparison, suggested_effects=found)
 

@@ -132,6 +132,11 @@ class Suggestion:
     stage: str | None = None
 
     @property
+    def label(self) -> str:
+        """Its effect, with the stage it would go on: "gear_tooth_fault on output stage"."""
+        return self.effect if self.stage is None else f"{self.effect} on {self.stage}"
+
+    @property
     def shown(self) -> bool:
         """Worth a line in a report: the residual points to it, or it was tried held out
         (an effect scored on an envelope may have no score in the spectrum)."""

@@ -61,6 +61,7 @@ def validate(problem: FitProblem, comparison: Comparison,
     it (a stage of a machine's model: :func:`pydiag.loop.machine_model.stage_effect`; its
     FMU is then not checked to be a GearPair), default the catalogue itself."""
     model = read_model_description(problem.spec.fmu_path)[0]
+    catalogue = EFFECTS if effects is None else effects
     if effects is None and not GEARPAIR_PARAMETERS <= {v.name for v in model.modelVariables}:
         return not_validated(comparison, f"the catalogue's effects extend GearDiag.GearPair, "
                                          f"and {model.modelName} is not one of its models")
@@ -72,7 +73,7 @@ def validate(problem: FitProblem, comparison: Comparison,
         s.status, s.message = status, f"{status.value}: {message}"
 
     for s in suggestions:
-        effect = (effects or EFFECTS)[s.effect]
+        effect = catalogue[s.effect]
         if s.score < min_score and not (effect.envelope or effect.affine):  # MIN_SCORE
             mark(s, Status.NOT_TRIED, f"its lines hold {100 * s.score:.0f} % of the "
                                       "unexplained energy")

@@ -237,7 +237,7 @@ def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
     """pydiag loop --machine without --fmu: the stiffness wave's even harmonics accepted on
     one stage, then on the other, each confirmed held out, the error falling at every step,
     nothing confident after; both written into the copy of the machine file, the file
-    given unchanged (measured: 0.193 -> 0.167 -> 0.148, 4.5 min on 2 cores)."""
+    given unchanged (the measured sequence: bench/RESULTS.md section 13)."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
     write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
