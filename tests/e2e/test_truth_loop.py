@@ -297,8 +297,10 @@ def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth
     tooth's d_f and f_f near 0 to make up for the lines the speed fluctuation moved);
     compare with the effect (``compare --effect``) frees the base parameters with it and
     explains the record. In make test-slow (35-50 s: the ripple's model is simulated whole
-    at every step); make test finds the ripple held out with the base freed the same way
-    (test_compare_and_discover_find_the_hidden_effect)."""
+    at every step), as is the ripple's discovery held out with the base freed the same
+    way (test_compare_and_discover_find_the_hidden_effect); make test ranks a torque
+    ripple first on a record of the catalogue's own ripple model
+    (tests/e2e/test_compare_loop.py: plumbing, not diagnosis)."""
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["speed_fluctuation"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point={"bearing": BEARING})
