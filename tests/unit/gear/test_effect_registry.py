@@ -22,7 +22,8 @@ def package_order() -> list[str]:
 def declaration(effect, variable: str) -> dict[str, float] | None:
     """min and max of ``variable`` where the effect's model (or what it extends) declares it."""
     own = [] if effect.in_base else [LIBRARY / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"]
-    for path in own + sorted((LIBRARY / "Components").glob("*.mo")) + [LIBRARY / "GearPair.mo"]:
+    base = [LIBRARY / "GearPair.mo", LIBRARY / "Interfaces" / "PartialMeshLaw.mo"]
+    for path in own + sorted((LIBRARY / "Components").glob("*.mo")) + base:
         m = re.search(DECLARATION.format(name=re.escape(variable)), path.read_text())
         if m:
             attrs = dict(re.findall(r"(\w+)\s*=\s*([^,]+)", m.group(1) or ""))

@@ -19,12 +19,13 @@ def test_shipped_fmu_matches_golden(gear_fmu):
 
 
 def test_changed_model_default_fails_regression(tmp_path, modelica_copy):
-    """Changing one default (the mesh damping, by 10 %) in the Modelica source must fail."""
-    src = modelica_copy / "GearDiag" / "GearPair.mo"
-    text = src.read_text()
+    """Changing one default (the mesh damping, by 10 %, in the law GearPair extends) must fail."""
+    law = modelica_copy / "GearDiag" / "Interfaces" / "PartialMeshLaw.mo"
+    text = law.read_text()
     assert 'c(unit="N.s/m") = 1000' in text
-    src.write_text(text.replace('c(unit="N.s/m") = 1000', 'c(unit="N.s/m") = 1100'))
-    fmu = inspected(build_fmu(src, "GearDiag.GearPair", tmp_path / "Perturbed.fmu"))
+    law.write_text(text.replace('c(unit="N.s/m") = 1000', 'c(unit="N.s/m") = 1100'))
+    fmu = inspected(build_fmu(modelica_copy / "GearDiag" / "GearPair.mo", "GearDiag.GearPair",
+                              tmp_path / "Perturbed.fmu"))
     report = regress.check(fmu, GOLDEN)
     assert not report.passed
     res = run_cli("-m", "pydiag", "regress", "--fmu", str(fmu), "--golden", GOLDEN)

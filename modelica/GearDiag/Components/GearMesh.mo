@@ -1,0 +1,24 @@
+within GearDiag.Components;
+model GearMesh "A gear stage's mesh between its pinion's and its gear's shafts, along the line of action"
+  // The teeth deflect along the line of action by x = r_p*theta_p - r_g*theta_g (theta:
+  // each shaft's angle over its steady rotation, each in its own sense of turning) and push
+  //   F = k(t)*(x - e(t)) + c*x'
+  // against the pinion's turning (torque r_p*F) and with the gear's (r_g*F); k(t) and e(t)
+  // are the paper's (Interfaces.PartialMeshLaw), at the stage's own teeth and pinion speed.
+  // The mesh has no inertia: the wheels' are Inertia components on its flanges. A pinion at
+  // its steady speed and a gear of inertia m*r_g^2 under a load T*r_g/r_p make GearPair of
+  // mass m (tests/fmu_build hold them to it).
+  extends GearDiag.Interfaces.PartialMeshLaw;
+  parameter Real r_g(unit="m") = r_p*Ng/Np "Gear pitch radius";
+  GearDiag.Interfaces.Flange flange_a "The pinion's shaft";
+  GearDiag.Interfaces.Flange flange_b "The gear's shaft";
+  Real x(unit="m", start=x_static, fixed=true, nominal=1e-5) "Deflection of the teeth along the line of action";
+  output Real mesh_force(unit="N") "Force between the teeth";
+  output Real disp(unit="m") "Deflection of the teeth";
+equation
+  der(x) = r_p*flange_a.w - r_g*flange_b.w;
+  mesh_force = stiffness*(x - e_ate - e_dte - e_extra) + c*der(x);
+  flange_a.tau = r_p*mesh_force;
+  flange_b.tau = -r_g*mesh_force;
+  disp = x;
+end GearMesh;
