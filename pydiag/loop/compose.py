@@ -12,6 +12,11 @@ does:
 - ``contact`` (the teeth separate) and ``t_angle`` (the shafts' angle) are the state of
   the mesh itself: one effect at most may set each.
 
+The same effects compose on a stage's mesh between two shafts
+(``GearDiag.Components.GearMesh``, :data:`MESH`, a machine's model's stage): its
+``acc_sensor`` starts from what the housing sees of the mesh force, and it has no
+``F_extra`` (a force on a stage is a torque on its shafts: a component of the machine).
+
 The effects' declarations (parameters, components) are copied as written; a component
 name two effects use is prefixed with the effect's key in the second; a parameter two
 effects declare differently cannot be shared, and the composition is refused naming it.
@@ -34,12 +39,30 @@ from pydiag.gear.effects import EFFECTS, model_file
 SUMMED_HOOKS = ("k_mod", "e_extra", "F_extra", "acc_sensor")
 #: Hooks one effect at most may set.
 SOLE_HOOKS = ("contact", "t_angle")
-#: What every contribution to ``acc_sensor`` starts with: the mesh's own acceleration.
+#: What every effect's contribution to ``acc_sensor`` is added to in its own model: the
+#: pair's mesh acceleration.
 SENSOR_BASE = "der(v)"
 
 _EXTENDS = re.compile(r"extends\s+GearDiag\.GearPair\s*\(")
 _COMPONENT = re.compile(r"^\s*GearDiag\.[\w.]+\s+(\w+)\s*[(\s\"]", re.M)
 _PARAMETER = re.compile(r"^\s*parameter\s+\w+\s+(\w+)", re.M)
+
+
+@dataclass(frozen=True)
+class Base:
+    """What composed effects extend: its class, its ``acc_sensor`` without effects, the
+    hooks it has."""
+
+    model: str
+    sensor: str
+    hooks: tuple[str, ...]
+
+
+#: The paper's pair: every effect's own model extends it.
+PAIR = Base("GearDiag.GearPair", SENSOR_BASE, SUMMED_HOOKS + SOLE_HOOKS)
+#: A stage's mesh between two shafts (a machine's model).
+MESH = Base("GearDiag.Components.GearMesh", "(T/r_p - mesh_force)/m_s",
+            ("k_mod", "e_extra", "acc_sensor", "contact", "t_angle"))
 
 
 class CompositionError(UsageError):
@@ -135,20 +158,26 @@ def _statements(body: str) -> list[str]:
 
 @dataclass(frozen=True)
 class ComposedModel:
-    """GearDiag.GearPair with the effects ``keys``: the model's name and its source."""
+    """A base (the pair, a stage's mesh) with the effects ``keys``: the model's name and
+    its source."""
 
     keys: tuple[str, ...]
     name: str
     source: str
 
 
-def compose(keys: tuple[str, ...], modelica_root: Path) -> ComposedModel:
-    """The model with every effect of ``keys`` (module docstring), in a canonical order
-    (the catalogue's), so that the same set makes the same model."""
+def compose(keys: tuple[str, ...], modelica_root: Path, base: Base = PAIR) -> ComposedModel:
+    """``base`` with every effect of ``keys`` (module docstring), in a canonical order (the
+    catalogue's), so that the same set makes the same model. One effect on the pair is its
+    own model: the pair takes two or more."""
     keys = tuple(k for k in EFFECTS if k in set(keys))
-    if len(keys) < 2:
-        raise CompositionError("a composed model takes two effects or more")
+    if len(keys) < (2 if base == PAIR else 1):
+        raise CompositionError(f"a composed model of {base.model} takes "
+                               f"{'two effects' if base == PAIR else 'an effect'} or more")
     sources = [read_effect(k, modelica_root) for k in keys]
+    for src in sources:
+        if src.hook not in base.hooks:
+            raise CompositionError(f"{src.key} gives {src.hook}, which {base.model} has not")
     terms: dict[str, list[str]] = {}
     setters: dict[str, str] = {}
     declared: dict[str, tuple[str, str]] = {}
@@ -181,14 +210,15 @@ def compose(keys: tuple[str, ...], modelica_root: Path) -> ComposedModel:
     for hook in SUMMED_HOOKS + SOLE_HOOKS:
         if hook in terms:
             added = " + ".join(f"({t})" for t in terms[hook])
-            modifiers.append(f"{hook} = {SENSOR_BASE} + {added}" if hook == "acc_sensor"
+            modifiers.append(f"{hook} = {base.sensor} + {added}" if hook == "acc_sensor"
                              else f"{hook} = {added}")
-    name = "GearPairWith" + "".join(EFFECTS[k].model.rsplit(".", 1)[1] for k in keys)
-    description = "GearDiag.GearPair with " + ", ".join(keys)
+    name = base.model.rsplit(".", 1)[1] + "With" + "".join(
+        EFFECTS[k].model.rsplit(".", 1)[1] for k in keys)
+    description = f"{base.model} with " + ", ".join(keys)
     source = ("within GearDiag;  // its effects' models are GearDiag's, and see what it declares\n"
               f"model {name} \"{description}\"\n"
               "  // Written by pydiag from the effects' models (pydiag/loop/compose.py).\n"
-              f"  extends GearDiag.GearPair(\n    " + ",\n    ".join(modifiers) + ");\n"
+              f"  extends {base.model}(\n    " + ",\n    ".join(modifiers) + ");\n"
               + "\n".join(bodies) + f"\nend {name};\n")
     return ComposedModel(keys, name, source)
 

@@ -1,10 +1,15 @@
 """A machine's model: every stage of a machine description in one Modelica model, each
-sensor seeing every stage, written by pydiag and built once per content.
+sensor seeing every stage, written by pydiag from the library's components and built once
+per content.
 
-Each stage is a ``GearDiag.GearPair`` at its teeth, its pinion at the input speed times
-the stage's speed ratio (``f_input``, the model's one speed). A sensor sees the stage it
-is near (the machine file's ``near_stage``, else the first) as that pair's own output, and
-every other stage through a level of its own relative to it, in dB
+Each stage is a drive train (``GearDiag.Components``, connected through flanges): its mesh
+(``GearMesh``: the pair's law at the stage's teeth, its pinion at the input speed times the
+stage's speed ratio, ``f_input`` the model's one speed) between its pinion's shaft held at
+its steady speed (``SteadySpeed``) and its gear's inertia under its load (``Inertia``,
+``LoadTorque``): the pair model's assumption, which makes the mesh's acceleration
+``GearDiag.GearPair``'s (``tests/fmu_build/test_components.py``). A sensor sees the
+stage it is near (the machine file's ``near_stage``, else the first) as that mesh's own
+acceleration, and every other stage through a level of its own relative to it, in dB
 (``<output>_<stage>_dB``): a housing passes each mesh to a sensor differently. These
 levels are fitted with the stages' fault parameters; the channel's overall level is the
 fit's gain, as for a pair. A sensor's output adds the stages' signals as they are
@@ -13,23 +18,25 @@ the first meshes at a phase of its own relative to the first's (``<stage>_mesh_p
 share of its mesh cycle by which its ``t_angle`` is ahead), fitted too.
 
 A stage carries the catalogue effects the machine file gives it (``[[effects]]``, which
-``pydiag accept`` writes): one with a model of its own makes the stage that model
-(``GearDiag.Effects.GearToothFault input_stage(...)``), several make it their composed
-model (:mod:`pydiag.loop.compose`, declared inside the machine's), one of the base
-model's own parameters frees them; their parameters are fitted as ``<stage>.<name>``. They
-are fitted after the stages (:func:`fit_machine`), from the stages' fit, so an effect
-never leaves the error above that fit. An effect whose lines do not repeat with the machine (a
-bearing's, a ripple's) or that is a sensor's path (the housing) is not a stage's in this
-model yet.
+``pydiag accept`` writes): those with models of their own make its mesh their composed
+model (:func:`pydiag.loop.compose.compose` on :data:`~pydiag.loop.compose.MESH`, declared
+inside the machine's), one of the base model's own parameters frees them; their parameters
+are fitted as ``<stage>.<name>``. They are fitted after the stages (:func:`fit_machine`),
+from the stages' fit, so an effect never leaves the error above that fit. An effect whose
+lines do not repeat with the machine (a bearing's, a ripple's) or that is a sensor's path
+(the housing) is not a stage's in this model yet.
 
 What the residual points to on each stage is tried held out as on a pair
 (:func:`validate_machine`): the model's problem seen from that stage's shafts
-(:func:`stage_view`: its kinematics name the lines), the catalogue named for the stage
+(:func:`stage_view`: its kinematics name the lines), the catalogue named for it
 (:func:`stage_effect`), the model with the effect on the stage built for it.
 
-The stages are not coupled: each mesh turns at its constant speed, as the pair model's
-does. What couples them in a gearbox (the shafts' torsion, one stage's transmission error
-in the other's load) is not modelled.
+The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
+shaft's torsion between two stages (``GearDiag.Components.Shaft``,
+``GearDiag.Examples.TwoStageGearbox``) couples them, but without the machine's inertias and
+shaft stiffnesses it puts torsional modes at made-up frequencies: with a shaft sized to
+twist 0.3 degree under its torque, the test box's error rose from 0.19 to 0.32 and the
+PHM09 records' stayed within 0.01 (``docs/gearbox.md``).
 
 One concern: the machine's model (written, built, fitted, its effects tried and
 accepted); the pair's loop is the rest of this package, which it calls.
@@ -60,7 +67,7 @@ from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
 from pydiag.io.outputs import write_text
 from pydiag.loop.compare import compare
-from pydiag.loop.compose import BuiltModel, built_fmu, compose
+from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
 from pydiag.loop.results import Comparison
 from pydiag.loop.validate import validate
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
@@ -75,6 +82,11 @@ DEFAULT_OUTPUT = "acc"
 #: The outputs of a stage a sensor may measure.
 STAGE_OUTPUTS = ("acc", "disp")
 _UNITS = {"acc": "m/s2", "disp": "m"}
+#: How far a shaft of the machine's model twists under the torque it carries, rad: a shaft
+#: sized for its torque (a design limit of a quarter of a degree to a degree a metre).
+SHAFT_TWIST_RAD = 0.00005
+#: Damping ratio of a shaft's torsional mode between the bodies on its ends.
+SHAFT_DAMPING = 0.05
 
 
 def _identifier(text: str, fallback: str, taken: set[str]) -> str:
@@ -157,20 +169,19 @@ def not_on_a_stage(key: str) -> str:
 
 def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
                  nested: dict[str, str]) -> str:
-    """The Modelica class of stage ``k`` with its effects (a composed one declared in
-    ``nested``, by name)."""
+    """The Modelica class of stage ``k``'s mesh with its effects (a composed one declared
+    in ``nested``, by name)."""
     keys = [e.key for e in machine.effects if e.stage == k]
     for key in keys:
         if not on_a_stage(EFFECTS[key]):
             raise UsageError(f"{machine.source}: effects: {not_on_a_stage(key)}")
     own = tuple(key for key in keys if EFFECTS[key].own_fmu)
     if not own:
-        return "GearDiag.GearPair"
-    if len(own) == 1:
-        return EFFECTS[own[0]].model
+        return MESH.model
     if modelica_root is None:
-        raise UsageError("a stage with several effects needs the Modelica library (--modelica)")
-    composed = compose(own, modelica_root)
+        raise UsageError("a stage with an effect of its own model needs the Modelica library "
+                         "(--modelica)")
+    composed = compose(own, modelica_root, MESH)
     body = composed.source.split("\n", 1)[1]  # without its `within`
     nested[composed.name] = "\n".join("  " + line if line else line
                                       for line in body.rstrip().splitlines())
@@ -199,6 +210,28 @@ def _effect_parameters(machine: Machine, k: int, instance: str
     return fitted, fixed
 
 
+def _drive_train(machine: Machine, k: int, mesh: str, taken: set[str]
+                 ) -> tuple[list[str], list[str]]:
+    """The drive train of stage ``k``'s mesh (instance ``mesh``), as declarations and
+    connect equations: its pinion's shaft at its steady speed, its gear's inertia under its
+    load (module docstring)."""
+    stage, pinion, gear = machine.stages[k], machine.shafts[k], machine.shafts[k + 1]
+    drive = _identifier(f"{mesh}_drive", f"stage{k + 1}_drive", taken)
+    wheel = _identifier(f"{mesh}_gear", f"stage{k + 1}_gear", taken)
+    load = _identifier(f"{mesh}_load", f"stage{k + 1}_load", taken)
+    declarations = [
+        f"  GearDiag.Components.SteadySpeed {drive} \"The {pinion} shaft at its steady "
+        "speed\";",
+        f"  GearDiag.Components.Inertia {wheel}(J={mesh}.m_s*{mesh}.r_g^2) \"{stage.name}'s "
+        f"gear, on the {gear} shaft\";",
+        f"  GearDiag.Components.LoadTorque {load}(T={mesh}.T*{mesh}.r_g/{mesh}.r_p) \"The "
+        f"{gear} shaft's load\";"]
+    connects = [f"  connect({drive}.flange, {mesh}.flange_a);",
+                f"  connect({mesh}.flange_b, {wheel}.flange_a);",
+                f"  connect({wheel}.flange_b, {load}.flange);"]
+    return declarations, connects
+
+
 def machine_model(machine: Machine, modelica_root: Path | None = None) -> MachineModel:
     """The model of ``machine`` (module docstring); ``modelica_root``: the library whose
     effects a stage with several is composed of."""
@@ -211,12 +244,13 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     phases: list[Parameter] = []
     effect_parameters: list[Parameter] = []
     fixed: dict[str, float] = {}
+    connects: list[str] = []
     for k, (s, inst) in enumerate(zip(machine.stages, stages)):
         ratio = machine.shaft_ratio(k)
         speed = SPEED_PARAMETER if ratio == 1 else \
             f"{SPEED_PARAMETER}*{ratio.numerator}/{ratio.denominator}"
-        cls = _stage_class(machine, k, modelica_root, nested)
         params, values = _effect_parameters(machine, k, inst)
+        cls = _stage_class(machine, k, modelica_root, nested)
         effect_parameters += params
         fixed.update(values)
         phase = ""
@@ -227,8 +261,12 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
             phase = f", t_angle=time + {name}/({s.pinion_teeth}*{speed})"
             phases.append(Parameter(name, 0.0, 1.0, periodic=True))
         lines.append(f"  {cls} {inst}(Np={s.pinion_teeth}, Ng={s.gear_teeth}, "
-                     f"f_pinion={speed}{phase}) \"{s.name}: {s.pinion_teeth}/{s.gear_teeth} "
-                     f"teeth, shafts {machine.shafts[k]} and {machine.shafts[k + 1]}\";")
+                     f"f_pinion={speed}{phase}) \"{s.name}: {s.pinion_teeth}/"
+                     f"{s.gear_teeth} teeth, shafts {machine.shafts[k]} and "
+                     f"{machine.shafts[k + 1]}\";")
+        declarations, equations = _drive_train(machine, k, inst, taken)
+        lines += declarations
+        connects += equations
     sensors = [(s.channel, s.output, s.near_stage or 0) for s in machine.sensors] or \
         [(None, DEFAULT_OUTPUT, 0)]
     outputs = []
@@ -260,7 +298,7 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
               f"  // Written by pydiag from {Path(machine.source).name} "
               "(pydiag/loop/machine_model.py).\n"
               + "".join(f"{text}\n" for text in nested.values())
-              + "\n".join(lines) + f"\nend {name};\n")
+              + "\n".join(lines) + "\nequation\n" + "\n".join(connects) + f"\nend {name};\n")
     first = machine.stages[0]
     return MachineModel(name, source, stages, tuple(outputs),
                         (first.pinion_teeth, first.gear_teeth),

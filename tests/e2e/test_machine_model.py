@@ -84,8 +84,8 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     source = tmp_path / "build" / "machines" / "Machine_short_box.mo"
     assert f"model      : {source} (every stage of {machine}, written by pydiag" in r.stdout
     written = source.read_text()
-    assert "GearDiag.GearPair stage_1(Np=18, Ng=36, f_pinion=f_input)" in written
-    assert ("GearDiag.GearPair stage_2(Np=20, Ng=50, f_pinion=f_input*1/2, "
+    assert "GearDiag.Components.GearMesh stage_1(Np=18, Ng=36, f_pinion=f_input)" in written
+    assert ("GearDiag.Components.GearMesh stage_2(Np=20, Ng=50, f_pinion=f_input*1/2, "
             "t_angle=time + stage_2_mesh_phase/(20*f_input*1/2))") in written
     assert "stage_2.a_f=" in r.stdout and "acc_stage_2_dB=" in r.stdout
     assert "stage_2_mesh_phase=" in r.stdout
@@ -105,7 +105,7 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     r = run_cli(*common, "--json", str(tmp_path / "1.json"))
     assert r.returncode == 0, r.stderr
     extended = Path(r.stdout.split("model      : ")[1].split(" (")[0])
-    assert "GearDiag.Effects.GearToothFault stage_2(Np=20" in extended.read_text()
+    assert "GearMeshWithGearToothFault stage_2(Np=20" in extended.read_text()
     before, after = (json.loads((tmp_path / f"{k}.json").read_text()) for k in "01")
     assert 0 <= after["parameters"]["stage_2.d_g"] <= 0.6
     assert 0 <= after["parameters"]["stage_2.tooth_g"] <= 50  # the stage's gear's teeth
@@ -158,8 +158,8 @@ def test_the_model_source_names_each_sensors_view_of_each_stage():
 
 
 def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
-    """Two effects with models of their own on one stage make it their composed model,
-    declared inside the machine's; one of the pair's own parameters frees them; a tooth's
+    """Two effects with models of their own on one stage make its mesh their composed
+    model, declared inside the machine's; one of the pair's own parameters frees them; a tooth's
     index ranges over the stage's own teeth; an effect with nothing to fit on the stage
     (every order of a 32-tooth pinion driving 96 is also one of its gear's) is refused."""
     import dataclasses
@@ -171,9 +171,9 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
         StageEffect("gear_tooth_fault", 0), StageEffect("gear_eccentricity", 0),
         StageEffect("mesh_stiffness_shape", 1)))
     model = machine_model(machine, MODELICA)
-    assert "\n  model GearPairWithGearEccentricityGearToothFault " in model.source
-    assert "  GearPairWithGearEccentricityGearToothFault input_stage(Np=32" in model.source
-    assert "  GearDiag.GearPair output_stage(Np=48" in model.source
+    assert "\n  model GearMeshWithGearEccentricityGearToothFault " in model.source
+    assert "  GearMeshWithGearEccentricityGearToothFault input_stage(Np=32" in model.source
+    assert "  GearDiag.Components.GearMesh output_stage(Np=48" in model.source
     assert "output_stage_mesh_phase" in {p.name for p in model.parameters(True, {"acc_ch1"})}
     ranges = {p.name: (p.low, p.high) for p in model.parameters(True, {"acc_ch1"})}
     assert ranges["input_stage.tooth_g"] == (0.0, 96.0)

@@ -5,20 +5,28 @@ model GearMesh "A gear stage's mesh between its pinion's and its gear's shafts, 
   //   F = k(t)*(x - e(t)) + c*x'
   // against the pinion's turning (torque r_p*F) and with the gear's (r_g*F); k(t) and e(t)
   // are the paper's (Interfaces.PartialMeshLaw), at the stage's own teeth and pinion speed.
-  // The mesh has no inertia: the wheels' are Inertia components on its flanges. A pinion at
-  // its steady speed and a gear of inertia m*r_g^2 under a load T*r_g/r_p make GearPair of
-  // mass m (tests/fmu_build hold them to it).
+  // The mesh has no inertia: the wheels' are Inertia components on its flanges. An
+  // accelerometer on the housing sees the change of the mesh force through the housing
+  // far above its modes, (T/r_p - F)/m_s (acc). A pinion at its steady speed and a gear of
+  // inertia m_s*r_g^2 under a load T*r_g/r_p make GearPair of mass m_s: the same acc
+  // (tests/fmu_build hold them to it). k_mod, e_extra, t_angle (the law's), contact and
+  // acc_sensor are hooks with neutral declaration equations, as GearPair's.
   extends GearDiag.Interfaces.PartialMeshLaw;
   parameter Real r_g(unit="m") = r_p*Ng/Np "Gear pitch radius";
+  parameter Real m_s(unit="kg") = 0.5 "Apparent mass of the housing at the sensor: what the mesh force's change accelerates";
   GearDiag.Interfaces.Flange flange_a "The pinion's shaft";
   GearDiag.Interfaces.Flange flange_b "The gear's shaft";
   Real x(unit="m", start=x_static, fixed=true, nominal=1e-5) "Deflection of the teeth along the line of action";
+  Real contact = 1 "Contact factor, 1 while the teeth touch (effects)";
+  Real acc_sensor(unit="m/s2") = (T/r_p - mesh_force)/m_s "What the acc sensor sees of this mesh (effects: a transfer path)";
+  output Real acc(unit="m/s2") "Acceleration at the sensor";
   output Real mesh_force(unit="N") "Force between the teeth";
   output Real disp(unit="m") "Deflection of the teeth";
 equation
   der(x) = r_p*flange_a.w - r_g*flange_b.w;
-  mesh_force = stiffness*(x - e_ate - e_dte - e_extra) + c*der(x);
+  mesh_force = contact*stiffness*(x - e_ate - e_dte - e_extra) + c*der(x);
   flange_a.tau = r_p*mesh_force;
   flange_b.tau = -r_g*mesh_force;
+  acc = acc_sensor;
   disp = x;
 end GearMesh;
