@@ -1,6 +1,7 @@
 within GearDiag.Interfaces;
 partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness and transmission errors, on the pinion's angle"
-  // k(t) = K*(meshStiffness(f_mesh*t_angle, ...) + k_mod)       the paper's wave and tooth, Eq. (3)
+  // k(t) = K*(1 + a(tooth)*sigma(theta_mesh, f_f) + k2*cos(2*theta_mesh + phi2)
+  //            + k4*cos(4*theta_mesh + phi4) - d_f*w0(theta_mesh) + k_mod)   Eq. (3) and beyond
   // e_ate = f_ate*xi_max*sin(w_pinion*t)                         assembly TE, Eq. (4)
   // e_dte = f_dte*gamma_max*sin(w_fe*t)                          geometric TE, Eq. (5), w_fe = w_mesh/N_ap
   // The kinematics run on t_angle, the pinion angle over its mean speed (= time).
@@ -57,12 +58,21 @@ partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness 
   Real e_extra(unit="m") = 0 "Extra transmission error (effects)";
   Real t_angle(unit="s") = time "Pinion angle over its mean speed: the time a steady shaft has turned for (effects: a speed fluctuation)";
 
+  Real toothIndex "Index of the pinion tooth in mesh, 0 is the faulty one";
+  Real a "Stiffness variation amplitude of the tooth in mesh";
+  Real sigma "Normalised stiffness wave";
   Real e_ate(unit="m") "Assembly transmission error";
   Real e_dte(unit="m") "Geometric transmission error";
   output Real stiffness(unit="N/m") "Mesh stiffness";
 equation
-  stiffness = K*(GearDiag.Functions.meshStiffness(f_mesh*t_angle, Np, a0, a_f, f_f, k2, phi2,
-    k4, phi4, d_f, eps_c, q_c, r_c) + k_mod);
+  // Tooth periods start a quarter mesh cycle early, where sigma = 0, so the jump of a
+  // between teeth leaves k continuous and the solver sees no discontinuity.
+  toothIndex = mod(floor(f_mesh*t_angle + 0.25), Np);
+  a = if toothIndex < 0.5 then a_f else a0;
+  sigma = GearDiag.Functions.formWave(2*GearDiag.pi*f_mesh*t_angle, f_f);
+  stiffness = K*(1 + a*sigma + k2*cos(4*GearDiag.pi*f_mesh*t_angle + phi2)
+    + k4*cos(8*GearDiag.pi*f_mesh*t_angle + phi4)
+    - d_f*GearDiag.Functions.toothWindow(f_mesh*t_angle, Np, 0, eps_c, q_c, r_c) + k_mod);
   e_ate = f_ate*xi_max*sin(2*GearDiag.pi*f_pinion*t_angle);
   e_dte = f_dte*gamma_max*sin(2*GearDiag.pi*f_fe*t_angle);
 end PartialMeshLaw;
