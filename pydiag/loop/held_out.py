@@ -51,9 +51,10 @@ import numpy as np
 from scipy.stats import norm
 
 from pydiag.core.errors import EstimationError
+from pydiag.core.parameters import Parameter
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, rician_mean, spectral_error
-from pydiag.fit.problem import FitProblem
+from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.gear.effects import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
@@ -69,8 +70,12 @@ FALSE_ALARM_RATE = 0.01
 #: share of the sample rate (its bottom: the top of the gear's analysed bands); below the
 #: Nyquist frequency by the anti-alias filter's usual margin.
 ENVELOPE_TOP = 0.45
-#: A parameter closer to a bound than this share of its range is at the bound.
+#: A parameter closer to a bound than this share of its range is at the bound ...
 AT_BOUND = 0.01
+#: ... and the fit presses against it when a step of BOUND_PROBE of its range inward
+#: raises the fitted half's error by more than BOUND_PRESSURE of it.
+BOUND_PROBE = 0.1
+BOUND_PRESSURE = 0.01
 
 
 @dataclass
@@ -157,16 +162,42 @@ def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarra
     return float(np.sum(w * d * d)), terms, excess
 
 
-def _at_bound(effect: Effect, fitted: dict[str, float]) -> list[str]:
+def pressed_bounds(parameters: tuple[Parameter, ...], x: np.ndarray,
+                   error: Callable[[np.ndarray], float], names: set[str]) -> list[str]:
+    """Those of ``names`` among ``parameters`` (at ``x``, the fit) at a bound of their range
+    that the fit presses against: within AT_BOUND of it (a low of 0, the effect off, and
+    an angle do not count), and a step of BOUND_PROBE of the range inward raises ``error``
+    by more than BOUND_PRESSURE of it. A parameter the error hardly depends on there is
+    undetermined, not saturated: where its fit stops is the rounding's (a housing mode's
+    damping above the band's lines), and a verdict must not hang on it."""
+    x = np.asarray(x, dtype=float)
+    fitted = None
     out = []
-    for p in effect.parameters:
-        if p.periodic or p.name not in fitted:
+    for i, p in enumerate(parameters):
+        if p.periodic or p.name not in names:
             continue
         margin = AT_BOUND * (p.high - p.low)
-        if fitted[p.name] >= p.high - margin or (fitted[p.name] <= p.low + margin
-                                                   and p.low > 0):
+        if x[i] >= p.high - margin:
+            inward = -BOUND_PROBE * (p.high - p.low)
+        elif x[i] <= p.low + margin and p.low > 0:
+            inward = BOUND_PROBE * (p.high - p.low)
+        else:
+            continue
+        fitted = error(x) if fitted is None else fitted
+        probe = x.copy()
+        probe[i] += inward
+        if error(probe) > fitted * (1 + BOUND_PRESSURE):
             out.append(p.name)
     return out
+
+
+def _at_bound(problem: FitProblem, effect: Effect, fitted: dict[str, float]) -> list[str]:
+    """The effect's parameters the fit on ``problem`` presses against a bound of
+    (:func:`pressed_bounds`, on the fitted half's error)."""
+    x = np.array([fitted[p.name] for p in problem.parameters])
+    with ProblemObjective(problem) as objective:
+        return pressed_bounds(problem.parameters, x, objective,
+                              {p.name for p in effect.parameters})
 
 
 def held_out(problem: FitProblem, base: Comparison, effect: Effect,
@@ -281,5 +312,5 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
                    float(min(explained, 1.0)), float(np.linalg.norm(err0)),
                    float(np.linalg.norm(err1)),
                    {p.name: fitted[p.name] for p in effect.parameters if p.name in fitted},
-                   _at_bound(effect, fitted), n_half, float(n * np.log(ratio) + k * np.log(n)),
+                   _at_bound(effect_problem, effect, fitted), n_half, float(n * np.log(ratio) + k * np.log(n)),
                    envelope_band_hz=band, claimed=claimed, line_terms=line_terms)

@@ -11,7 +11,8 @@ from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.loop.competition import outcompeted, rivals
 from pydiag.loop.effect_fit import in_model
-from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out_statistic
+from pydiag.core.parameters import Parameter
+from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out_statistic, pressed_bounds
 from pydiag.loop.results import HeldOut
 
 
@@ -223,3 +224,29 @@ def test_an_effect_is_in_the_model_when_every_parameter_it_fits_on_this_pair_is(
     other = EFFECTS["other_shaft_orders"]
     assert in_model(problem(["a0", "A_o2"]), other)
     assert not in_model(problem(["a0"]), other)
+
+
+def test_a_bound_saturates_only_where_the_fit_presses_against_it():
+    """A parameter at a bound saturates when the error rises stepping inward from it (the
+    record asks for more than the range allows); one the error hardly depends on there
+    (a housing mode's damping, with every line below the mode) does not, so the verdict
+    does not hang on where rounding stopped its fit. A bound of 0 (the effect off), an
+    angle and a parameter not the effect's are never saturated."""
+    params = (Parameter("runout", 0.0, 50e-6), Parameter("zeta", 0.005, 0.5),
+              Parameter("phase", 0.0, 6.3, periodic=True), Parameter("a0", 0.01, 0.9))
+    names = {"runout", "zeta", "phase"}
+
+    def error(x):  # falls towards the runout's top; nearly flat in zeta; a0 pressed too
+        return 1.0 - 1e4 * x[0] + 1e-4 * x[1] + 0.3 * x[3]
+
+    at = np.array([50e-6, 0.005, 0.0, 0.01])
+    assert pressed_bounds(params, at, error, names) == ["runout"]
+    assert pressed_bounds(params, at, error, names | {"a0"}) == ["runout", "a0"]
+    assert pressed_bounds(params, np.array([25e-6, 0.005, 6.3, 0.5]), error, names) == []
+
+    def steep(x):  # the error falls towards the damping's lower bound
+        return 1.0 + 2.0 * x[1]
+
+    assert pressed_bounds(params, at, steep, names) == ["zeta"]
+    zero = (Parameter("runout", 0.0, 50e-6),)
+    assert pressed_bounds(zero, np.array([0.0]), lambda x: 1.0 + 1e4 * x[0], {"runout"}) == []
