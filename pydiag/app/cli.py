@@ -228,7 +228,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("discover", help="try every catalogue effect held out, rank them")
-    p.add_argument("--fmu", required=True, help="the base model FMU")
+    p.add_argument("--fmu", help="the base model FMU; with --machine of several stages and no "
+                   "--stage, none: every effect the machine's own model lacks, on every stage")
     _measurement_args(p)
     _loop_args(p)
     p.add_argument("--effects", type=effect_list, help="comma-separated effect keys (default: "

@@ -84,20 +84,21 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
 
 
 def format_discovery(base: Comparison, found: list[Discovery]) -> str:
+    width = max([26] + [len(d.label) for d in found])
     lines = [f"base model error {base.error:.5f}; effects fitted on half the periods, ranked by "
              "how far they lower the error on the other half (z: in noise standard deviations)",
-             f"{'rank':>4} {'effect':<26} {'z':>8} {'dBIC':>10} {'error':>8} {'reduction':>9}  "
-             "parameters"]
+             f"{'rank':>4} {'effect':<{width}} {'z':>8} {'dBIC':>10} {'error':>8} "
+             f"{'reduction':>9}  parameters"]
     for i, d in enumerate(found, 1):
         h = d.held_out
         if h is None or not h.tried:
-            lines.append(f"{i:4d} {d.effect:<26} {'-':>8} {'-':>10} {'-':>8} {'-':>9}  "
+            lines.append(f"{i:4d} {d.label:<{width}} {'-':>8} {'-':>10} {'-':>8} {'-':>9}  "
                          + (d.message if d.status is not Status.FAILED
                             else f"failed: {d.message}"))
             continue
         params = ", ".join(f"{k}={v:.4g}" for k, v in h.parameters.items())
         reduction = 1 - h.error_effect / h.error_base if h.error_base > 0 else 0.0
-        lines.append(f"{i:4d} {d.effect:<26} {h.z:8.1f} {h.delta_bic:10.1f} "
+        lines.append(f"{i:4d} {d.label:<{width}} {h.z:8.1f} {h.delta_bic:10.1f} "
                      f"{h.error_effect:8.4f} {100 * reduction:8.0f}%  {params}")
         lines.append(f"{'':5}{'CONFIDENT' if d.confident else ''} {d.message}".rstrip())
     return "\n".join(lines)

@@ -26,6 +26,7 @@ from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import BuiltModel, composed_fmu
+from pydiag.loop.machine_discover import check_effects, discover_machine
 from pydiag.loop.machine_loop import machine_loop
 from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_fmu,
                                        machine_problem, validate_machine)
@@ -77,7 +78,7 @@ def _machine_problem(args, m: Measurement, build: Callable[[Machine], tuple[Mach
     """compare without --fmu: the fit problem of the machine's own model of every stage
     (:mod:`pydiag.loop.machine_model`), and that model, as written and as built."""
     machine = _machine(args)
-    if args.effect:
+    if getattr(args, "effect", None):
         raise UsageError(f"--effect fits a pair's effect: give --stage (the stages of "
                          f"{args.machine}: " + ", ".join(s.name for s in machine.stages)
                          + ") and --fmu")
@@ -86,6 +87,13 @@ def _machine_problem(args, m: Measurement, build: Callable[[Machine], tuple[Mach
     problem = machine_problem(built.fmu, model, m, machine, found, settings["fit_gain"],
                               settings["feature_mode"], drop)
     return problem, (model, built)
+
+
+def _model_fact(args, built: BuiltModel) -> str:
+    """The machine's own model, as the commands name it: its source, whose it is."""
+    return (f"{built.source} (every stage of {args.machine}, "
+            + ("your edit of what pydiag wrote" if built.edited else "written by pydiag")
+            + "; pydiag accept EFFECT --stage S gives a stage an effect)")
 
 
 def _machine_record(args, m: Measurement) -> tuple[SpeedEstimate, dict, tuple[str, ...]]:
@@ -155,11 +163,7 @@ def cmd_compare(args) -> int:
              if k not in ("n_periods", "duration_s")}  # the comparison's own are in c
     facts.update(_stage_fact(args))
     if machine_model is not None:
-        built = machine_model[1]
-        facts["model"] = (f"{built.source} (every stage of {args.machine}, "
-                          + ("your edit of what pydiag wrote" if built.edited else
-                             "written by pydiag") + "; pydiag accept EFFECT --stage S "
-                          "gives a stage an effect)")
+        facts["model"] = _model_fact(args, machine_model[1])
     warnings = (fit_warnings(problem, c.fit_error, c.gains, c.parameters)
                 if c.fit_error is not None else [])
     # the run is recorded when its outputs are written (history.recording)
@@ -182,15 +186,33 @@ def cmd_compare(args) -> int:
 def cmd_discover(args) -> int:
     check_outputs(args, "json")
     check_modelica_root(Path(args.modelica) if args.modelica else MODELICA_ROOT)
+    if not args.fmu:
+        check_effects(args.effects)
     m = read_input(args)
-    progress = None if args.quiet else (lambda d: print(f"{d.effect}: tried in {d.elapsed_s:.1f} s",
+    progress = None if args.quiet else (lambda d: print(f"{d.label}: tried in {d.elapsed_s:.1f} s",
                                                         file=sys.stderr))
-    base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
-                           args.effects,
-                           Path(args.modelica) if args.modelica else MODELICA_ROOT,
-                           Path(args.build_dir) if args.build_dir else None, progress,
-                           _effect_estimator(args))
-    print("\n".join(filter(None, [format_facts(_stage_fact(args)), format_discovery(base, found)])))
+    facts = _stage_fact(args)
+    if args.fmu:
+        base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
+                               args.effects,
+                               Path(args.modelica) if args.modelica else MODELICA_ROOT,
+                               Path(args.build_dir) if args.build_dir else None, progress,
+                               _effect_estimator(args))
+    else:  # the machine's own model: every effect its stages lack, on every stage
+        machines = _machine_models(args)
+        problem, (model, built) = _machine_problem(args, m, machines)
+        update, close = progress_bar(args.quiet, "compare")
+        try:
+            base = compare_machine(problem, model,
+                                   FaultEstimator(**estimator_settings(args), progress=update),
+                                   _effect_estimator(args).replace(progress=update))
+        finally:
+            close()
+        found = discover_machine(problem, args.machine_description, model, base,
+                                 lambda machine: str(machines(machine)[1].fmu),
+                                 _effect_estimator(args), args.effects, progress)
+        facts["model"] = _model_fact(args, built)
+    print("\n".join(filter(None, [format_facts(facts), format_discovery(base, found)])))
     if args.json:
         write_text(args.json, json.dumps(as_dict(base, found), indent=2) + "\n", args.force)
     return 0

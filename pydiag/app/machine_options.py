@@ -66,13 +66,13 @@ def apply_machine(args) -> Machine | None:
 def _stage_of(args, machine: Machine) -> int | None:
     """The stage compare, discover and loop fit (``--stage``; the only one of a one-stage
     machine); None for the commands that fit every stage (diagnose and batch, stage by
-    stage; compare without --fmu, the machine's own model)."""
+    stage; compare, discover and loop without --fmu, the machine's own model)."""
     stage = getattr(args, "stage", None)
     if len(machine.stages) == 1:
         return 0 if stage is None else machine.stage_index(stage)
     if args.command in ("diagnose", "batch"):
         return None
-    if args.command in ("compare", "loop") and not args.fmu:
+    if args.command in ("compare", "discover", "loop") and not args.fmu:
         if stage is None:
             return None  # the machine's own model, every stage
         raise UsageError(f"--stage {stage}: {args.command} fits that stage's pair model: give "

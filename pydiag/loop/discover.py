@@ -37,6 +37,7 @@ import multiprocessing as mp
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Callable
 
@@ -46,7 +47,7 @@ from fmu_build import build_fmu
 from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.effects import EFFECTS, model_file
+from pydiag.gear.effects import EFFECTS, Effect, model_file
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import settle
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
@@ -114,23 +115,34 @@ def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
                      time.perf_counter() - started, h.confident)
 
 
-def _shared_halves(problem: FitProblem, base: Comparison, keys: list[str],
-                   estimator: FaultEstimator) -> dict:
+def shared_halves(problem: FitProblem, base: Comparison, keys: list[str],
+                  estimator: FaultEstimator, catalogue: Mapping[str, Effect] = EFFECTS) -> dict:
     """What every effect's held-out test shares (:class:`pydiag.loop.held_out.Halves`), made
     once here for the workers; empty when it cannot be made (each effect's row then says
     why). The base polished free, which every effect that frees the base is scored
-    against, is made here too when two or more such effects may need it."""
+    against, is made here too when two or more such effects may need it. ``catalogue``:
+    the effects as the model names them (a machine's stage's)."""
     try:
-        bands = {envelope_band(problem, EFFECTS[key]) for key in keys}
+        bands = {envelope_band(problem, catalogue[key]) for key in keys}
         shared = {band: halves(problem, base, band, with_base_signals=True) for band in bands}
-        freeing = [key for key in keys if EFFECTS[key].reshapes_base
-                   and not EFFECTS[key].unknown_lines(problem.kinematics)]
+        freeing = [key for key in keys if catalogue[key].reshapes_base
+                   and not catalogue[key].unknown_lines(problem.kinematics)]
         if len(freeing) >= 2:
-            band = envelope_band(problem, EFFECTS[freeing[0]])
+            band = envelope_band(problem, catalogue[freeing[0]])
             shared[band].free_base(estimator, dict(base.parameters))
         return shared
     except PydiagError:
         return {}
+
+
+def discovery_cost(effect: Effect) -> int:
+    """How long an effect's held-out fit takes, in rough units, so the longest start first
+    and the short ones fill the cores at the end: one that is not synchronous is simulated
+    over the whole record, the others over one period (twice the weight), one that
+    reshapes the base is polished with the base parameters free as well, and one with a
+    free start polished so twice."""
+    return (2 * (not effect.synchronous) + effect.reshapes_base
+            + (effect.free_start is not None))
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
@@ -154,12 +166,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
         raise UsageError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(EFFECTS)}")
     base = base or compare(problem, estimator)
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
-    # the longest first, so the short ones fill the cores at the end: an effect that is not
-    # synchronous is simulated over the whole record, the others over one period (twice
-    # the weight), one that reshapes the base is polished with the base parameters free
-    # as well, and one with a free start polished so twice
-    keys.sort(key=lambda key: -(2 * (not EFFECTS[key].synchronous) + EFFECTS[key].reshapes_base
-                                + (EFFECTS[key].free_start is not None)))
+    keys.sort(key=lambda key: -discovery_cost(EFFECTS[key]))  # the longest first
     fmus: dict[str, str] = {}
     found: list[Discovery] = []
     for key in keys:  # built in this process: two workers must not build one FMU at once
@@ -173,7 +180,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
                 progress(found[-1])
     keys = [key for key in keys if key in fmus]
     effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
-    memo = _shared_halves(problem, base, keys, effect_estimator)
+    memo = shared_halves(problem, base, keys, effect_estimator)
     cores = effect_estimator.n_workers or os.cpu_count() or 1
     jobs = min(cores, len(keys))
     if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children

@@ -188,6 +188,18 @@ def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
     return composed.name
 
 
+def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
+    """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine`` (every line
+    it would fit is another's of the stage: a 32-tooth pinion driving 96 has no pinion
+    order that is not also one of its gear's), or "" when it has."""
+    effect = EFFECTS[key]
+    kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
+    if effect.parameters and not effect.bounds([], 0.0, kin):
+        return (f"{key} has nothing to fit on {machine.stages[k].name} (its lines are all "
+                "another's of the stage's)")
+    return ""
+
+
 def _effect_parameters(machine: Machine, k: int, instance: str
                        ) -> tuple[list[Parameter], dict[str, float]]:
     """Stage ``k``'s effects' parameters as ``<instance>.<name>`` (ranges as the stage's
@@ -197,11 +209,9 @@ def _effect_parameters(machine: Machine, k: int, instance: str
     fitted, fixed = [], {}
     for e in (stage_effect(EFFECTS[s.key], instance, ()) for s in machine.effects
               if s.stage == k):
+        if why := nothing_to_fit(machine, k, e.key):
+            raise UsageError(f"{machine.source}: effects: {why}")
         chosen = e.bounds([], 0.0, kin)
-        if e.parameters and not chosen:
-            raise UsageError(f"{machine.source}: effects: {e.key} has nothing to fit on "
-                             f"{machine.stages[k].name} (its lines are all another's of the "
-                             "stage's)")
         names = {p.fmu_variable for p in chosen}
         fixed.update({name: value for name, value in e.neutral_values().items()
                       if name not in names})

@@ -201,6 +201,12 @@ class Discovery:
     n_parameters: int = 0  # the parameters it declares (its hint may fit fewer)
     elapsed_s: float = 0.0  # wall time of its build, fit and test
     confident: bool = False  # held out confident, and no competitor close to it
+    stage: str | None = None  # the machine's stage it was tried on (a machine's model)
+
+    @property
+    def label(self) -> str:
+        """Its effect, with the stage it was tried on: "gear_tooth_fault on output stage"."""
+        return self.effect if self.stage is None else f"{self.effect} on {self.stage}"
 
     @property
     def z(self) -> float:
@@ -215,7 +221,8 @@ class Discovery:
         def number(v: float | None) -> float | None:
             return None if v is None or not math.isfinite(v) else float(v)
         reduction = (1 - h.error_effect / h.error_base if h and h.error_base > 0 else None)
-        return {"effect": self.effect, "status": self.status.value, "message": self.message,
+        return {"effect": self.effect, "stage": self.stage, "status": self.status.value,
+                "message": self.message,
                 "z": number(h.z if h else None),
                 "delta_bic": number(h.delta_bic if h else None),
                 "error": number(h.error_effect if h else None),

@@ -232,6 +232,62 @@ def test_the_effect_the_box_has_is_confirmed_held_out_on_each_stage(tmp_path):
     assert "mesh_stiffness_shape on stage 2" in r.stdout
 
 
+BOX = ('name = "short box"\ninput_rpm = 1500\n'
+       '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
+       '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
+
+
+def test_discover_tries_an_effect_on_every_stage_of_the_machines_model(tmp_path, capsys):
+    """discover --machine without --fmu: the effect asked for, tried held out on each stage
+    of the machine's own model (a row a stage, named for it, in the text and the JSON);
+    where it has nothing to fit (every order of the 18-tooth pinion driving 36 is also one
+    of its gear's) it is not tried, and says why. An effect no stage can have, and --stage
+    without --fmu, are one line each."""
+    import json
+    rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
+    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
+    machine.write_text(BOX)
+    common = ("discover", "--measurement", str(rec), "--machine", str(machine), "--speed",
+              "mesh", "--build-dir", str(tmp_path / "build"), "--quiet")
+    from pydiag.app.cli import main
+    assert main([*common, "--effects", "pinion_shaft_orders", "--particles", "6", "--iterations",
+                 "2", "--polish", "10", "--json", str(tmp_path / "d.json")]) == 0
+    out = capsys.readouterr().out
+    rows = json.loads((tmp_path / "d.json").read_text())["ranking"]
+    assert [(d["effect"], d["stage"]) for d in rows] == [
+        ("pinion_shaft_orders", "stage 2"), ("pinion_shaft_orders", "stage 1")]
+    assert rows[0]["z"] is not None and rows[1]["status"] == "not tried"
+    assert "pinion_shaft_orders has nothing to fit on stage 1" in rows[1]["message"]
+    assert "pinion_shaft_orders on stage 2" in out
+    assert "not an effect a stage of a machine's model can have: housing_sensor" in refused(
+        capsys, *common, "--effects", "housing_sensor")
+    assert "--stage 2: discover fits that stage's pair model: give it with --fmu" in refused(
+        capsys, *common, "--stage", "2")
+
+
+@pytest.mark.slow
+def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
+    """discover on the machine's own model, every effect the stages can have: the stiffness
+    wave's even harmonics (the box's meshes have harmonics 1, 1/2, 1/3 at phases of their
+    own) rank first on stage 1 and second on stage 2, both confident (an effect on one
+    stage does not compete with itself on the other), nothing else confident: what compare
+    and the loop find, without the residual's pointing."""
+    from pydiag.loop.effect_fit import EFFECT_REFIT
+    from pydiag.loop.machine_discover import discover_machine
+    from pydiag.loop.machine_model import compare_machine
+    m = gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE)
+    speed = machine_speed(m, SHORT_MACHINE, INPUT_HZ, SpeedSettings("mesh"))
+    model, built = machine_fmu(SHORT_MACHINE, MODELICA, tmp_path)
+    problem = machine_problem(built.fmu, model, m, SHORT_MACHINE, speed)
+    base = compare_machine(problem, model, FaultEstimator(), FaultEstimator(**EFFECT_REFIT))
+    found = discover_machine(problem, SHORT_MACHINE, model, base,
+                             lambda machine: str(machine_fmu(machine, MODELICA, tmp_path)[1].fmu))
+    assert [(d.effect, d.stage) for d in found[:2]] == [("mesh_stiffness_shape", "stage 1"),
+                                                        ("mesh_stiffness_shape", "stage 2")]
+    assert [d.confident for d in found[:2]] == [True, True]
+    assert not any(d.confident for d in found[2:]), found[2:]
+
+
 @pytest.mark.slow
 def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
     """pydiag loop --machine without --fmu: the stiffness wave's even harmonics accepted on

@@ -1,0 +1,152 @@
+"""discover on a machine's own model: every effect a stage can have and does not have yet,
+tried held out on every stage, and ranked.
+
+For each stage, the model's problem is seen from that stage's shafts
+(:func:`~pydiag.loop.machine_model.stage_view`) with the catalogue named for it
+(:func:`~pydiag.loop.machine_model.stage_effects`); each effect the stage lacks is fitted
+on half of the periods on the model with it on that stage and scored on the other half
+(:func:`pydiag.loop.held_out.held_out`), whatever its score on the residual (compare
+tries only those its residual points to). The models are built here, one after the
+other; the fits run side by side, one per core, as :func:`pydiag.loop.discover.discover`
+runs a pair's, the longest first. Competitors are settled stage by stage: two effects on
+one stage claim the same lines, the same effect on two stages does not.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import multiprocessing as mp
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Callable
+
+from fmu_build import ModelicaBuildError as BuildError
+
+from pydiag.core.errors import PydiagError, UsageError
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import FitProblem
+from pydiag.gear.effects import EFFECTS
+from pydiag.gear.machine import Machine, StageEffect
+from pydiag.loop.compare import compare
+from pydiag.loop.competition import settle
+from pydiag.loop.discover import discovery_cost, shared_halves
+from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
+from pydiag.loop.held_out import held_out
+from pydiag.loop.machine_model import (MachineModel, nothing_to_fit, on_a_stage,
+                                       stage_effects, stage_view)
+from pydiag.loop.results import Comparison, Discovery, Status
+
+
+@dataclasses.dataclass(frozen=True)
+class _Stage:
+    """What every effect tried on one stage shares: its view of the problem, the
+    comparison seen from it, the held-out halves."""
+
+    view: FitProblem
+    seen: Comparison
+    memo: dict
+
+
+def _try_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key: str,
+                  fmu: str, estimator: FaultEstimator) -> Discovery:
+    """The effect ``key`` on stage ``index`` (called ``name``) held out, as a row. Takes
+    the key, not the effect (whose hints are closures): it runs in a worker process."""
+    started = time.perf_counter()
+    effect = stage_effects(model, index)[key]
+    try:
+        h = held_out(stage.view, stage.seen, effect, fmu, estimator, memo=stage.memo)
+    except PydiagError as err:
+        return Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
+                         n_parameters=len(effect.parameters),
+                         elapsed_s=time.perf_counter() - started, stage=name)
+    return Discovery(key, h.status, h.message, h, len(effect.parameters),
+                     time.perf_counter() - started, h.confident, stage=name)
+
+
+def check_effects(effects: list[str] | None) -> None:
+    """A UsageError naming those of ``effects`` no stage of a machine's model can have
+    (:func:`~pydiag.loop.machine_model.on_a_stage`), before any work."""
+    allowed = [key for key, effect in EFFECTS.items() if on_a_stage(effect)]
+    unknown = [key for key in effects or () if key not in allowed]
+    if unknown:
+        raise UsageError(f"not an effect a stage of a machine's model can have: "
+                         f"{', '.join(unknown)} ({', '.join(allowed)})")
+
+
+def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
+                     base: Comparison, effect_model: Callable[[Machine], str],
+                     estimator: FaultEstimator | None = None, effects: list[str] | None = None,
+                     progress: Callable[[Discovery], None] | None = None) -> list[Discovery]:
+    """Every effect of ``effects`` (default: the catalogue) that a stage can have and lacks,
+    tried on every stage of ``machine``'s model (``problem``, fitted as ``base``), ranked by
+    held-out z (module docstring). ``effect_model``: the FMU of a machine (the machine with
+    one more effect); ``estimator``: each effect's fit (default
+    :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`), its ``n_workers`` the cores the fits
+    share; ``progress`` gets each row as it is done."""
+    check_effects(effects)
+    estimator = estimator or FaultEstimator(**EFFECT_REFIT)
+    catalogues = [stage_effects(model, k) for k in range(len(machine.stages))]
+    views = [stage_view(problem, machine, k) for k in range(len(machine.stages))]
+    tasks = [(k, key) for k, catalogue in enumerate(catalogues) for key, effect in
+             catalogue.items() if (not effects or key in effects)
+             and not in_model(views[k], effect)]
+    tasks.sort(key=lambda task: -discovery_cost(catalogues[task[0]][task[1]]))
+    found: list[Discovery] = []
+    fmus: dict[tuple[int, str], str] = {}
+    for k, key in tasks:  # built here: two workers must not build one model at once
+        started = time.perf_counter()
+        if why := nothing_to_fit(machine, k, key):
+            found.append(Discovery(key, Status.NOT_TRIED, f"{Status.NOT_TRIED.value}: {why}",
+                                   n_parameters=len(EFFECTS[key].parameters),
+                                   stage=machine.stages[k].name))
+            if progress:
+                progress(found[-1])
+            continue
+        try:
+            fmus[k, key] = effect_model(dataclasses.replace(
+                machine, effects=machine.effects + (StageEffect(key, k),)))
+        except (PydiagError, BuildError) as err:
+            found.append(Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
+                                   elapsed_s=time.perf_counter() - started,
+                                   stage=machine.stages[k].name))
+            if progress:
+                progress(found[-1])
+    tasks = [task for task in tasks if task in fmus]
+    stages = {}
+    for k in sorted({k for k, _ in tasks}):
+        seen = compare(views[k], None, base.false_alarm_rate, base.n_periods,
+                       parameters=base.parameters, effects=catalogues[k])
+        keys = [key for j, key in tasks if j == k]
+        stages[k] = _Stage(views[k], seen, shared_halves(views[k], seen, keys, estimator,
+                                                         catalogues[k]))
+    cores = estimator.n_workers or os.cpu_count() or 1
+    jobs = min(cores, len(tasks))
+    name = [s.name for s in machine.stages]
+    if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
+        for k, key in tasks:
+            found.append(_try_on_stage(stages[k], model, k, name[k], key, fmus[k, key],
+                                       estimator))
+            if progress:
+                progress(found[-1])
+    else:
+        one = estimator.replace(n_workers=cores, progress=None)
+        with ProcessPoolExecutor(jobs) as pool:
+            running = {pool.submit(_try_on_stage, stages[k], model, k, name[k], key,
+                                   fmus[k, key], one): (k, key) for k, key in tasks}
+            rows = {}
+            for task in as_completed(running):
+                rows[running[task]] = task.result()
+                if progress:
+                    progress(rows[running[task]])
+        found += [rows[task] for task in tasks]
+    for k, stage in stages.items():
+        mine = [d for d in found if d.stage == name[k]]
+        beaten = settle({d.effect: d.held_out for d in mine if d.held_out is not None},
+                        {s.effect: s.competing for s in stage.seen.suggested_effects})
+        for d in mine:
+            if d.effect in beaten:
+                d.confident, d.status, d.message = False, Status.OUTCOMPETED, beaten[d.effect]
+    found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
+    return found
