@@ -165,16 +165,16 @@ def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarra
 def pressed_bounds(parameters: tuple[Parameter, ...], x: np.ndarray,
                    error: Callable[[np.ndarray], float], names: set[str]) -> list[str]:
     """Those of ``names`` among ``parameters`` (at ``x``, the fit) at a bound of their range
-    that the fit presses against: within AT_BOUND of it (a low of 0, the effect off, and
-    an angle do not count), and a step of BOUND_PROBE of the range inward raises ``error``
-    by more than BOUND_PRESSURE of it. A parameter the error hardly depends on there is
-    undetermined, not saturated: where its fit stops is the rounding's (a housing mode's
-    damping above the band's lines), and a verdict must not hang on it."""
+    that the fit presses against: within AT_BOUND of it (a low of 0, the effect off, an
+    angle and a tooth's index do not count), and a step of BOUND_PROBE of the range
+    inward raises ``error`` by more than BOUND_PRESSURE of it. A parameter the error hardly
+    depends on there is undetermined, not saturated: where its fit stops is the rounding's
+    (a housing mode's damping above the band's lines), and a verdict must not hang on it."""
     x = np.asarray(x, dtype=float)
-    fitted = None
+    at_fit = None
     out = []
     for i, p in enumerate(parameters):
-        if p.periodic or p.name not in names:
+        if p.periodic or p.step is not None or p.name not in names:
             continue
         margin = AT_BOUND * (p.high - p.low)
         if x[i] >= p.high - margin:
@@ -183,10 +183,10 @@ def pressed_bounds(parameters: tuple[Parameter, ...], x: np.ndarray,
             inward = BOUND_PROBE * (p.high - p.low)
         else:
             continue
-        fitted = error(x) if fitted is None else fitted
+        at_fit = error(x) if at_fit is None else at_fit
         probe = x.copy()
         probe[i] += inward
-        if error(probe) > fitted * (1 + BOUND_PRESSURE):
+        if error(probe) > at_fit * (1 + BOUND_PRESSURE):
             out.append(p.name)
     return out
 

@@ -82,11 +82,6 @@ DEFAULT_OUTPUT = "acc"
 #: The outputs of a stage a sensor may measure.
 STAGE_OUTPUTS = ("acc", "disp")
 _UNITS = {"acc": "m/s2", "disp": "m"}
-#: How far a shaft of the machine's model twists under the torque it carries, rad: a shaft
-#: sized for its torque (a design limit of a quarter of a degree to a degree a metre).
-SHAFT_TWIST_RAD = 0.00005
-#: Damping ratio of a shaft's torsional mode between the bodies on its ends.
-SHAFT_DAMPING = 0.05
 
 
 def _identifier(text: str, fallback: str, taken: set[str]) -> str:

@@ -231,7 +231,7 @@ def test_a_bound_saturates_only_where_the_fit_presses_against_it():
     record asks for more than the range allows); one the error hardly depends on there
     (a housing mode's damping, with every line below the mode) does not, so the verdict
     does not hang on where rounding stopped its fit. A bound of 0 (the effect off), an
-    angle and a parameter not the effect's are never saturated."""
+    angle, a tooth's index and a parameter not the effect's are never saturated."""
     params = (Parameter("runout", 0.0, 50e-6), Parameter("zeta", 0.005, 0.5),
               Parameter("phase", 0.0, 6.3, periodic=True), Parameter("a0", 0.01, 0.9))
     names = {"runout", "zeta", "phase"}
@@ -250,3 +250,5 @@ def test_a_bound_saturates_only_where_the_fit_presses_against_it():
     assert pressed_bounds(params, at, steep, names) == ["zeta"]
     zero = (Parameter("runout", 0.0, 50e-6),)
     assert pressed_bounds(zero, np.array([0.0]), lambda x: 1.0 + 1e4 * x[0], {"runout"}) == []
+    tooth = (Parameter("tooth", 0.5, 13.5, step=1.0),)
+    assert pressed_bounds(tooth, np.array([13.5]), lambda x: 2.0 - x[0], {"tooth"}) == []
