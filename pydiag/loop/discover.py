@@ -145,6 +145,38 @@ def discovery_cost(effect: Effect) -> int:
             + (effect.free_start is not None))
 
 
+def side_by_side(call: Callable[[object, FaultEstimator], tuple[Callable, tuple]],
+                 tasks: list, estimator: FaultEstimator,
+                 progress: Callable[[Discovery], None] | None) -> list[Discovery]:
+    """The row of each task, in the tasks' order: ``call(task, estimator)`` says the
+    function and its arguments, run one task a core (``estimator.n_workers``, default all
+    cores), each fit free to use every core (module docstring); in this process when one
+    core is given or in a daemonic process, which may not start children. ``progress``
+    gets each row as it is done."""
+    cores = estimator.n_workers or os.cpu_count() or 1
+    jobs = min(cores, len(tasks))
+    if jobs <= 1 or mp.current_process().daemon:
+        rows = []
+        for task in tasks:
+            function, args = call(task, estimator)
+            rows.append(function(*args))
+            if progress:
+                progress(rows[-1])
+        return rows
+    one = estimator.replace(n_workers=cores, progress=None)
+    done: dict[int, Discovery] = {}
+    with ProcessPoolExecutor(jobs) as pool:
+        running = {}
+        for i, task in enumerate(tasks):
+            function, args = call(task, one)
+            running[pool.submit(function, *args)] = i
+        for future in as_completed(running):
+            done[running[future]] = future.result()
+            if progress:
+                progress(done[running[future]])
+    return [done[i] for i in range(len(tasks))]
+
+
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
              effects: list[str] | None = None,
              modelica_root: Path = MODELICA_ROOT, build_dir: Path | None = None,
@@ -181,24 +213,8 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     keys = [key for key in keys if key in fmus]
     effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
     memo = shared_halves(problem, base, keys, effect_estimator)
-    cores = effect_estimator.n_workers or os.cpu_count() or 1
-    jobs = min(cores, len(keys))
-    if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
-        for key in keys:
-            found.append(_try_effect(problem, base, key, fmus[key], effect_estimator, memo))
-            if progress:
-                progress(found[-1])
-    else:
-        one = effect_estimator.replace(n_workers=cores, progress=None)
-        with ProcessPoolExecutor(jobs) as pool:
-            tasks = {pool.submit(_try_effect, problem, base, key, fmus[key], one, memo): key
-                     for key in keys}
-            rows = {}
-            for task in as_completed(tasks):
-                rows[tasks[task]] = task.result()
-                if progress:
-                    progress(rows[tasks[task]])
-        found += [rows[key] for key in keys]
+    found += side_by_side(lambda key, estimator: (_try_effect, (
+        problem, base, key, fmus[key], estimator, memo)), keys, effect_estimator, progress)
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     beaten = settle({d.effect: d.held_out for d in found if d.held_out is not None},
                     {s.effect: s.competing for s in base.suggested_effects})

@@ -16,10 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import multiprocessing as mp
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable
 
 from fmu_build import ModelicaBuildError as BuildError
@@ -31,7 +28,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine, StageEffect
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import settle
-from pydiag.loop.discover import discovery_cost, shared_halves
+from pydiag.loop.discover import discovery_cost, shared_halves, side_by_side
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
 from pydiag.loop.held_out import held_out
 from pydiag.loop.machine_model import (MachineModel, nothing_to_fit, on_a_stage,
@@ -121,26 +118,10 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         keys = [key for j, key in tasks if j == k]
         stages[k] = _Stage(views[k], seen, shared_halves(views[k], seen, keys, estimator,
                                                          catalogues[k]))
-    cores = estimator.n_workers or os.cpu_count() or 1
-    jobs = min(cores, len(tasks))
     name = [s.name for s in machine.stages]
-    if jobs <= 1 or mp.current_process().daemon:  # a daemonic process may not start children
-        for k, key in tasks:
-            found.append(_try_on_stage(stages[k], model, k, name[k], key, fmus[k, key],
-                                       estimator))
-            if progress:
-                progress(found[-1])
-    else:
-        one = estimator.replace(n_workers=cores, progress=None)
-        with ProcessPoolExecutor(jobs) as pool:
-            running = {pool.submit(_try_on_stage, stages[k], model, k, name[k], key,
-                                   fmus[k, key], one): (k, key) for k, key in tasks}
-            rows = {}
-            for task in as_completed(running):
-                rows[running[task]] = task.result()
-                if progress:
-                    progress(rows[running[task]])
-        found += [rows[task] for task in tasks]
+    found += side_by_side(lambda task, one: (_try_on_stage, (
+        stages[task[0]], model, task[0], name[task[0]], task[1], fmus[task], one)), tasks,
+        estimator, progress)
     for k, stage in stages.items():
         mine = [d for d in found if d.stage == name[k]]
         beaten = settle({d.effect: d.held_out for d in mine if d.held_out is not None},
