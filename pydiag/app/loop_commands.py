@@ -64,7 +64,8 @@ def _machine_models(args) -> Callable[[Machine], tuple[MachineModel, BuiltModel]
 
 
 def _machine(args) -> Machine:
-    """The machine compare or loop fit the own model of without --fmu (--machine)."""
+    """The machine whose own model compare, discover or loop fit without --fmu
+    (--machine)."""
     machine = getattr(args, "machine_description", None)
     if machine is None:
         raise UsageError(f"give --fmu, or --machine FILE to {args.command} the machine's own "

@@ -94,25 +94,34 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> 
     return out
 
 
-def _failed(key: str, err: Exception, started: float) -> Discovery:
-    """The row of an effect that could not be built or fitted."""
+def failed_row(key: str, err: Exception, started: float, stage: str | None = None
+               ) -> Discovery:
+    """The row of an effect (on ``stage`` of a machine's model) that could not be built or
+    fitted."""
     return Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
                      n_parameters=len(EFFECTS[key].parameters),
-                     elapsed_s=time.perf_counter() - started)
+                     elapsed_s=time.perf_counter() - started, stage=stage)
+
+
+def held_out_row(problem: FitProblem, base: Comparison, effect: Effect, fmu: str,
+                 estimator: FaultEstimator, memo: dict | None = None,
+                 stage: str | None = None) -> Discovery:
+    """``effect`` (on ``stage`` of a machine's model) held out, as a row; an effect that
+    cannot be fitted is a row too."""
+    started = time.perf_counter()
+    try:
+        h = held_out(problem, base, effect, fmu, estimator, memo=memo)
+    except PydiagError as err:
+        return failed_row(effect.key, err, started, stage)
+    return Discovery(effect.key, h.status, h.message, h, len(effect.parameters),
+                     time.perf_counter() - started, h.confident, stage=stage)
 
 
 def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
                 estimator: FaultEstimator, memo: dict | None = None) -> Discovery:
-    """One effect held out, as a row (an effect that cannot be fitted is a row too).
-    Takes the effect's key, not the effect: it runs in a worker process."""
-    started = time.perf_counter()
-    effect = EFFECTS[key]
-    try:
-        h = held_out(problem, base, effect, fmu, estimator, memo=memo)
-    except PydiagError as err:
-        return _failed(key, err, started)
-    return Discovery(key, h.status, h.message, h, len(effect.parameters),
-                     time.perf_counter() - started, h.confident)
+    """:func:`held_out_row` of the effect ``key``. Takes the effect's key, not the effect:
+    it runs in a worker process."""
+    return held_out_row(problem, base, EFFECTS[key], fmu, estimator, memo)
 
 
 def shared_halves(problem: FitProblem, base: Comparison, keys: list[str],
@@ -207,7 +216,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
             fmus[key] = (str(effect_fmu(key, modelica_root, build_dir))
                          if EFFECTS[key].own_fmu else problem.spec.fmu_path)
         except (PydiagError, BuildError) as err:  # its row, not built again
-            found.append(_failed(key, err, started))
+            found.append(failed_row(key, err, started))
             if progress:
                 progress(found[-1])
     keys = [key for key in keys if key in fmus]

@@ -28,9 +28,9 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine, StageEffect
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import settle
-from pydiag.loop.discover import discovery_cost, shared_halves, side_by_side
+from pydiag.loop.discover import (discovery_cost, failed_row, held_out_row, shared_halves,
+                                  side_by_side)
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
-from pydiag.loop.held_out import held_out
 from pydiag.loop.machine_model import (MachineModel, nothing_to_fit, on_a_stage,
                                        stage_effects, stage_view)
 from pydiag.loop.results import Comparison, Discovery, Status
@@ -48,18 +48,11 @@ class _Stage:
 
 def _try_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key: str,
                   fmu: str, estimator: FaultEstimator) -> Discovery:
-    """The effect ``key`` on stage ``index`` (called ``name``) held out, as a row. Takes
-    the key, not the effect (whose hints are closures): it runs in a worker process."""
-    started = time.perf_counter()
-    effect = stage_effects(model, index)[key]
-    try:
-        h = held_out(stage.view, stage.seen, effect, fmu, estimator, memo=stage.memo)
-    except PydiagError as err:
-        return Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
-                         n_parameters=len(effect.parameters),
-                         elapsed_s=time.perf_counter() - started, stage=name)
-    return Discovery(key, h.status, h.message, h, len(effect.parameters),
-                     time.perf_counter() - started, h.confident, stage=name)
+    """:func:`~pydiag.loop.discover.held_out_row` of the effect ``key`` on stage ``index``
+    (called ``name``). Takes the key, not the effect (whose hints are closures): it runs in
+    a worker process."""
+    return held_out_row(stage.view, stage.seen, stage_effects(model, index)[key], fmu,
+                        estimator, stage.memo, name)
 
 
 def check_effects(effects: list[str] | None) -> None:
@@ -105,9 +98,7 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
             fmus[k, key] = effect_model(dataclasses.replace(
                 machine, effects=machine.effects + (StageEffect(key, k),)))
         except (PydiagError, BuildError) as err:
-            found.append(Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
-                                   elapsed_s=time.perf_counter() - started,
-                                   stage=machine.stages[k].name))
+            found.append(failed_row(key, err, started, machine.stages[k].name))
             if progress:
                 progress(found[-1])
     tasks = [task for task in tasks if task in fmus]

@@ -34,9 +34,8 @@ What the residual points to on each stage is tried held out as on a pair
 The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
 shaft's torsion between two stages (``GearDiag.Components.Shaft``,
 ``GearDiag.Examples.TwoStageGearbox``) couples them, but without the machine's inertias and
-shaft stiffnesses it puts torsional modes at made-up frequencies: with a shaft sized to
-twist 0.3 degree under its torque, the test box's error rose from 0.19 to 0.32 and the
-PHM09 records' stayed within 0.01 (``docs/gearbox.md``).
+shaft stiffnesses it puts torsional modes at made-up frequencies, and fitted no better
+(measured in ``bench/RESULTS.md`` section 13, ``docs/gearbox.md``).
 
 One concern: the machine's model (written, built, fitted, its effects tried and
 accepted); the pair's loop is the rest of this package, which it calls.

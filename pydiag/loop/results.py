@@ -28,6 +28,11 @@ class Status(str, Enum):
     OUTCOMPETED = "outcompeted"  # confirmed, but a competitor explains its lines as well
 
 
+def labelled(effect: str, stage: str | None) -> str:
+    """An effect's key, with the machine's stage it is on when it is one's."""
+    return effect if stage is None else f"{effect} on {stage}"
+
+
 @dataclass
 class HeldOut:
     """An effect fitted on half A of the record and scored on half B
@@ -134,7 +139,7 @@ class Suggestion:
     @property
     def label(self) -> str:
         """Its effect, with the stage it would go on: "gear_tooth_fault on output stage"."""
-        return self.effect if self.stage is None else f"{self.effect} on {self.stage}"
+        return labelled(self.effect, self.stage)
 
     @property
     def shown(self) -> bool:
@@ -206,7 +211,7 @@ class Discovery:
     @property
     def label(self) -> str:
         """Its effect, with the stage it was tried on: "gear_tooth_fault on output stage"."""
-        return self.effect if self.stage is None else f"{self.effect} on {self.stage}"
+        return labelled(self.effect, self.stage)
 
     @property
     def z(self) -> float:
