@@ -79,7 +79,7 @@ def main() -> int:
         seen[path.name] = (int(case), hz, load, record, time.perf_counter() - started,
                            tacho.speed_hz, model)
     print(f"{'record':<24}{'tacho Hz':>10}{'mesh Hz':>10}{'err %':>9}{'conf dB':>8}  "
-          f"{'stage 1':<22}{'stage 2':<22}{'label':<18}{'s':>5}")
+          f"{'stage 1':<22}{'stage 2':<22}{'thr dB':>7}  {'label':<18}{'s':>5}")
     right = total = model_right = model_total = 0
     models = []
     for name, (case, hz, load, record, took, tacho_hz, model) in seen.items():
@@ -93,13 +93,14 @@ def main() -> int:
                 model_right += sum((m == "healthy") == (lab == "healthy")
                                    for m, lab in zip(model, LABELS[case]))
         speed = record.speed
-        cells = []
+        cells, threshold = [], ""
         if baselines:
             verdicts, _ = judge_stages(machine, record, baselines)
             cells = [f"{'changed' if v.changed else 'healthy'}"
                      f"{', ' + v.suspect if v.suspect else ''} "
                      f"{max(abs(v.pinion.change_db), abs(v.gear.change_db)):.1f}dB"
                      for v in verdicts]
+            threshold = f"{verdicts[0].threshold_db:.2f}"
             label = LABELS.get(case)
             if label:
                 total += 2
@@ -110,7 +111,7 @@ def main() -> int:
         cells = cells or ["no baseline", ""]
         print(f"{name[:23]:<24}{tacho_hz:>10.4f}{speed.speed_hz:>10.4f}"
               f"{100 * (speed.speed_hz / tacho_hz - 1):>+9.4f}{speed.confidence_db:>8.1f}  "
-              f"{cells[0]:<22}{cells[1]:<22}{label_text:<18}{took:>5.1f}")
+              f"{cells[0]:<22}{cells[1]:<22}{threshold:>7}  {label_text:<18}{took:>5.1f}")
     if total:
         print(f"stage verdicts as labelled: {right} of {total}")
     if models:

@@ -5,19 +5,26 @@ Every shaft's time-synchronous average (TSA) is taken from the record order-trac
 shaft (:mod:`pydiag.gear.speed`), in every channel, with the harmonics of every mesh on it
 and their first sidebands taken as regular (an intermediate shaft carries two gears), and
 so are another stage's mesh harmonics that fall on the shaft's orders (they survive its
-TSA). The
-measure of change is the **residual energy** of a shaft's TSA (what is left when the
-shaft's first two orders and its meshes are removed: a local tooth fault, an eccentric
-gear's sidebands): its level in dB against the baseline's, averaged over the channels.
+TSA). A faster shaft that turns a whole number n of times per turn of this one (the PHM09
+box's input, 3 turns an idler turn) survives its TSA too, on every n-th order: those lines
+are the faster shaft's and are left out of this one's residual (a chipped input pinion
+changes the input shaft, not the idler). The measure of change is the **residual energy**
+of a shaft's TSA (what is left when the shaft's first two orders, its meshes and the faster
+shafts' lines are removed: a local tooth fault, an eccentric gear's sidebands): its level
+in dB against the baseline's, averaged over the channels.
 
 How much two healthy records of the machine differ is estimated from the baselines
 themselves: the residual energy of each half of a baseline against the other half, and,
 with two or more baselines, of each baseline against the others, pooled over every shaft
 and channel as a root mean square (``spread_db``). A stage is **changed** when one of its
-two shafts' change (up or down) exceeds ``K_SPREAD`` times that spread; its ``suspect`` is the shaft
-whose change stands higher than the other's by more than the same margin (null: neither
-clearly does). Without a baseline nothing is judged: there is no absolute scale of a real
-machine's residual energy.
+two shafts' change (up or down) exceeds ``K_SPREAD`` times that spread; its ``suspect`` is
+the shaft whose change stands higher than the other's by more than the same margin (null:
+neither clearly does). Where a faster shaft turns a whole number of times per turn of the
+slower one, the slower shaft's fault reaches the faster shaft's TSA on their common lines
+(a local fault's lines cover every order), so a change of both is no evidence against
+the slower one: the suspect stays null unless one stands clearly higher. Without a
+baseline nothing is judged: there is no absolute scale of a real machine's residual
+energy.
 """
 
 from __future__ import annotations
@@ -95,6 +102,14 @@ def _synchronous_meshes(machine: Machine, shaft: int) -> tuple[int, ...]:
     return tuple(found)
 
 
+def _faster_shafts(machine: Machine, shaft: int) -> tuple[int, ...]:
+    """The turns per turn of shaft ``shaft`` of the shafts that turn a whole number (>= 2)
+    of times per turn of it: their lines survive its TSA (module docstring)."""
+    own = machine.shaft_ratio(shaft)
+    ratios = (machine.shaft_ratio(j) / own for j in range(len(machine.shafts)) if j != shaft)
+    return tuple(sorted({r.numerator for r in ratios if r.denominator == 1 and r > 1}))
+
+
 def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEstimate,
                   drop: tuple[str, ...] = ()) -> list[ShaftRecord]:
     """Every shaft's TSA of every channel but ``drop`` (module docstring), from the input
@@ -105,6 +120,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         speed_hz = estimate.speed_hz * ratio
         teeth = _teeth_on(machine, index)
         others = _synchronous_meshes(machine, index)
+        faster = _faster_shafts(machine, index)
         samples_per_rev = int(math.ceil(measurement.sample_rate_hz / speed_hz))
         if 1.5 * max(teeth) >= samples_per_rev / 2:
             raise MeasurementError(
@@ -120,7 +136,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         half = (n_revs // 2) * samples_per_rev
         for channel, x in zip(names, tracked):
             parts = [tsa_signals(synchronous_average(y, samples_per_rev), teeth[-1],
-                                 other_meshes=teeth[:-1] + others)
+                                 other_meshes=teeth[:-1] + others, faster_shafts=faster)
                      for y in (x, x[:half], x[half:2 * half])]
             energy[channel] = float(np.var(parts[0].residual))
             halves[channel] = (float(np.var(parts[1].residual)),

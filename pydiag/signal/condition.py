@@ -15,6 +15,10 @@ that shaft:
 - difference signal: the TSA minus the regular signal;
 - residual signal: the TSA minus shaft orders 1..``shaft_orders`` and the mesh harmonics
   (the sidebands stay);
+- with ``faster_shafts`` (a gearbox's shafts that turn a whole number n of times per turn
+  of this one: their lines are every n-th order of its TSA, which does not average them
+  out), those orders are the other shafts', left out of the difference and residual
+  signals: a chipped input pinion is not the idler's fault;
 - envelope signal (NB4): the magnitude of the analytic signal of the TSA band-passed to
   orders (mesh_order/2, 3 mesh_order/2) around the first mesh harmonic.
 
@@ -58,11 +62,13 @@ class TsaSignals:
 
 
 def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDERS,
-                other_meshes: tuple[int, ...] = ()) -> TsaSignals:
+                other_meshes: tuple[int, ...] = (),
+                faster_shafts: tuple[int, ...] = ()) -> TsaSignals:
     """Regular, difference, residual and envelope signals of one revolution ``tsa`` of a
     shaft carrying ``mesh_order`` teeth; ``other_meshes``: the teeth of the shaft's other
     gears (an intermediate shaft of a gearbox carries two), whose mesh harmonics and first
-    sidebands are regular too."""
+    sidebands are regular too; ``faster_shafts``: the turns per turn of this one of the
+    shafts whose lines are not its own (module docstring)."""
     tsa = np.asarray(tsa, dtype=float)
     n = tsa.size
     if mesh_order < 2 or mesh_order >= n // 2:
@@ -76,6 +82,11 @@ def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDE
         sidebands |= ((orders + 1) % teeth == 0) | ((orders - 1) % teeth == 0)
     sidebands &= (orders > 1) & ~mesh
     shaft = (orders >= 1) & (orders <= shaft_orders)
+    foreign = np.zeros(orders.size, dtype=bool)
+    for turns in faster_shafts:
+        if turns < 2:
+            raise ValueError(f"a faster shaft turns a whole number >= 2 of times, got {turns}")
+        foreign |= orders % turns == 0
 
     def part(keep: np.ndarray) -> np.ndarray:
         return np.fft.irfft(np.where(keep, coeffs, 0), n)
@@ -85,8 +96,8 @@ def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDE
     analytic = np.fft.ifft(np.concatenate([np.where(band, 2 * coeffs, 0),
                                            np.zeros(n - coeffs.size)]))
     return TsaSignals(tsa=tsa - tsa.mean(), regular=regular,
-                      difference=part(~(mesh | sidebands | shaft) & (orders > 0)),
-                      residual=part(~(mesh | shaft) & (orders > 0)),
+                      difference=part(~(mesh | sidebands | shaft | foreign) & (orders > 0)),
+                      residual=part(~(mesh | shaft | foreign) & (orders > 0)),
                       envelope=np.abs(analytic), spectrum=2 * np.abs(coeffs) / n,
                       mesh_order=mesh_order)
 

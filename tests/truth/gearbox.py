@@ -25,9 +25,11 @@ SHORT_MACHINE = machine_from_dict({"name": "short-period test box",
 
 
 def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
-                   depth: float = 0.8, noise: float = 0.3, machine=MACHINE) -> Measurement:
+                   depth: float = 0.8, noise: float = 0.3, machine=MACHINE,
+                   also: tuple[tuple[int, int], ...] = ()) -> Measurement:
     """A record of ``machine`` at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2
-    output) carries a broken tooth of ``depth`` on stage ``stage``'s mesh."""
+    output) carries a broken tooth of ``depth`` on stage ``stage``'s mesh, and so does each
+    (shaft, stage) of ``also``."""
     MACHINE = machine  # noqa: N806 (the box the record is of)
     rng = np.random.default_rng(seed)
     n = int(FS * DURATION)
@@ -40,8 +42,10 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
         gain = np.ones(n)
         for shaft in (k, k + 1):
             gain += 0.1 * np.cos(2 * np.pi * float(MACHINE.shaft_ratio(shaft)) * revs + shaft)
-        if faulty_shaft is not None and k == stage:
-            angle = np.mod(float(MACHINE.shaft_ratio(faulty_shaft)) * revs, 1.0)
-            gain -= depth * np.exp(-0.5 * ((angle - 0.3) / 0.01) ** 2)
+        faults = ((faulty_shaft, stage),) if faulty_shaft is not None else ()
+        for shaft, on_stage in faults + also:
+            if on_stage == k:
+                angle = np.mod(float(MACHINE.shaft_ratio(shaft)) * revs, 1.0)
+                gain -= depth * np.exp(-0.5 * ((angle - 0.3) / 0.01) ** 2)
         x += gain * sum(np.cos(2 * np.pi * h * order * revs + h) / h for h in (1, 2, 3))
     return Measurement({"acc": x + noise * rng.standard_normal(n)}, FS)

@@ -3,7 +3,7 @@
 on one gear or none."""
 
 import pytest
-from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record as record
+from truth.gearbox import INPUT_HZ, MACHINE, SHORT_MACHINE, gearbox_record as record
 
 from pydiag.core.errors import MeasurementError
 from pydiag.gear.machine_indicators import judge_stages, machine_record, machine_report
@@ -40,3 +40,38 @@ def test_the_report_judges_nothing_without_a_baseline_and_is_plain_data():
     assert data["speed_hz"] == pytest.approx(INPUT_HZ * 0.99, rel=1e-3)
     with pytest.raises(MeasurementError, match="needs a baseline"):
         judge_stages(MACHINE, report.record, [])
+
+
+@pytest.fixture(scope="module")
+def short_baseline():
+    return machine_record(record(1, machine=SHORT_MACHINE), SHORT_MACHINE,
+                          SpeedSettings("mesh"), INPUT_HZ)
+
+
+def judged_short(baseline, **fault):
+    faulty = machine_record(record(3, machine=SHORT_MACHINE, **fault), SHORT_MACHINE,
+                            SpeedSettings("mesh"), INPUT_HZ)
+    return judge_stages(SHORT_MACHINE, faulty, [baseline])[0]
+
+
+def test_a_faster_shafts_fault_is_not_the_slower_shafts_whose_turn_holds_whole_turns_of_it(
+        short_baseline):
+    # the input turns 2 times an idler turn and 5 times an output turn: its broken tooth's
+    # lines survive both their TSAs, and are the input's alone
+    first, second = judged_short(short_baseline, faulty_shaft=0, stage=0)
+    assert first.changed and first.suspect == "pinion", first
+    assert abs(first.gear.change_db) < first.threshold_db, first
+    assert not second.changed, second
+
+
+def test_a_slower_shafts_fault_is_not_called_the_faster_ones(short_baseline):
+    # its lines on every 2nd idler order are input orders too: the input changes as well,
+    # but not beyond the idler, so stage 1 names no suspect rather than the wrong one
+    first, second = judged_short(short_baseline, faulty_shaft=1, stage=1)
+    assert first.changed and first.suspect is None, first
+    assert second.changed and second.suspect == "pinion", second
+
+
+def test_a_fault_on_each_of_two_stages_names_each_stages_own_shaft(short_baseline):
+    first, second = judged_short(short_baseline, faulty_shaft=0, stage=0, also=((1, 1),))
+    assert (first.suspect, second.suspect) == ("pinion", "pinion"), (first, second)

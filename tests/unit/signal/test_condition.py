@@ -103,3 +103,17 @@ def test_na4_against_a_baseline_is_the_fourth_moment_over_the_baseline_variance(
 def test_a_tsa_needs_a_whole_revolution():
     with pytest.raises(ValueError, match="hold no revolution"):
         synchronous_average(np.zeros(N - 1), N)
+
+
+def test_a_faster_shafts_lines_are_left_out_of_the_residual_and_difference():
+    # a shaft turning 3 times a turn of this one: orders 3, 6, 9, ... are its lines
+    parts = {6: 0.5, 7: 0.2, TEETH + 3: 0.1, 11: 0.3}
+    tsa = sum(a * np.cos(2 * np.pi * k * ANGLE) for k, a in parts.items())
+    s = tsa_signals(tsa, TEETH, faster_shafts=(3,))
+    residual, difference = (np.round(2 * np.abs(np.fft.rfft(x)) / N, 9)
+                            for x in (s.residual, s.difference))
+    for k, a in parts.items():
+        assert residual[k] == pytest.approx(0.0 if k % 3 == 0 else a)
+        assert difference[k] == pytest.approx(0.0 if k % 3 == 0 else a)
+    with pytest.raises(ValueError, match="whole number"):
+        tsa_signals(tsa, TEETH, faster_shafts=(1,))
