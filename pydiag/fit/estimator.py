@@ -13,7 +13,8 @@ the best few distinct personal-best positions, and the lowest error wins: polish
 global best alone can converge in the wrong basin, and the valley is narrow in f_ate
 (displacement channel) and shallow in a_f, f_f, which a Gauss-Newton step handles and a
 simplex does not (docs/method.md). The Jacobian is by forward differences, its columns
-simulated in parallel.
+simulated in parallel, and the polishes run side by side, their simulations batched
+(:mod:`pydiag.fit.lockstep`: each takes the steps it would take alone).
 
 Particles and Jacobian columns are evaluated in worker processes, each with its own
 FMU instance; the result does not depend on the number of workers, and the same seed
@@ -23,6 +24,7 @@ gives the same result in any thread.
 from __future__ import annotations
 
 import contextlib
+import functools
 import inspect
 import multiprocessing as mp
 import os
@@ -35,6 +37,7 @@ import scipy.optimize
 
 from pydiag.core.errors import EstimationError, TooManyFailures, UsageError
 from pydiag.core.parameters import snap
+from pydiag.fit.lockstep import run_in_lockstep
 from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.fit.pso import global_best_pso
 from pydiag.fmu.isolation import IsolatedPool
@@ -163,13 +166,13 @@ class FaultEstimator:
                                                             lows, highs)
             best_x, best_cost = starts[0], start_costs[0]
             if self.polish_evaluations > 0:
-                for x0, c0 in zip(starts, start_costs):
-                    if np.isfinite(c0):
-                        x, c = self._polish(run.residuals, x0, c0, lows, highs,
-                                            seen.get(np.clip(x0, lows, highs).tobytes()),
-                                            discrete)
-                        if c < best_cost:
-                            best_x, best_cost = x, c
+                polishes = [functools.partial(self._polish, x0=x0, cost0=c0, lows=lows,
+                                              highs=highs, held=discrete,
+                                              r0=seen.get(np.clip(x0, lows, highs).tobytes()))
+                            for x0, c0 in zip(starts, start_costs) if np.isfinite(c0)]
+                for x, c in run_in_lockstep(run.residuals, polishes):
+                    if c < best_cost:
+                        best_x, best_cost = x, c
         return self._result(problem, run, best_x, best_cost, swarm.best_cost_history)
 
     def _initial_positions(self, problem: FitProblem) -> np.ndarray:

@@ -104,8 +104,8 @@ def test_a_discrete_parameter_is_searched_exhaustively(gear_fmu, monkeypatch):
         batches.clear()
         r = FaultEstimator(n_particles=3, iterations=3, polish_evaluations=30, polish_starts=1,
                            n_workers=2, seed=seed).fit(problem)
-        swarm = [b for b in batches if len(b) == 11]
-        assert len(swarm) == 3 and all(np.array_equal(b[:, 0], swarm[0][:, 0]) for b in swarm)
+        swarm = batches[:3]  # the 11 values' particles, 3 iterations
+        assert all(len(b) == 11 and np.array_equal(b[:, 0], swarm[0][:, 0]) for b in swarm)
         # every value's best position polished: some simulations at each value after the swarm
         polished = np.concatenate(batches[3:])[:, 0]
         assert set(np.round(polished, 6)) == {round(k / 10, 6) for k in range(11)}
