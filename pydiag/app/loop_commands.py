@@ -28,8 +28,9 @@ from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effec
 from pydiag.loop.compose import BuiltModel, composed_fmu
 from pydiag.loop.machine_discover import check_effects, discover_machine
 from pydiag.loop.machine_loop import machine_loop
+from pydiag.loop.machine_discover import validate_machine
 from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_fmu,
-                                       machine_problem, validate_machine)
+                                       machine_problem)
 from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
                                   default_build_dir, discover, effect_fmu)

@@ -1,5 +1,6 @@
-"""discover on a machine's own model: every effect a stage can have and does not have yet,
-tried held out on every stage, and ranked.
+"""Effects tried held out on a machine's own model, stage by stage: discover (every effect
+a stage can have and does not have yet, ranked) and compare's validation (the effects
+each stage's residual points to).
 
 For each stage, the model's problem is seen from that stage's shafts
 (:func:`~pydiag.loop.machine_model.stage_view`) with the catalogue named for it
@@ -10,11 +11,16 @@ tries only those its residual points to). The models are built here, one after t
 other; the fits run side by side, one per core, as :func:`pydiag.loop.discover.discover`
 runs a pair's, the longest first. Competitors are settled stage by stage: two effects on
 one stage claim the same lines, the same effect on two stages does not.
+
+Validation (:func:`validate_machine`) tries on each stage what
+:func:`pydiag.loop.validate.validate` would try there, the fits of every stage side by
+side in the same way, then lets it judge each stage with them.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from typing import Callable
@@ -24,7 +30,7 @@ from fmu_build import ModelicaBuildError as BuildError
 from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.effects import EFFECTS
+from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.machine import Machine, StageEffect
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import settle
@@ -34,6 +40,7 @@ from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
 from pydiag.loop.machine_model import (MachineModel, nothing_to_fit, on_a_stage,
                                        stage_effects, stage_view)
 from pydiag.loop.results import Comparison, Discovery, Status
+from pydiag.loop.validate import effects_to_fit, validate
 
 
 @dataclasses.dataclass(frozen=True)
@@ -122,3 +129,58 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                 d.confident, d.status, d.message = False, Status.OUTCOMPETED, beaten[d.effect]
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     return found
+
+
+def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
+                     comparison: Comparison, effect_model: Callable[[Machine], str],
+                     estimator: FaultEstimator | None = None,
+                     progress: Callable[[str], None] | None = None) -> Comparison:
+    """``comparison`` (of ``problem``, the machine's model at its fit) with the effects
+    its residual points to on each stage tried held out (:func:`pydiag.loop.validate.
+    validate`, on :func:`~pydiag.loop.machine_model.stage_view`), every stage's
+    suggestions in one list, each with its stage; ``effect_model``: the FMU of a machine
+    (the machine with one more effect). The fits of every stage run side by side, one a
+    core (module docstring); ``progress`` gets each as it starts, as "effect on stage"."""
+    estimator = estimator or FaultEstimator(**EFFECT_REFIT)
+    stages, tasks, fmus = {}, [], {}
+    for k in range(len(machine.stages)):
+        view, effects = stage_view(problem, machine, k), stage_effects(model, k)
+        seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
+                       parameters=comparison.parameters, effects=effects)
+        keys = []
+        for key in effects_to_fit(view, seen, effects=effects):
+            try:  # built here: two workers must not build one model at once
+                fmus[k, key] = effect_model(dataclasses.replace(
+                    machine, effects=machine.effects + (StageEffect(key, k),)))
+                keys.append(key)
+            except (PydiagError, BuildError):
+                pass  # validate builds it again, and says why it cannot
+        stages[k] = _Stage(view, seen, shared_halves(view, seen, keys, estimator, effects))
+        tasks += [(k, key) for key in keys]
+    tasks.sort(key=lambda task: -discovery_cost(stage_effects(model, task[0])[task[1]]))
+    name = [s.name for s in machine.stages]
+    for k, key in tasks:
+        if progress:
+            progress(f"{key} on {name[k]}")
+    rows = side_by_side(lambda task, one: (_try_on_stage, (
+        stages[task[0]], model, task[0], name[task[0]], task[1], fmus[task], one)), tasks,
+        estimator, None)
+    tried = {task: row.held_out for task, row in zip(tasks, rows) if row.held_out is not None}
+    found = []
+    for k, stage in stages.items():
+        def fmu(effect: Effect, k: int = k) -> str:
+            return effect_model(dataclasses.replace(
+                machine, effects=machine.effects + (StageEffect(effect.key, k),)))
+        checked = validate(stage.view, stage.seen, fmu, estimator,
+                           effects=stage_effects(model, k),
+                           tried={key: h for (j, key), h in tried.items() if j == k},
+                           progress=None if progress is None else
+                           functools.partial(_said, progress, name[k]))
+        found += [dataclasses.replace(s, stage=name[k]) for s in checked.suggested_effects]
+    found.sort(key=lambda s: (not s.confident, -(s.held_out.z if s.held_out else -math.inf),
+                              -s.score))
+    return dataclasses.replace(comparison, suggested_effects=found)
+
+
+def _said(progress: Callable[[str], None], stage: str, key: str) -> None:
+    progress(f"{key} on {stage}")

@@ -24,8 +24,8 @@ from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.effect_fit import EFFECT_REFIT
-from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem,
-                                       validate_machine)
+from pydiag.loop.machine_discover import validate_machine
+from pydiag.loop.machine_model import MachineModel, accept, compare_machine, machine_problem
 
 
 def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,

@@ -27,9 +27,9 @@ lines do not repeat with the machine (a bearing's, a ripple's) or that is a sens
 (the housing) is not a stage's in this model yet.
 
 What the residual points to on each stage is tried held out as on a pair
-(:func:`validate_machine`): the model's problem seen from that stage's shafts
-(:func:`stage_view`: its kinematics name the lines), the catalogue named for it
-(:func:`stage_effect`), the model with the effect on the stage built for it.
+(:func:`pydiag.loop.machine_discover.validate_machine`): the model's problem seen from
+that stage's shafts (:func:`stage_view`: its kinematics name the lines), the catalogue
+named for it (:func:`stage_effect`), the model with the effect on the stage built for it.
 
 The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
 shaft's torsion between two stages (``GearDiag.Components.Shaft``,
@@ -37,8 +37,8 @@ shaft's torsion between two stages (``GearDiag.Components.Shaft``,
 shaft stiffnesses it puts torsional modes at made-up frequencies, and fitted no better
 (measured in ``bench/RESULTS.md`` section 13, ``docs/gearbox.md``).
 
-One concern: the machine's model (written, built, fitted, its effects tried and
-accepted); the pair's loop is the rest of this package, which it calls.
+One concern: the machine's model (written, built, fitted, its effects accepted); its
+effects' held-out tries are :mod:`pydiag.loop.machine_discover`'s.
 """
 
 from __future__ import annotations
@@ -47,12 +47,10 @@ import dataclasses
 import functools
 import hashlib
 import json
-import math
 import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
@@ -68,7 +66,6 @@ from pydiag.io.outputs import write_text
 from pydiag.loop.compare import compare
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
 from pydiag.loop.results import Comparison
-from pydiag.loop.validate import validate
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
 from pydiag.model.simulate import SIMULATED_SOURCE
 
@@ -459,34 +456,3 @@ def stage_view(problem: FitProblem, machine: Machine, stage: int) -> FitProblem:
     stage's, over the machine's period."""
     input_hz = problem.kinematics.f_pinion_hz  # the first stage's pinion: the input shaft
     return dataclasses.replace(problem, kinematics=machine.model_kinematics(input_hz, stage))
-
-
-def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
-                     comparison: Comparison, effect_model: Callable[[Machine], str],
-                     estimator: FaultEstimator | None = None,
-                     progress: Callable[[str], None] | None = None) -> Comparison:
-    """``comparison`` (of ``problem``, the machine's model at its fit) with the effects
-    its residual points to on each stage tried held out (:func:`pydiag.loop.validate.
-    validate`, on :func:`stage_view`), every stage's suggestions in one list, each with its
-    stage; ``effect_model``: the FMU of a machine (the machine with one more effect)."""
-    found = []
-    for k, stage in enumerate(machine.stages):
-        view = stage_view(problem, machine, k)
-        effects = stage_effects(model, k)
-        seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
-                       parameters=comparison.parameters, effects=effects)
-
-        def fmu(effect: Effect, k: int = k) -> str:
-            return effect_model(dataclasses.replace(
-                machine, effects=machine.effects + (StageEffect(effect.key, k),)))
-        checked = validate(view, seen, fmu, estimator, effects=effects,
-                           progress=None if progress is None else
-                           functools.partial(_said, progress, stage.name))
-        found += [dataclasses.replace(s, stage=stage.name) for s in checked.suggested_effects]
-    found.sort(key=lambda s: (not s.confident, -(s.held_out.z if s.held_out else -math.inf),
-                              -s.score))
-    return dataclasses.replace(comparison, suggested_effects=found)
-
-
-def _said(progress: Callable[[str], None], stage: str, key: str) -> None:
-    progress(f"{key} on {stage}")

@@ -69,28 +69,13 @@ def validate(problem: FitProblem, comparison: Comparison,
     fits: dict[str, HeldOut] = {}
     memo: dict = {}  # what every effect's test shares (held_out.Halves)
 
-    def mark(s, status: Status, message: str) -> None:
-        s.status, s.message = status, f"{status.value}: {message}"
-
     for s in suggestions:
         effect = catalogue[s.effect]
-        if s.score < min_score and not (effect.envelope or effect.affine):  # MIN_SCORE
-            mark(s, Status.NOT_TRIED, f"its lines hold {100 * s.score:.0f} % of the "
-                                      "unexplained energy")
+        why = _not_fitted(problem, s, effect, min_score, present, composed)
+        if why is not None:
+            s.status, s.message = why
             continue
-        if s.effect in present or in_model(problem, effect):
-            s.status, s.message = Status.IN_MODEL, Status.IN_MODEL.value
-            continue
-        unknown = effect.unknown_lines(problem.kinematics)
-        if unknown:
-            mark(s, Status.NOT_TRIED, unknown)
-            continue
-        beside = tuple(k for k in present if effect.own_fmu and EFFECTS[k].own_fmu)
-        if beside and composed is None:  # its model extends GearPair, not the model
-            mark(s, Status.NOT_VALIDATED, f"the model has {', '.join(beside)}, which "
-                                          f"{effect.model} lacks: trying {s.effect} too "
-                                          "needs a Modelica model with both")
-            continue
+        beside = _beside(effect, present)
         h = (tried or {}).get(s.effect)
         if h is None:
             if progress:
@@ -102,7 +87,7 @@ def validate(problem: FitProblem, comparison: Comparison,
                 h = held_out(problem, comparison, effect, fmu, estimator, false_alarm_rate,
                              memo)
             except (PydiagError, BuildError) as err:
-                mark(s, Status.NOT_VALIDATED, str(err))
+                s.status, s.message = _marked(Status.NOT_VALIDATED, str(err))
                 continue
         fits[s.effect] = h
         s.held_out = h if h.tried else None
@@ -112,6 +97,49 @@ def validate(problem: FitProblem, comparison: Comparison,
         if s.effect in beaten:
             s.confident, s.status, s.message = False, Status.OUTCOMPETED, beaten[s.effect]
     return dataclasses.replace(comparison, suggested_effects=suggestions)
+
+
+def effects_to_fit(problem: FitProblem, comparison: Comparison,
+                   min_score: float = MIN_SCORE, present: tuple[str, ...] = (),
+                   composed: Callable[[tuple[str, ...]], str] | None = None,
+                   effects: Mapping[str, Effect] | None = None) -> list[str]:
+    """The suggestions of ``comparison`` that :func:`validate` (the same arguments)
+    fits held out, in its order: to fit them elsewhere, side by side, and hand them to it
+    as ``tried``."""
+    catalogue = EFFECTS if effects is None else effects
+    return [s.effect for s in comparison.suggested_effects
+            if _not_fitted(problem, s, catalogue[s.effect], min_score, present, composed)
+            is None]
+
+
+def _beside(effect: Effect, present: tuple[str, ...]) -> tuple[str, ...]:
+    """The effects with models of their own the model has, beside which ``effect``
+    (with a model of its own too) is tried."""
+    return tuple(k for k in present if effect.own_fmu and EFFECTS[k].own_fmu)
+
+
+def _marked(status: Status, message: str) -> tuple[Status, str]:
+    return status, f"{status.value}: {message}"
+
+
+def _not_fitted(problem: FitProblem, s, effect: Effect, min_score: float,
+                present: tuple[str, ...], composed) -> tuple[Status, str] | None:
+    """Why suggestion ``s`` is not fitted held out (its status and message), or None
+    when it is (module docstring)."""
+    if s.score < min_score and not (effect.envelope or effect.affine):  # MIN_SCORE
+        return _marked(Status.NOT_TRIED, f"its lines hold {100 * s.score:.0f} % of the "
+                                         "unexplained energy")
+    if s.effect in present or in_model(problem, effect):
+        return Status.IN_MODEL, Status.IN_MODEL.value
+    unknown = effect.unknown_lines(problem.kinematics)
+    if unknown:
+        return _marked(Status.NOT_TRIED, unknown)
+    beside = _beside(effect, present)
+    if beside and composed is None:  # its model extends GearPair, not the model
+        return _marked(Status.NOT_VALIDATED, f"the model has {', '.join(beside)}, which "
+                                             f"{effect.model} lacks: trying {s.effect} too "
+                                             "needs a Modelica model with both")
+    return None
 
 
 def not_validated(comparison: Comparison, why: str) -> Comparison:
