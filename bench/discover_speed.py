@@ -65,7 +65,7 @@ def main() -> None:
     args = ap.parse_args()
     build = Path(tempfile.mkdtemp(prefix="discover_fmus_"))
     for key, effect in EFFECTS.items():
-        if not effect.in_base:
+        if effect.own_fmu:
             effect_fmu(key, ROOT / "modelica", build)
     print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}; "
           f"records of {PERIODS} periods at {RATE_HZ:g} Hz, acc + disp; {args.repeat} runs")
