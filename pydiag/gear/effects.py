@@ -140,6 +140,17 @@ def _gear_eccentricity(line, freq, f_mesh):
     return 1.0 if line.family == "mesh_sb_gear" and abs(line.order) == 1 else 0.0
 
 
+def _mesh_modulation(line, freq, f_mesh):
+    # amplitude modulation once per turn of a shaft: the first sideband of that shaft's
+    # order either side of every mesh harmonic, and, at half weight, the shaft's first
+    # order (the deflection under load)
+    if line is None:
+        return 0.0
+    if line.family in ("mesh_sb_pinion", "mesh_sb_gear"):
+        return 1.0 if abs(line.order) == 1 else 0.0
+    return 0.5 if line.family in ("pinion", "gear") and line.order == 1 else 0.0
+
+
 def _gear_tooth_fault(line, freq, f_mesh):
     if line is None:
         return 0.0
@@ -387,6 +398,13 @@ EFFECTS = {e.key: e for e in (
            _second_pinion_tooth, in_base=True),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
            (Parameter("ecc_gear", 0.0, 50e-6),), _gear_eccentricity),
+    # an eccentric or tilted gear: the load along the face varies around the turn
+    Effect("mesh_modulation", "GearDiag.Effects.MeshModulation",
+           "the mesh stiffness modulated once per turn of each shaft (a gear mounted tilted "
+           "or eccentric: the face width in contact varies around its turn)",
+           (Parameter("m_p", 0.0, 0.5), Parameter("phi_p", -math.pi, math.pi, periodic=True),
+            Parameter("m_g", 0.0, 0.5), Parameter("phi_g", -math.pi, math.pi, periodic=True)),
+           _mesh_modulation),
     # a softer tooth over its contact; which tooth is unknown (one turn of the index, the
     # bump moving smoothly with it; the hint sets the turn from the wheel's teeth)
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",

@@ -60,6 +60,9 @@ class Effects:
     # phases of their own) in its own angle, at the sensor, m/s2
     other_shaft_acc: float = 0.0
     other_shaft_ratio: float = 29.0 / 17.0
+    # a gear tilted on its shaft: the face width in contact, so every tooth pair's
+    # stiffness, varies once per gear turn by this share (a load-distribution factor)
+    gear_tilt: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -167,12 +170,12 @@ def _dynamics(y, t, g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: floa
                + g.pitch_error_m * assembly * math.cos(assembly * theta_p) * omega_p
                + e.gear_runout_m * math.cos(theta_g + 0.7) * omega_g)
     stretch = d - te
+    k = mesh.stiffness(theta_p) * (1.0 + e.gear_tilt * math.cos(theta_g + 1.9))
     if e.backlash_m > 0.0 and stretch < 0.0:  # the teeth separate: no force across the gap
         stretch = min(stretch + e.backlash_m, 0.0)
-        force = mesh.stiffness(theta_p) * stretch + (g.damping_n_s_m * (dv - te_rate)
-                                                     if stretch < 0.0 else 0.0)
+        force = k * stretch + (g.damping_n_s_m * (dv - te_rate) if stretch < 0.0 else 0.0)
     else:
-        force = mesh.stiffness(theta_p) * stretch + g.damping_n_s_m * (dv - te_rate)
+        force = k * stretch + g.damping_n_s_m * (dv - te_rate)
     t_in = g.torque_n_m * (1.0 + e.torque_ripple * math.sin(TWO_PI * e.ripple_hz * t))
     t_load = g.torque_n_m * g.n_gear / g.n_pinion + load_damping * (omega_g - omega_g0)
     acc_p = (t_in - r_p * force) / inertia_p
