@@ -26,9 +26,8 @@ from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import BuiltModel, composed_fmu
-from pydiag.loop.machine_discover import check_effects, discover_machine
+from pydiag.loop.machine_discover import check_effects, discover_machine, validate_machine
 from pydiag.loop.machine_loop import machine_loop
-from pydiag.loop.machine_discover import validate_machine
 from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_fmu,
                                        machine_problem)
 from pydiag.loop.stages import machine_speed

@@ -102,8 +102,7 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                 progress(found[-1])
             continue
         try:
-            fmus[k, key] = effect_model(dataclasses.replace(
-                machine, effects=machine.effects + (StageEffect(key, k),)))
+            fmus[k, key] = effect_model(_with_effect(machine, key, k))
         except (PydiagError, BuildError) as err:
             found.append(failed_row(key, err, started, machine.stages[k].name))
             if progress:
@@ -150,8 +149,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         keys = []
         for key in effects_to_fit(view, seen, effects=effects):
             try:  # built here: two workers must not build one model at once
-                fmus[k, key] = effect_model(dataclasses.replace(
-                    machine, effects=machine.effects + (StageEffect(key, k),)))
+                fmus[k, key] = effect_model(_with_effect(machine, key, k))
                 keys.append(key)
             except (PydiagError, BuildError):
                 pass  # validate builds it again, and says why it cannot
@@ -169,8 +167,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     found = []
     for k, stage in stages.items():
         def fmu(effect: Effect, k: int = k) -> str:
-            return effect_model(dataclasses.replace(
-                machine, effects=machine.effects + (StageEffect(effect.key, k),)))
+            return effect_model(_with_effect(machine, effect.key, k))
         checked = validate(stage.view, stage.seen, fmu, estimator,
                            effects=stage_effects(model, k),
                            tried={key: h for (j, key), h in tried.items() if j == k},
@@ -180,6 +177,11 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     found.sort(key=lambda s: (not s.confident, -(s.held_out.z if s.held_out else -math.inf),
                               -s.score))
     return dataclasses.replace(comparison, suggested_effects=found)
+
+
+def _with_effect(machine: Machine, key: str, stage: int) -> Machine:
+    """``machine`` with the effect ``key`` on stage ``stage`` too: the model it is tried on."""
+    return dataclasses.replace(machine, effects=machine.effects + (StageEffect(key, stage),))
 
 
 def _said(progress: Callable[[str], None], stage: str, key: str) -> None:
