@@ -13,7 +13,7 @@ FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)
 
-.PHONY: venv fmu demo lint test test-fast test-slow regress bless bench loop clean
+.PHONY: venv fmu demo lint test test-fast test-slow regress bless bench loop loop-real clean
 
 venv: $(STAMP)
 
@@ -61,6 +61,12 @@ bench: fmu
 # docs/loop.md, end to end: a measurement with a bearing defect the base model lacks
 loop: fmu
 	bash docs/loop.sh
+
+# the loop on the shared real records, as bench/RESULTS.md section 10 has it (the GFD
+# records in ../shared/data/gfd; DATA=folder for another set in that layout)
+DATA ?= ../shared/data/gfd
+loop-real: fmu
+	$(PY) bench/real_loop.py --data "$(DATA)" --steps 4
 
 clean:
 	rm -rf build

@@ -98,6 +98,9 @@ def main() -> None:
     paths = sorted(Path(args.data).glob("*.csv.gz"))
     if args.records:
         paths = [p for p in paths if p.name.split(".")[0] in args.records.split(",")]
+    if not paths:
+        sys.exit(f"real_loop.py: no records (*.csv.gz{', ' + args.records if args.records else ''})"
+                 f" in {args.data}")
     build = Path(tempfile.mkdtemp(prefix="real_loop_fmus_"))
     print(f"{platform.machine()}, {platform.python_version()}; records: "
           f"{', '.join(p.name for p in paths)}")

@@ -267,11 +267,12 @@ def test_discover_tries_an_effect_on_every_stage_of_the_machines_model(tmp_path,
 
 @pytest.mark.slow
 def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
-    """discover on the machine's own model, every effect the stages can have: the stiffness
-    wave's even harmonics (the box's meshes have harmonics 1, 1/2, 1/3 at phases of their
-    own) rank first on stage 1 and second on stage 2, both confident (an effect on one
-    stage does not compete with itself on the other), nothing else confident: what compare
-    and the loop find, without the residual's pointing."""
+    """discover on the machine's own model, every effect the stages can have: the box's
+    two effects on both stages rank first, all four confident (an effect on one stage does
+    not compete with itself on the other): the stiffness wave's even harmonics (its meshes
+    have harmonics 1, 1/2, 1/3 at phases of their own) and the mesh's modulation once per
+    turn of each shaft (10 % by each of its two shafts); nothing else confident: what
+    compare and the loop find, without the residual's pointing."""
     from pydiag.loop.effect_fit import EFFECT_REFIT
     from pydiag.loop.machine_discover import discover_machine
     from pydiag.loop.machine_model import compare_machine
@@ -282,18 +283,20 @@ def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
     base = compare_machine(problem, model, FaultEstimator(), FaultEstimator(**EFFECT_REFIT))
     found = discover_machine(problem, SHORT_MACHINE, model, base,
                              lambda machine: str(machine_fmu(machine, MODELICA, tmp_path)[1].fmu))
-    assert [(d.effect, d.stage) for d in found[:2]] == [("mesh_stiffness_shape", "stage 1"),
-                                                        ("mesh_stiffness_shape", "stage 2")]
-    assert [d.confident for d in found[:2]] == [True, True]
-    assert not any(d.confident for d in found[2:]), found[2:]
+    assert {(d.effect, d.stage) for d in found[:4]} == {
+        (effect, stage) for effect in ("mesh_stiffness_shape", "mesh_modulation")
+        for stage in ("stage 1", "stage 2")}, found[:4]
+    assert all(d.confident for d in found[:4])
+    assert not any(d.confident for d in found[4:]), found[4:]
 
 
 @pytest.mark.slow
 def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
-    """pydiag loop --machine without --fmu: the stiffness wave's even harmonics accepted on
-    one stage, then on the other, each confirmed held out, the error falling at every step,
-    nothing confident after; both written into the copy of the machine file, the file
-    given unchanged (the measured sequence: bench/RESULTS.md section 13)."""
+    """pydiag loop --machine without --fmu: the box's two effects accepted on each stage,
+    one step at a time (the mesh's modulation by its shafts and the stiffness wave's even
+    harmonics), each confirmed held out, the error falling at every step, nothing
+    confident after; all four written into the copy of the machine file, the file given
+    unchanged (the measured sequence: bench/RESULTS.md section 13)."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
     write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
@@ -302,15 +305,18 @@ def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
     machine.write_text(text)
     r = run_cli("-m", "pydiag", "loop", "--measurement", str(rec), "--machine", str(machine),
                 "--build-dir", str(tmp_path / "build"), "--history", str(tmp_path / "h.sqlite"),
-                "--quiet", "--speed", "mesh", "--json", str(tmp_path / "loop.json"))
+                "--quiet", "--speed", "mesh", "--max-steps", "5", "--json",
+                str(tmp_path / "loop.json"))
     assert r.returncode == 0, r.stderr
     steps = json.loads((tmp_path / "loop.json").read_text())["steps"]
-    assert [s["effect"] for s in steps] == ["mesh_stiffness_shape on stage 1",
-                                            "mesh_stiffness_shape on stage 2", None]
+    box = {f"{effect} on stage {k}" for effect in ("mesh_modulation", "mesh_stiffness_shape")
+           for k in (1, 2)}
+    accepted = [s["effect"] for s in steps]
+    assert len(steps) == 5 and set(accepted[:4]) == box and accepted[4] is None, accepted
+    assert not any(s["confident"] for s in steps[4]["suggested_effects"])
     errors = [s["error"] for s in steps]
-    assert errors[2] < errors[1] < errors[0], errors
-    assert all(s["held_out_error_with"] < s["held_out_error_base"] for s in steps[:2])
+    assert all(b < a for a, b in zip(errors, errors[1:])), errors
+    assert all(s["held_out_error_with"] < s["held_out_error_base"] for s in steps[:4])
     assert machine.read_text() == text
     copy = load_machine(tmp_path / "box.loop.toml")
-    assert [(e.key, e.stage) for e in copy.effects] == [("mesh_stiffness_shape", 0),
-                                                        ("mesh_stiffness_shape", 1)]
+    assert [f"{e.key} on stage {e.stage + 1}" for e in copy.effects] == accepted[:4]
