@@ -63,10 +63,10 @@ loop: fmu
 	bash docs/loop.sh
 
 # the loop on the shared real records, as bench/RESULTS.md section 10 has it (the GFD
-# records in ../shared/data/gfd; DATA=folder for another set in that layout)
-DATA ?= ../shared/data/gfd
+# records in ../shared/data/gfd; GFD_DATA=folder for another set in that layout)
+GFD_DATA ?= ../shared/data/gfd
 loop-real: fmu
-	$(PY) bench/real_loop.py --data "$(DATA)" --steps 4
+	$(PY) bench/real_loop.py --data "$(GFD_DATA)" --steps 4
 
 clean:
 	rm -rf build
