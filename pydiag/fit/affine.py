@@ -12,7 +12,6 @@ parameter, bounded least squares (trust-region reflective) for several.
 from __future__ import annotations
 
 import numpy as np
-import scipy.optimize
 
 from pydiag.fit.problem import FitProblem
 
@@ -38,6 +37,8 @@ def fit_affine(problem: FitProblem) -> tuple[dict[str, float], float]:
 
     def error(u: np.ndarray) -> float:
         return float(np.linalg.norm(problem.residuals_of(outputs(u))))
+
+    import scipy.optimize  # here: importing it takes 0.3 s of every command's start
 
     if len(params) == 1:
         found = scipy.optimize.minimize_scalar(lambda u: error(np.array([u])), bounds=(0.0, 1.0),

@@ -45,10 +45,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from statistics import NormalDist
 from typing import Callable
 
 import numpy as np
-from scipy.stats import norm
 
 from pydiag.core.errors import EstimationError
 from pydiag.core.parameters import Parameter
@@ -147,7 +147,7 @@ def _signals(problem: FitProblem, parameters: dict[str, float]) -> np.ndarray:
 
 def threshold(false_alarm_rate: float = FALSE_ALARM_RATE) -> float:
     """The z above which an effect lowers the held-out error by more than noise would."""
-    return float(norm.ppf(1 - false_alarm_rate))
+    return NormalDist().inv_cdf(1 - false_alarm_rate)
 
 
 def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarray,

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from pydiag.core.errors import MeasurementError
 from pydiag.signal.angle import resample_at
@@ -67,6 +66,8 @@ def band_envelope(signal: np.ndarray, sample_rate_hz: float,
     if not 0 < low < high < sample_rate_hz / 2:
         raise ValueError(f"the band must lie inside (0, {sample_rate_hz / 2:g}) Hz with low < "
                          f"high, got {low:g}-{high:g} Hz")
+    import scipy.signal  # here: importing it takes 0.6 s of every command's start
+
     sos = scipy.signal.butter(4, [low, high], btype="bandpass", fs=sample_rate_hz, output="sos")
     return np.abs(scipy.signal.hilbert(scipy.signal.sosfiltfilt(sos, np.asarray(signal, float))))
 
