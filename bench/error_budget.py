@@ -1,0 +1,126 @@
+"""Where a real record's error lies, and what two other noise models would make of it.
+
+For each record of a labelled set in the layout of ``../shared/data/gfd`` (channel a1 in g,
+no time column): GearPair with the channel gain and ``a0`` fitted, the speed found and the
+record order-tracked, compared on the whole record (``pydiag compare``'s error:
+noise-corrected Eq. 12 on every synchronous line and every significant peak). Printed:
+
+- the share of the weighted squared residual of Eq. 12 on each group of bins (the
+  kinematic families, the non-kinematic peaks) and the bins that hold the most;
+- the error with a noise floor that follows the spectrum (each bin's noise power the
+  median power / ln 2 of the bins between lines within +-1/6 octave, the peaks judged
+  against it) instead of one floor for the whole band;
+- an upper bound for a comb of lines of random amplitude (every tooth of a gear a little
+  different): on the bins of the gear's orders and the hunting/assembly lines (and the
+  pinion's orders), the expected power taken from the measurement itself (its local
+  median / ln 2 within +-1/6 octave) and added to the noise power, as a stochastic line
+  model would predict it at best.
+
+Usage:
+    .venv/bin/python bench/error_budget.py [--data ../shared/data/gfd] [--records b30hz90,...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pydiag.fit.estimator import FaultEstimator  # noqa: E402
+from pydiag.fit.objective import noise_corrected_error  # noqa: E402
+from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.gear.kinematic_map import kinematic_map  # noqa: E402
+from pydiag.gear.speed import SpeedSettings  # noqa: E402
+from pydiag.io.readers import read_measurement  # noqa: E402
+from pydiag.loop.compare import compare  # noqa: E402
+from pydiag.loop.residual import RESIDUAL_GROUPS, bin_groups, error_bins  # noqa: E402
+from pydiag.signal.spectra import local_maxima  # noqa: E402
+
+OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
+SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
+#: The half-width of the window a local floor or a comb's expected power is taken over.
+OCTAVE = 1 / 6
+#: The groups of bins a comb of random line amplitudes is put on.
+COMBS = (("gear_orders", "assembly_hunting"),
+         ("gear_orders", "assembly_hunting", "pinion_orders"))
+
+
+def local_power(freqs: np.ndarray, amplitude: np.ndarray, among: np.ndarray,
+                octave: float = OCTAVE) -> np.ndarray:
+    """At every bin, the median power / ln 2 of the bins ``among`` within +-``octave``."""
+    idx = np.flatnonzero(among)
+    f = freqs[idx]
+    out = np.zeros(freqs.size)
+    for i in range(freqs.size):
+        a, b = np.searchsorted(f, [freqs[i] * 2 ** -octave, freqs[i] * 2 ** octave])
+        if b > a:
+            out[i] = np.median(amplitude[idx[a:b]] ** 2) / np.log(2)
+    return out
+
+
+def budget(path: Path) -> None:
+    m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
+    problem = build_problem(str(ROOT / "build" / "GearPair.fmu"), m,
+                            operating_point=OPERATING_POINT, speed=SpeedSettings("auto"),
+                            fit_gain=True)
+    c = compare(problem, FaultEstimator(seed=0))
+    s = c.spectra["acc"]
+    freqs, meas, model = (np.asarray(v, dtype=float) for v in (s.freq_hz, s.measured, s.model))
+    noise, rate = s.noise_power, 0.01
+    margin = np.sqrt(noise * np.log(meas.size / rate))
+    bins = error_bins(meas, margin, c.n_periods)
+    groups = bin_groups(freqs, kinematic_map(problem.kinematics, problem.featurizer.max_freq_hz),
+                        c.bin_hz, meas, margin)
+    expected = np.sqrt(model ** 2 + noise)
+    term = (expected / expected[bins].max() + 1.0) ** 2 * (expected - meas) ** 2
+    total = float(term[bins].sum())
+    print(f"\n{path.name}: error {c.error:.3f} on {bins.sum()} bins ({c.n_periods} periods)")
+    print("| group | bins | share of the measured | share of the error's square |")
+    print("|---|---|---|---|")
+    for i, name in enumerate(RESIDUAL_GROUPS):
+        on = bins & (groups == i)
+        if on.any():
+            print(f"| {name} | {on.sum()} | {np.sum(meas[on] ** 2) / np.sum(meas[bins] ** 2):.2f}"
+                  f" | {term[on].sum() / total:.2f} |")
+    top = np.flatnonzero(bins)[np.argsort(-term[bins])[:6]]
+    print("largest bins: " + "; ".join(
+        f"{freqs[k]:.1f} Hz {RESIDUAL_GROUPS[groups[k]]} measured {meas[k]:.3g} model "
+        f"{model[k]:.3g} ({100 * term[k] / total:.1f} %)" for k in top))
+    between = (np.arange(meas.size) + 1) % c.n_periods != 0
+    floor = local_power(freqs, meas, between)
+    own = ~between | ((meas > np.sqrt(floor * np.log(meas.size / rate))) & local_maxima(meas))
+    print(f"local floor ({floor[bins].min() / noise:.3g}-{floor[bins].max() / noise:.3g} x the "
+          f"flat one): error {noise_corrected_error(model[bins], meas[bins], floor[bins]):.3f} "
+          f"on the same bins, {noise_corrected_error(model[own], meas[own], floor[own]):.3f} "
+          f"on its own {own.sum()}")
+    for comb in COMBS:
+        on = np.isin(groups, [RESIDUAL_GROUPS.index(g) for g in comb])
+        power = noise + np.where(on, local_power(freqs, meas, on), 0.0)
+        print(f"comb of random lines on {' + '.join(comb)} at the measured power (a bound): "
+              f"error {noise_corrected_error(model[bins], meas[bins], power[bins]):.3f}")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "gfd")
+    ap.add_argument("--records", default="b30hz0,b30hz90,h30hz0,h30hz90")
+    args = ap.parse_args()
+    paths = [args.data / f"{name}.csv.gz" for name in args.records.split(",")]
+    missing = [str(p) for p in paths if not p.exists()]
+    if missing:
+        print(f"error_budget: no record {', '.join(missing)}", file=sys.stderr)
+        return 2
+    print(f"{platform.machine()}, Python {platform.python_version()}")
+    for path in paths:
+        budget(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
