@@ -14,7 +14,10 @@ noise-corrected Eq. 12 on every synchronous line and every significant peak). Pr
   different): on the bins of the gear's orders and the hunting/assembly lines (and the
   pinion's orders), the expected power taken from the measurement itself (its local
   median / ln 2 within +-1/6 octave) and added to the noise power, as a stochastic line
-  model would predict it at best.
+  model would predict it at best;
+- how much each group's lines repeat: the complex spectra of the even and of the odd
+  periods' averages, ``sum |A - B|^2 / sum (|A|^2 + |B|^2)`` on the group's lines (0: the
+  same line in both halves, a deterministic source; 1: random phases).
 
 Usage:
     .venv/bin/python bench/error_budget.py [--data ../shared/data/gfd] [--records b30hz90,...]
@@ -64,6 +67,15 @@ def local_power(freqs: np.ndarray, amplitude: np.ndarray, among: np.ndarray,
     return out
 
 
+def repeatability(signal: np.ndarray, samples: int, orders: np.ndarray) -> float:
+    """``sum |A - B|^2 / sum (|A|^2 + |B|^2)`` at ``orders`` of the period of ``samples``:
+    A, B the spectra of the average of the even and of the odd periods of ``signal``."""
+    periods = signal[:signal.size // samples * samples].reshape(-1, samples)
+    a = np.fft.rfft(periods[0::2].mean(axis=0))[orders]
+    b = np.fft.rfft(periods[1::2].mean(axis=0))[orders]
+    return float(np.sum(np.abs(a - b) ** 2) / np.sum(np.abs(a) ** 2 + np.abs(b) ** 2))
+
+
 def budget(path: Path) -> None:
     m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
     problem = build_problem(str(ROOT / "build" / "GearPair.fmu"), m,
@@ -80,19 +92,24 @@ def budget(path: Path) -> None:
     expected = np.sqrt(model ** 2 + noise)
     term = (expected / expected[bins].max() + 1.0) ** 2 * (expected - meas) ** 2
     total = float(term[bins].sum())
+    between = (np.arange(meas.size) + 1) % c.n_periods != 0  # not on a synchronous line
     print(f"\n{path.name}: error {c.error:.3f} on {bins.sum()} bins ({c.n_periods} periods)")
-    print("| group | bins | share of the measured | share of the error's square |")
-    print("|---|---|---|---|")
+    tracked = problem.measurement
+    samples = int(round(problem.kinematics.period_s * tracked.sample_rate_hz))
+    print("| group | bins | share of the measured | share of the error's square | repeats |")
+    print("|---|---|---|---|---|")
     for i, name in enumerate(RESIDUAL_GROUPS):
         on = bins & (groups == i)
         if on.any():
+            lines = (np.flatnonzero(on & ~between) + 1) // c.n_periods  # orders of the period
+            again = (f"{repeatability(tracked.channels['acc'], samples, lines):.2f}"
+                     if lines.size else "-")
             print(f"| {name} | {on.sum()} | {np.sum(meas[on] ** 2) / np.sum(meas[bins] ** 2):.2f}"
-                  f" | {term[on].sum() / total:.2f} |")
+                  f" | {term[on].sum() / total:.2f} | {again} |")
     top = np.flatnonzero(bins)[np.argsort(-term[bins])[:6]]
     print("largest bins: " + "; ".join(
         f"{freqs[k]:.1f} Hz {RESIDUAL_GROUPS[groups[k]]} measured {meas[k]:.3g} model "
         f"{model[k]:.3g} ({100 * term[k] / total:.1f} %)" for k in top))
-    between = (np.arange(meas.size) + 1) % c.n_periods != 0
     floor = local_power(freqs, meas, between)
     own = ~between | ((meas > np.sqrt(floor * np.log(meas.size / rate))) & local_maxima(meas))
     print(f"local floor ({floor[bins].min() / noise:.3g}-{floor[bins].max() / noise:.3g} x the "
