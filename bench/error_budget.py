@@ -3,7 +3,10 @@
 For each record of a labelled set in the layout of ``../shared/data/gfd`` (channel a1 in g,
 no time column): GearPair with the channel gain and ``a0`` fitted, the speed found and the
 record order-tracked, compared on the whole record (``pydiag compare``'s error:
-noise-corrected Eq. 12 on every synchronous line and every significant peak). Printed:
+noise-corrected Eq. 12 on every synchronous line and every significant peak). With
+``--phm09 FOLDER``, the PHM 2009 spur records named there instead, each stage of
+``examples/phm09_spur.toml`` on its own (the pair model of the stage, the other stage's
+lines left out, the speed from the meshes). Printed:
 
 - the share of the weighted squared residual of Eq. 12 on each group of bins (the
   kinematic families, the non-kinematic peaks) and the bins that hold the most;
@@ -21,6 +24,8 @@ noise-corrected Eq. 12 on every synchronous line and every significant peak). Pr
 
 Usage:
     .venv/bin/python bench/error_budget.py [--data ../shared/data/gfd] [--records b30hz90,...]
+    .venv/bin/python bench/error_budget.py --phm09 ../shared/data/phm09 \
+        [--records "spur 1_30hz_High_1,spur 2_30hz_High_1"]
 """
 
 from __future__ import annotations
@@ -38,15 +43,19 @@ sys.path.insert(0, str(ROOT))
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.objective import noise_corrected_error  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.gear.features import other_stages_lines  # noqa: E402
 from pydiag.gear.kinematic_map import kinematic_map  # noqa: E402
+from pydiag.gear.machine import load_machine  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
-from pydiag.loop.residual import RESIDUAL_GROUPS, bin_groups, error_bins  # noqa: E402
+from pydiag.loop.residual import RESIDUAL_GROUPS, bin_groups, measured_spectra  # noqa: E402
+from pydiag.loop.stages import machine_speed, stage_problem  # noqa: E402
 from pydiag.signal.spectra import local_maxima  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
+PHM09_RATE_HZ = 66_666.67  # the challenge's documentation (../shared/data/phm09/README.md)
 #: The half-width of the window a local floor or a comb's expected power is taken over.
 OCTAVE = 1 / 6
 #: The groups of bins a comb of random line amplitudes is put on.
@@ -76,24 +85,38 @@ def repeatability(signal: np.ndarray, samples: int, orders: np.ndarray) -> float
     return float(np.sum(np.abs(a - b) ** 2) / np.sum(np.abs(a) ** 2 + np.abs(b) ** 2))
 
 
-def budget(path: Path) -> None:
+def gfd_problems(path: Path) -> dict:
     m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
-    problem = build_problem(str(ROOT / "build" / "GearPair.fmu"), m,
-                            operating_point=OPERATING_POINT, speed=SpeedSettings("auto"),
-                            fit_gain=True)
+    return {path.name: build_problem(str(ROOT / "build" / "GearPair.fmu"), m,
+                                     operating_point=OPERATING_POINT,
+                                     speed=SpeedSettings("auto"), fit_gain=True)}
+
+
+def phm09_problems(path: Path) -> dict:
+    """Each stage's problem (its channel as ``acc``, the tacho left out, the speed from
+    every mesh) of a 30 Hz PHM09 record."""
+    machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
+    m = read_measurement(path, PHM09_RATE_HZ)
+    found = machine_speed(m, machine, 30.0, SpeedSettings("mesh", tacho="ch3"))
+    return {f"{path.name} {stage.name}": stage_problem(
+        str(ROOT / "build" / "GearPair.fmu"), m, machine, k, found, fit_gain=True,
+        drop=("ch3",)) for k, stage in enumerate(machine.stages)}
+
+
+def budget(name: str, problem) -> None:
     c = compare(problem, FaultEstimator(seed=0))
-    s = c.spectra["acc"]
+    s = c.spectra[problem.channels[0]]
     freqs, meas, model = (np.asarray(v, dtype=float) for v in (s.freq_hz, s.measured, s.model))
-    noise, rate = s.noise_power, 0.01
+    noise, rate = s.noise_power, c.false_alarm_rate
     margin = np.sqrt(noise * np.log(meas.size / rate))
-    bins = error_bins(meas, margin, c.n_periods)
+    bins = measured_spectra(problem, rate).featurizer.bins  # the error's (compare's) bins
     groups = bin_groups(freqs, kinematic_map(problem.kinematics, problem.featurizer.max_freq_hz),
                         c.bin_hz, meas, margin)
     expected = np.sqrt(model ** 2 + noise)
     term = (expected / expected[bins].max() + 1.0) ** 2 * (expected - meas) ** 2
     total = float(term[bins].sum())
     between = (np.arange(meas.size) + 1) % c.n_periods != 0  # not on a synchronous line
-    print(f"\n{path.name}: error {c.error:.3f} on {bins.sum()} bins ({c.n_periods} periods)")
+    print(f"\n{name}: error {c.error:.3f} on {bins.sum()} bins ({c.n_periods} periods)")
     tracked = problem.measurement
     samples = int(round(problem.kinematics.period_s * tracked.sample_rate_hz))
     print("| group | bins | share of the measured | share of the error's square | repeats |")
@@ -102,7 +125,7 @@ def budget(path: Path) -> None:
         on = bins & (groups == i)
         if on.any():
             lines = (np.flatnonzero(on & ~between) + 1) // c.n_periods  # orders of the period
-            again = (f"{repeatability(tracked.channels['acc'], samples, lines):.2f}"
+            again = (f"{repeatability(tracked.channels[problem.channels[0]], samples, lines):.2f}"
                      if lines.size else "-")
             print(f"| {name} | {on.sum()} | {np.sum(meas[on] ** 2) / np.sum(meas[bins] ** 2):.2f}"
                   f" | {term[on].sum() / total:.2f} | {again} |")
@@ -112,6 +135,10 @@ def budget(path: Path) -> None:
         f"{model[k]:.3g} ({100 * term[k] / total:.1f} %)" for k in top))
     floor = local_power(freqs, meas, between)
     own = ~between | ((meas > np.sqrt(floor * np.log(meas.size / rate))) & local_maxima(meas))
+    exclude = getattr(problem.featurizer, "exclude_hz", ())  # a stage: as compare leaves out
+    if exclude:
+        own &= ~other_stages_lines(freqs, problem.kinematics, exclude,
+                                   problem.featurizer.max_freq_hz)
     print(f"local floor ({floor[bins].min() / noise:.3g}-{floor[bins].max() / noise:.3g} x the "
           f"flat one): error {noise_corrected_error(model[bins], meas[bins], floor[bins]):.3f} "
           f"on the same bins, {noise_corrected_error(model[own], meas[own], floor[own]):.3f} "
@@ -126,16 +153,24 @@ def budget(path: Path) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "gfd")
-    ap.add_argument("--records", default="b30hz0,b30hz90,h30hz0,h30hz90")
+    ap.add_argument("--phm09", type=Path, help="the PHM09 folder (its zips) instead")
+    ap.add_argument("--records", help="names without their extension (default: the GFD four; "
+                    "with --phm09 spur 1_30hz_High_1 and spur 2_30hz_High_1)")
     args = ap.parse_args()
-    paths = [args.data / f"{name}.csv.gz" for name in args.records.split(",")]
+    if args.phm09:
+        names = args.records or "spur 1_30hz_High_1,spur 2_30hz_High_1"
+        paths = [args.phm09 / f"{name}.zip" for name in names.split(",")]
+    else:
+        names = args.records or "b30hz0,b30hz90,h30hz0,h30hz90"
+        paths = [args.data / f"{name}.csv.gz" for name in names.split(",")]
     missing = [str(p) for p in paths if not p.exists()]
     if missing:
         print(f"error_budget: no record {', '.join(missing)}", file=sys.stderr)
         return 2
     print(f"{platform.machine()}, Python {platform.python_version()}")
     for path in paths:
-        budget(path)
+        for name, problem in (phm09_problems if args.phm09 else gfd_problems)(path).items():
+            budget(name, problem)
     return 0
 
 

@@ -78,14 +78,22 @@ def features_from_spectrum(spec: SyncSpectrum, kin: GearKinematics, mode: str = 
                                f"reach {top:.1f} Hz: raise the sample rate")
     masks = [(spec.freq_hz >= b.low_hz) & (spec.freq_hz < b.high_hz) for b in bands]
     if len(exclude_hz):
-        others = _near(spec.freq_hz, np.asarray(exclude_hz), 0.5 * kin.f_hunting_hz)
-        own = _near(spec.freq_hz, own_lines(kin, top), 0.5 * kin.f_hunting_hz)
-        masks = [m & ~(others & ~own) for m in masks]
+        others = other_stages_lines(spec.freq_hz, kin, exclude_hz, top)
+        masks = [m & ~others for m in masks]
     if mode == "lines":
         keep = np.any(masks, axis=0)
         return Spectrum(spec.freq_hz[keep], spec.amplitude[keep], spec.noise_power)
     idx = [np.flatnonzero(m)[np.argmax(spec.amplitude[m])] for m in masks if np.any(m)]
     return Spectrum(spec.freq_hz[idx], spec.amplitude[idx], spec.noise_power)
+
+
+def other_stages_lines(freqs: np.ndarray, kin: GearKinematics, exclude_hz: tuple[float, ...],
+                       max_freq_hz: float) -> np.ndarray:
+    """Which of ``freqs`` a stage leaves out: within half a line spacing of ``exclude_hz``
+    (another stage's lines) and of none of the pair's own lines (:func:`own_lines`)."""
+    tolerance = 0.5 * kin.f_hunting_hz
+    return (_near(freqs, np.asarray(exclude_hz, dtype=float), tolerance)
+            & ~_near(freqs, own_lines(kin, max_freq_hz), tolerance))
 
 
 def own_lines(kin: GearKinematics, max_freq_hz: float) -> np.ndarray:

@@ -10,7 +10,10 @@ and the residual's energy by kinematic family.
   chance of any false peak is at most alpha (Bonferroni).
 - The error bins (what the ``error`` of a comparison is taken on) depend on the
   measurement only, so model revisions are compared on the same footing: every
-  synchronous line up to the top band edge, and every significant peak.
+  synchronous line up to the top band edge, and every significant peak; on one stage of
+  a machine, none near another stage's lines that is not one of the pair's own (the rule
+  of the stage's fit, :func:`pydiag.gear.features.other_stages_lines`): no pair model of
+  this stage makes them, and they are named in the peaks and the residual's families.
 - Every bin goes to one group of :data:`RESIDUAL_GROUPS`: the kinematic line on it, else a
   significant peak (non-kinematic), else broadband.
 """
@@ -23,7 +26,7 @@ import numpy as np
 
 from pydiag.core.errors import EstimationError
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.features import FullSpectrumFeaturizer
+from pydiag.gear.features import FullSpectrumFeaturizer, other_stages_lines
 from pydiag.gear.kinematic_map import PRIORITY
 from pydiag.signal.spectra import Spectrum, local_maxima, whole_periods
 
@@ -121,11 +124,14 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
                               f"period ({kin.period_s:.4g} s)")
     featurizer = featurizer or FullSpectrumFeaturizer(
         kin, min(n_periods, max_periods or n_periods), problem.featurizer.max_freq_hz)
+    exclude = getattr(problem.featurizer, "exclude_hz", ())  # another stage's lines
     spectra, margin, bins = {}, {}, None
     for channel in problem.channels:
         spectra[channel] = spectrum = featurizer.spectrum(m.channels[channel], m.sample_rate_hz)
         freqs, amp, noise = spectrum.freq_hz, spectrum.amplitude, spectrum.noise_power
         margin[channel] = np.sqrt(noise * np.log(freqs.size / false_alarm_rate))
         mask = error_bins(amp, margin[channel], featurizer.n_periods)
+        if exclude and featurizer.envelope_band_hz is None:
+            mask &= ~other_stages_lines(freqs, kin, exclude, featurizer.max_freq_hz)
         bins = mask if bins is None else bins | mask
     return MeasuredSpectra(featurizer.with_bins(bins), spectra, margin)

@@ -92,7 +92,8 @@ def test_batch_diagnoses_every_stage_of_every_record(gear_fmu, tmp_path):
 def test_compare_of_one_stage_names_the_other_stages_lines(gear_fmu):
     """Stage 2 compared on a two-stage record: stage 1's mesh and its sidebands, which no
     pair model of stage 2 makes, are the other stage's lines in the peaks and the residual
-    families, not unexplained; the cursors mark both stages' meshes."""
+    families, not unexplained, and not in the error (as in the stage's fit); the cursors
+    mark both stages' meshes."""
     from pydiag.gear.speed import estimate_speed
     from pydiag.loop.compare import compare
     m = gearbox_record(4)
@@ -108,4 +109,10 @@ def test_compare_of_one_stage_names_the_other_stages_lines(gear_fmu):
                 and p.energy_fraction > 0.01], c.peaks[:5]
     shares = c.residual_by_family["acc"]
     assert shares["other_stages"]["measured"] > 0.2, shares
+    from pydiag.loop.residual import measured_spectra
+    scored = measured_spectra(problem, c.false_alarm_rate).featurizer.bins
+    freqs = np.asarray(c.spectra["acc"].freq_hz)
+    assert not scored[np.abs(freqs - first_mesh) < 1.5 * c.bin_hz].any()
+    assert scored[np.abs(freqs - problem.kinematics.f_mesh_hz) < 0.5 * c.bin_hz].all()
+    assert c.n_error_bins == np.count_nonzero(scored)
     assert {"mesh", "stage_mesh"} <= {mk["family"] for mk in c.markers}
