@@ -68,8 +68,10 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
         lines.append(f"  {i:2d}. {p.channel:<5} {p.freq_hz:9.2f} Hz  {p.family:<15} "
                      f"{100 * p.energy_fraction:5.1f} % of the peaks' energy  {p.label}")
     for channel, groups in c.residual_by_family.items():
-        lines.append(f"by family  : {channel}: share of the measured / of the residual energy")
-        lines += [f"  {g:<18} {100 * v['measured']:5.1f} % / {100 * v['residual']:5.1f} %"
+        lines.append(f"by family  : {channel}: share of the measured / of the residual energy "
+                     "/ of the error (its bins)")
+        lines += [f"  {g:<18} {100 * v['measured']:5.1f} % / {100 * v['residual']:5.1f} % / "
+                  + (f"{100 * v['error']:5.1f} %" if "error" in v else "-")
                   for g, v in groups.items()]
     shown = [s for s in c.suggested_effects if s.shown]
     lines.append("suggested  : " + ("none" if not shown else ""))

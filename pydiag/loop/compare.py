@@ -78,7 +78,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
         model = featurizer.spectrum(y[i], rate).amplitude
         spectra[channel] = ChannelSpectrum(freqs.tolist(), meas.tolist(), model.tolist(), noise)
         groups = bin_groups(freqs, lines, bin_hz, meas, measured.margin[channel])
-        by_family[channel] = residual_shares(groups, meas, model)
+        by_family[channel] = residual_shares(groups, meas, model, bins, noise)
         errors.append(noise_corrected_error(model[bins], meas[bins], noise))
         raw.append(spectral_error(model[bins], meas[bins], noise))
         excess = meas - model

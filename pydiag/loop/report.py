@@ -96,13 +96,21 @@ def _spectrum_figure(name: str, spec, markers: list[dict], peaks: list):
     return fig
 
 
+def _percent(share: float | None) -> str:
+    return "-" if share is None else f"{100 * share:.1f} %"
+
+
 def _family_figure(by_family: dict[str, dict[str, dict[str, float]]]):
-    """Each group's share of the measured and of the residual energy, per channel."""
+    """Each group's share of the measured and of the residual energy, and of the error,
+    per channel."""
     import plotly.graph_objects as go
 
     fig = go.Figure()
     for channel, groups in by_family.items():
-        for what, colour in (("measured", "#95a5a6"), ("residual", "#c0392b")):
+        for what, colour in (("measured", "#95a5a6"), ("residual", "#c0392b"),
+                             ("error", "#1f5fa8")):
+            if any(what not in groups[g] for g in RESIDUAL_GROUPS):
+                continue
             fig.add_trace(go.Bar(
                 x=list(RESIDUAL_GROUPS), y=[100 * groups[g][what] for g in RESIDUAL_GROUPS],
                 name=f"{channel}: of the {what} energy", offsetgroup=f"{channel}-{what}",
@@ -165,10 +173,12 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
         parts.append("<h2>Residual by family</h2>"
                      + _html(_family_figure(c.residual_by_family), "residual-by-family"))
         parts.append("<table><tr><th>channel</th><th>lines</th>"
-                     "<th>of the measured energy</th><th>of the residual energy</th></tr>")
+                     "<th>of the measured energy</th><th>of the residual energy</th>"
+                     "<th>of the error (its bins)</th></tr>")
         parts += [f"<tr><td>{html.escape(ch)}</td><td>{html.escape(g)}</td>"
                   f"<td class='num'>{100 * v['measured']:.1f} %</td>"
-                  f"<td class='num'>{100 * v['residual']:.1f} %</td></tr>"
+                  f"<td class='num'>{100 * v['residual']:.1f} %</td>"
+                  f"<td class='num'>{_percent(v.get('error'))}</td></tr>"
                   for ch, groups in c.residual_by_family.items() for g, v in groups.items()]
         parts.append("</table>")
     parts.append("<h2>Suggested effects</h2>")

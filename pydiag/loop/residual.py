@@ -15,7 +15,9 @@ and the residual's energy by kinematic family.
   of the stage's fit, :func:`pydiag.gear.features.other_stages_lines`): no pair model of
   this stage makes them, and they are named in the peaks and the residual's families.
 - Every bin goes to one group of :data:`RESIDUAL_GROUPS`: the kinematic line on it, else a
-  significant peak (non-kinematic), else broadband.
+  significant peak (non-kinematic), else broadband. Each group's share of the measured
+  and of the residual energy is over every bin; its share of the error, over the error's
+  bins alone, with Eq. 12's weights: where the error lies (bench/RESULTS.md, section 10).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pydiag.core.errors import EstimationError
+from pydiag.fit.objective import spectral_residuals
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.features import FullSpectrumFeaturizer, other_stages_lines
 from pydiag.gear.kinematic_map import PRIORITY
@@ -60,14 +63,22 @@ def bin_groups(freqs: np.ndarray, lines: list, bin_hz: float, measured: np.ndarr
     return groups
 
 
-def residual_shares(groups: np.ndarray, measured: np.ndarray,
-                    model: np.ndarray) -> dict[str, dict[str, float]]:
-    """Each group's share of the measured and of the residual energy."""
+def residual_shares(groups: np.ndarray, measured: np.ndarray, model: np.ndarray,
+                    scored: np.ndarray | None = None,
+                    noise_power: float = 0.0) -> dict[str, dict[str, float]]:
+    """Each group's share of the measured and of the residual energy; with ``scored`` (the
+    error's bins) and the noise power, its share of the squared Eq. 12 error as well."""
     meas_sq, res_sq = measured ** 2, (measured - model) ** 2
     total_meas, total_res = float(meas_sq.sum()) or 1.0, float(res_sq.sum()) or 1.0
-    return {g: {"measured": float(meas_sq[groups == i].sum()) / total_meas,
-                "residual": float(res_sq[groups == i].sum()) / total_res}
-            for i, g in enumerate(RESIDUAL_GROUPS)}
+    out = {g: {"measured": float(meas_sq[groups == i].sum()) / total_meas,
+               "residual": float(res_sq[groups == i].sum()) / total_res}
+           for i, g in enumerate(RESIDUAL_GROUPS)}
+    if scored is not None and np.any(scored):
+        terms = spectral_residuals(model[scored], measured[scored], noise_power) ** 2
+        total = float(terms.sum()) or 1.0
+        for i, g in enumerate(RESIDUAL_GROUPS):
+            out[g]["error"] = float(terms[groups[scored] == i].sum()) / total
+    return out
 
 
 def describe_non_kinematic(freq_hz: float, kin, bin_hz: float) -> str:

@@ -35,6 +35,16 @@ def test_every_bin_goes_to_one_group_and_the_shares_are_energy_shares():
     for group in ("pinion_orders", "gear_orders", "non_kinematic"):
         assert shares[group]["residual"] == pytest.approx(1 / 3)
     assert sum(s["measured"] for s in shares.values()) == pytest.approx(1.0)
+    assert "error" not in shares["mesh_harmonics"]  # no bins scored: no share of the error
+    # the error's bins: the mesh line, the gear order and a broadband bin; its share of the
+    # error is over those alone, with Eq. 12's weights (the missing gear line, 1 - 0.01,
+    # against a broadband bin the model has right)
+    scored = np.zeros(freqs.size, dtype=bool)
+    scored[[at[KIN.f_mesh_hz], at[2 * KIN.f_gear_hz], 5]] = True
+    shares = residual_shares(groups, measured, model, scored)
+    assert shares["gear_orders"]["error"] == pytest.approx(1.0)
+    assert shares["pinion_orders"]["error"] == shares["mesh_harmonics"]["error"] == 0.0
+    assert sum(s["error"] for s in shares.values()) == pytest.approx(1.0)
 
 
 def test_a_non_kinematic_line_is_described_and_claimed_by_no_signature_that_misses_it():
