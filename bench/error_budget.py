@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.objective import noise_corrected_error  # noqa: E402
+from pydiag.fit.objective import noise_corrected_error, spectral_residuals  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.features import other_stages_lines  # noqa: E402
 from pydiag.gear.kinematic_map import kinematic_map  # noqa: E402
@@ -112,14 +112,16 @@ def budget(name: str, problem) -> None:
     bins = measured_spectra(problem, rate).featurizer.bins  # the error's (compare's) bins
     groups = bin_groups(freqs, kinematic_map(problem.kinematics, problem.featurizer.max_freq_hz),
                         c.bin_hz, meas, margin)
-    expected = np.sqrt(model ** 2 + noise)
-    term = (expected / expected[bins].max() + 1.0) ** 2 * (expected - meas) ** 2
-    total = float(term[bins].sum())
+    term = np.zeros(meas.size)  # each scored bin's part of the squared error
+    term[bins] = spectral_residuals(model[bins], meas[bins], noise) ** 2
+    total = float(term.sum())
+    shares = c.residual_by_family[problem.channels[0]]
     between = (np.arange(meas.size) + 1) % c.n_periods != 0  # not on a synchronous line
     print(f"\n{name}: error {c.error:.3f} on {bins.sum()} bins ({c.n_periods} periods)")
     tracked = problem.measurement
     samples = int(round(problem.kinematics.period_s * tracked.sample_rate_hz))
-    print("| group | bins | share of the measured | share of the error's square | repeats |")
+    print("| group | bins | share of the measured (the error's bins) | share of the error's "
+          "square | repeats |")
     print("|---|---|---|---|---|")
     for i, name in enumerate(RESIDUAL_GROUPS):
         on = bins & (groups == i)
@@ -128,7 +130,7 @@ def budget(name: str, problem) -> None:
             again = (f"{repeatability(tracked.channels[problem.channels[0]], samples, lines):.2f}"
                      if lines.size else "-")
             print(f"| {name} | {on.sum()} | {np.sum(meas[on] ** 2) / np.sum(meas[bins] ** 2):.2f}"
-                  f" | {term[on].sum() / total:.2f} | {again} |")
+                  f" | {shares[name]['error']:.2f} | {again} |")
     top = np.flatnonzero(bins)[np.argsort(-term[bins])[:6]]
     print("largest bins: " + "; ".join(
         f"{freqs[k]:.1f} Hz {RESIDUAL_GROUPS[groups[k]]} measured {meas[k]:.3g} model "
