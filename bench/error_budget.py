@@ -123,14 +123,14 @@ def budget(name: str, problem) -> None:
     print("| group | bins | share of the measured (the error's bins) | share of the error's "
           "square | repeats |")
     print("|---|---|---|---|---|")
-    for i, name in enumerate(RESIDUAL_GROUPS):
+    for i, group in enumerate(RESIDUAL_GROUPS):
         on = bins & (groups == i)
         if on.any():
             lines = (np.flatnonzero(on & ~between) + 1) // c.n_periods  # orders of the period
             again = (f"{repeatability(tracked.channels[problem.channels[0]], samples, lines):.2f}"
                      if lines.size else "-")
-            print(f"| {name} | {on.sum()} | {np.sum(meas[on] ** 2) / np.sum(meas[bins] ** 2):.2f}"
-                  f" | {shares[name]['error']:.2f} | {again} |")
+            print(f"| {group} | {on.sum()} | {np.sum(meas[on] ** 2) / np.sum(meas[bins] ** 2):.2f}"
+                  f" | {shares[group]['error']:.2f} | {again} |")
     top = np.flatnonzero(bins)[np.argsort(-term[bins])[:6]]
     print("largest bins: " + "; ".join(
         f"{freqs[k]:.1f} Hz {RESIDUAL_GROUPS[groups[k]]} measured {meas[k]:.3g} model "
