@@ -80,6 +80,7 @@ def noise_corrected_error(model: np.ndarray, reference: np.ndarray,
     noise_sq = np.sum(weight * (2 * expected ** 2 - 2 * expected * rician_mean(model, noise_power)))
     measured_sq = np.sum(reference ** 2) or 1.0
     residual_sq = raw ** 2 * measured_sq  # the weighted squared residual of Eq. (12)
+    # one P for every bin: N x P, as it always was (a sum of N copies differs in the last bit)
     noise_total = (reference.size * max(float(noise_power), 0.0) if np.ndim(noise_power) == 0
                    else float(np.sum(noise)))
     signal_sq = max(measured_sq - noise_total, 1e-3 * measured_sq)

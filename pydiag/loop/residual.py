@@ -135,14 +135,14 @@ def measured_spectra(problem: FitProblem, false_alarm_rate: float,
                               f"period ({kin.period_s:.4g} s)")
     featurizer = featurizer or FullSpectrumFeaturizer(
         kin, min(n_periods, max_periods or n_periods), problem.featurizer.max_freq_hz)
-    exclude = getattr(problem.featurizer, "exclude_hz", ())  # another stage's lines
     spectra, margin, bins = {}, {}, None
     for channel in problem.channels:
         spectra[channel] = spectrum = featurizer.spectrum(m.channels[channel], m.sample_rate_hz)
         freqs, amp, noise = spectrum.freq_hz, spectrum.amplitude, spectrum.noise_power
         margin[channel] = np.sqrt(noise * np.log(freqs.size / false_alarm_rate))
         mask = error_bins(amp, margin[channel], featurizer.n_periods)
-        if exclude and featurizer.envelope_band_hz is None:
-            mask &= ~other_stages_lines(freqs, kin, exclude, featurizer.max_freq_hz)
         bins = mask if bins is None else bins | mask
+    exclude = getattr(problem.featurizer, "exclude_hz", ())  # another stage's lines
+    if exclude and featurizer.envelope_band_hz is None:  # every channel has these bins
+        bins &= ~other_stages_lines(freqs, kin, exclude, featurizer.max_freq_hz)
     return MeasuredSpectra(featurizer.with_bins(bins), spectra, margin)
