@@ -51,6 +51,12 @@ class Parameter:
         return [v for v in values if not (self.periodic and v >= self.high)]
 
     @property
+    def off(self) -> float:
+        """The estimate nearest zero in range: what switches an effect's amplitude off (its
+        lower bound for a non-negative amplitude, 0 for a signed coefficient)."""
+        return min(max(0.0, self.low), self.high)
+
+    @property
     def fmu_variable(self) -> str:
         return self.variable or self.name
 

@@ -1,6 +1,10 @@
 """The fit problem: built once from (FMU, adapter, measurement), then fitted, compared,
 extended with an effect (:meth:`FitProblem.derive`, which opens no FMU).
 
+One concern: what a fit of a model to a record solves (the record's features, the
+model's runs, their residuals); the record's preparation is
+:mod:`pydiag.fit.operating_point`'s, a gain's arithmetic :mod:`pydiag.fit.gain`'s.
+
 :func:`build_problem` makes it in three steps: the operating point and the record prepared
 at it (:mod:`pydiag.fit.operating_point`: the speed found and the record order-tracked),
 then the problem itself: the FMU opened once to check the adapter and the parameters
@@ -13,7 +17,10 @@ units of its own, so the model's level is not the measurement's. With ``fit_gain
 channel's model features are scaled by the gain that fits them best in least squares,
 in closed form (it enters linearly): ``g = sum(S R~) / sum(S^2)`` with the noise taken out
 of the measured amplitudes, ``R~ = sqrt(max(R^2 - P, 0))``. The fault parameters then
-match the shape of the spectrum, never its overall level.
+match the shape of the spectrum, never its overall level. With ``gain_curve`` too, the
+gain is a curve over frequency with a node at every mesh harmonic
+(:mod:`pydiag.fit.gain`): the parameters then match the pattern of lines around each
+harmonic, not the spectrum's shape.
 
 With the level free, the stiffness variation of the faulty tooth (``a_f``) and of the
 healthy ones (``a0``, fixed at the paper's 0.1 otherwise) both scale the mesh lines, so
@@ -33,6 +40,7 @@ import numpy as np
 from pydiag.core.errors import AdapterError, EstimationError, PlantError
 from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import Parameter, fmu_values
+from pydiag.fit.gain import apply_curve, curve_basis, curve_nodes, fitted_curve, fitted_gain
 from pydiag.fit.objective import spectral_residuals
 from pydiag.fit.operating_point import at_model_speed, prepare_record, resolve_operating_point
 from pydiag.fmu.description import read_model_description
@@ -76,6 +84,8 @@ class FitProblem:
         transfer: paths between the model's outputs and the sensors, applied to the
             simulated outputs (:mod:`pydiag.signal.transfer`); their variables are among
             the parameters and fixed values, never set in the FMU
+        gain_curve: with ``fit_gain``, each fitted gain is a curve over frequency with a
+            node at every mesh harmonic (module docstring)
     """
 
     spec: PlantSpec
@@ -93,6 +103,7 @@ class FitProblem:
     speed: SpeedEstimate | None = None
     fixed_gains: dict[str, float] = field(default_factory=dict)
     transfer: tuple[HousingMode, ...] = ()
+    gain_curve: bool = False
 
     @property
     def lows(self) -> np.ndarray:
@@ -147,21 +158,46 @@ class FitProblem:
                 y[i] = path.apply(y[i], self.spec.sample_rate_hz, at)
         return np.asarray(self.scales)[:, None] * y
 
-    def _gain(self, model: np.ndarray, channel: str) -> float:
+    def _clean(self, channel: str) -> np.ndarray:
+        ref = self.reference[channel]
+        return np.sqrt(np.maximum(ref.amplitude ** 2 - ref.noise_power, 0.0))
+
+    def _curved(self, channel: str) -> bool:
+        return self.fit_gain and self.gain_curve and channel not in self.fixed_gains
+
+    def curve_nodes_hz(self) -> np.ndarray:
+        """The gain curve's nodes (:func:`pydiag.fit.gain.curve_nodes`), Hz."""
+        return curve_nodes(self.kinematics, max(float(s.freq_hz[-1])
+                                                for s in self.reference.values()))
+
+    def _curve(self, model: np.ndarray, channel: str) -> np.ndarray:
+        """The gain curve's node values that fit ``model`` (features) to ``channel``."""
+        basis = curve_basis(self.reference[channel].freq_hz, self.curve_nodes_hz())
+        return fitted_curve(model, self._clean(channel), basis)
+
+    def _gain(self, model: np.ndarray, channel: str) -> float | np.ndarray:
+        """The gain of ``model`` (features) onto ``channel``: a number, or with
+        ``gain_curve`` one a feature."""
         if channel in self.fixed_gains:
             return self.fixed_gains[channel]
         if not self.fit_gain:
             return 1.0
-        ref = self.reference[channel]
-        clean = np.sqrt(np.maximum(ref.amplitude ** 2 - ref.noise_power, 0.0))
-        power = float(np.dot(model, model))
-        return max(float(np.dot(model, clean)) / power, 0.0) if power > 0 else 1.0
+        if self.gain_curve:
+            return (curve_basis(self.reference[channel].freq_hz, self.curve_nodes_hz())
+                    @ self._curve(model, channel))
+        return fitted_gain(model, self._clean(channel))
 
     def gains(self, plant: FmuPlant, x: np.ndarray) -> dict[str, float]:
-        """Channel -> the model's gain at ``x`` (1.0 everywhere without ``fit_gain``)."""
+        """Channel -> the model's gain at ``x`` (1.0 everywhere without ``fit_gain``; with
+        ``gain_curve``, the curve's value at the first mesh harmonic)."""
         y = self._simulate(plant, x, self.featurizer.duration_s)
-        return {c: self._gain(self.featurizer(y[i], self.spec.sample_rate_hz).amplitude, c)
-                for i, c in enumerate(self.channels)}
+        fs = self.spec.sample_rate_hz
+        out = {}
+        for i, c in enumerate(self.channels):
+            model = self.featurizer(y[i], fs).amplitude
+            out[c] = (float(self._curve(model, c)[0]) if self._curved(c)
+                      else float(self._gain(model, c)))
+        return out
 
     def model_signals(self, plant: FmuPlant, x: np.ndarray, duration_s: float | None = None) -> np.ndarray:
         """Channel signals (channel units, gains applied) of the model at ``x``."""
@@ -169,8 +205,12 @@ class FitProblem:
         y = self._simulate(plant, x, max(duration_s, self.featurizer.duration_s))
         if self.fit_gain:
             fs = self.spec.sample_rate_hz
-            y = np.array([self._gain(self.featurizer(y[i], fs).amplitude, c) * y[i]
-                          for i, c in enumerate(self.channels)])
+            out = []
+            for i, c in enumerate(self.channels):
+                model = self.featurizer(y[i], fs).amplitude
+                out.append(apply_curve(y[i], fs, self.curve_nodes_hz(), self._curve(model, c))
+                           if self._curved(c) else self._gain(model, c) * y[i])
+            y = np.array(out)
         return y[:, :int(round(duration_s * self.spec.sample_rate_hz))]
 
     def residuals(self, plant: FmuPlant, x: np.ndarray) -> np.ndarray:
@@ -184,13 +224,28 @@ class FitProblem:
 
     def residuals_of(self, y: np.ndarray) -> np.ndarray:
         """Eq. (12) residuals of every channel of the signals ``y`` (:meth:`simulate`'s)."""
+        return self.residuals_of_amplitudes(
+            [self.featurizer(y[i], self.spec.sample_rate_hz).amplitude
+             for i in range(len(self.channels))])
+
+    def residuals_of_amplitudes(self, amplitudes: list[np.ndarray]) -> np.ndarray:
+        """Eq. (12) residuals of the model's feature amplitudes, one array a channel."""
         out = []
-        for i, c in enumerate(self.channels):
-            model = self.featurizer(y[i], self.spec.sample_rate_hz).amplitude
+        for model, c in zip(amplitudes, self.channels):
             ref = self.reference[c]
             out.append(spectral_residuals(self._gain(model, c) * model, ref.amplitude,
                                           ref.noise_power))
         return np.concatenate(out)
+
+    def linear_features(self, y: np.ndarray) -> list[np.ndarray] | None:
+        """Complex values a channel whose moduli are the feature amplitudes of the signals
+        ``y``, linear in them; None when the featurizer's are not
+        (``FullSpectrumFeaturizer.linear``)."""
+        linear = getattr(self.featurizer, "linear", None)
+        if linear is None:
+            return None
+        out = [linear(y[i], self.spec.sample_rate_hz) for i in range(len(self.channels))]
+        return None if any(v is None for v in out) else out
 
     def derive(self, fmu_path: str | None = None, parameters: tuple[Parameter, ...] | None = None,
                fixed_values: dict[str, float] | None = None,
@@ -302,7 +357,8 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
                   warmup_s: float | None = None, relative_tolerance: float | None = None,
                   engine: str | None = None, fit_gain: bool | None = False,
                   speed: SpeedSettings | None = None,
-                  speed_estimate: SpeedEstimate | None = None) -> FitProblem:
+                  speed_estimate: SpeedEstimate | None = None,
+                  gain_curve: bool = False) -> FitProblem:
     """The fit problem of ``measurement`` on ``fmu_path``.
 
     Args:
@@ -325,6 +381,8 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
         speed: find the speed in the record and order-track it (gear models); None takes
             the record at the nominal speed as it is
         speed_estimate: a speed already found for this (already tracked) measurement
+        gain_curve: with the gain fitted, a curve over frequency (a node at every mesh
+            harmonic, :mod:`pydiag.fit.gain`) rather than one number a channel
     """
     if fit_gain is None:
         fit_gain = measurement.metadata.get("source") != SIMULATED_SOURCE
@@ -361,6 +419,9 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     except (PlantError, AdapterError) as err:
         raise EstimationError(str(err)) from err
     kin = resolve_operating_point(measurement, fmu_kin, kinematics, operating_point)
+    if gain_curve and fit_gain and kin is None:
+        raise EstimationError("a gain curve needs the gear's kinematics: its nodes are the "
+                              "mesh harmonics (give the teeth and the speed)")
     if kin is not None:
         if speed is not None and speed_estimate is None:  # no lines the record cannot hold
             _check_rate(measurement, featurizer or KinematicFeaturizer(kin, feature_mode),
@@ -390,4 +451,5 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     return FitProblem(spec, tuple(s.channel for s in maps), tuple(s.scale for s in maps),
                       parameters, reference, featurizer,
                       adapter.warmup_s if warmup_s is None else warmup_s, kin, measurement,
-                      adapter, fixed, fit_gain, speed_estimate)
+                      adapter, fixed, fit_gain, speed_estimate,
+                      gain_curve=gain_curve and fit_gain)

@@ -125,11 +125,12 @@ class Effect:
         return f"its lines are not known without {missing}" if missing else ""
 
     def neutral_values(self) -> dict[str, float]:
-        """FMU values that switch the effect off (its lower bounds; none for a transfer
-        path, which is off when it is not applied)."""
+        """FMU values that switch the effect off (each parameter's value nearest zero,
+        :attr:`pydiag.core.parameters.Parameter.off`; none for a transfer path, which is
+        off when it is not applied)."""
         if self.transfer is not None:
             return {}
-        return {p.fmu_variable: p.fmu_value(p.low) for p in self.parameters}
+        return {p.fmu_variable: p.fmu_value(p.off) for p in self.parameters}
 
 
 def _gear_eccentricity(line, freq, f_mesh):

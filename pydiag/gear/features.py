@@ -208,8 +208,8 @@ class FullSpectrumFeaturizer:
         return f"{self.duration_s / self.kinematics.period_s:.0f} fundamental periods " \
                f"({self.duration_s:.4g} s)"
 
-    def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
-        """Every bin up to max_freq_hz, and the noise between the synchronous lines."""
+    def _analysed(self, signal: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, float]:
+        """The samples the spectrum is taken of, and their rate."""
         x = first_window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
         if self.envelope_band_hz is not None:
             periods = int(round(self.duration_s / self.kinematics.period_s))
@@ -221,6 +221,11 @@ class FullSpectrumFeaturizer:
             length = x.size // (2 * self.n_periods)
             x = np.concatenate([x[k * length:(k + 1) * length]
                                 for k in range(self.half, 2 * self.n_periods, 2)])
+        return x, sample_rate_hz
+
+    def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
+        """Every bin up to max_freq_hz, and the noise between the synchronous lines."""
+        x, sample_rate_hz = self._analysed(signal, sample_rate_hz)
         freqs, amp = amplitude_spectrum(x, sample_rate_hz)
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)
         idx = np.flatnonzero(keep)
@@ -249,6 +254,20 @@ class FullSpectrumFeaturizer:
             raise ValueError("a whole-record featurizer has no other half")
         return FullSpectrumFeaturizer(self.kinematics, self.n_periods, self.max_freq_hz,
                                       self.bins, 1 - self.half, self.envelope_band_hz)
+
+    def linear(self, signal: np.ndarray, sample_rate_hz: float) -> np.ndarray | None:
+        """Complex values at this featurizer's bins whose moduli are its amplitudes: linear
+        in ``signal`` (so a model affine in its parameters is affine here, and its
+        amplitudes are had without a spectrum each); None for an envelope's spectrum,
+        which is not."""
+        if self.envelope_band_hz is not None:
+            return None
+        x, sample_rate_hz = self._analysed(signal, sample_rate_hz)
+        spectrum = 2.0 * np.fft.rfft(x - np.mean(x)) / x.size
+        freqs = np.fft.rfftfreq(x.size, 1.0 / sample_rate_hz)
+        keep = (freqs > 0) & (freqs <= self.max_freq_hz)
+        values = spectrum[keep]
+        return values if self.bins is None else values[self.bins]
 
     def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
         full = self.spectrum(signal, sample_rate_hz)

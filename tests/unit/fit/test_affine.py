@@ -26,7 +26,8 @@ def problem(truth: float, low: float = 0.0, high: float = 10.0):
 
     spec = SimpleNamespace(open=lambda: contextlib.nullcontext(None))
     return SimpleNamespace(parameters=(Parameter("a", low, high),), spec=spec,
-                           simulate=simulate, residuals_of=residuals_of), calls
+                           simulate=simulate, residuals_of=residuals_of,
+                           linear_features=lambda y: None), calls
 
 
 def test_the_value_is_found_from_two_simulations():
@@ -42,9 +43,10 @@ def test_a_value_beyond_the_range_stops_at_its_end():
     assert fitted["a"] == 10.0
 
 
-def lines(truth: list[float], high: float = 10.0):
+def lines(truth: list[float], high: float = 10.0, linear: bool = False, low: float = 0.0):
     """y(a) = base + sum_j a_j * shape_j (lines at 5, 9 and 13 cycles), measured at
-    ``truth``; counts its simulations."""
+    ``truth``; counts its simulations. ``linear``: the problem gives its features' complex
+    values (``FitProblem.linear_features``), and counts the spectra taken of a signal."""
     t = np.linspace(0.0, 1.0, 400, endpoint=False)
     base = np.sin(2 * np.pi * 3 * t)
     shapes = np.array([np.cos(2 * np.pi * k * t) for k in (5, 9, 13)])
@@ -54,13 +56,23 @@ def lines(truth: list[float], high: float = 10.0):
         calls.append(tuple(float(v) for v in x))
         return (base + x @ shapes)[None, :]
 
+    measured = np.abs(np.fft.rfft(base + np.array(truth) @ shapes))
+    spectra = []
+
     def residuals_of(y):
-        return np.abs(np.fft.rfft(y[0])) - np.abs(np.fft.rfft(base + np.array(truth) @ shapes))
+        spectra.append(1)
+        return np.abs(np.fft.rfft(y[0])) - measured
+
+    def linear_features(y):
+        spectra.append(1)
+        return [np.fft.rfft(y[0])] if linear else None
 
     spec = SimpleNamespace(open=lambda: contextlib.nullcontext(None))
-    params = tuple(Parameter(f"a{j}", 0.0, high) for j in range(3))
+    params = tuple(Parameter(f"a{j}", low, high) for j in range(3))
     return SimpleNamespace(parameters=params, spec=spec, simulate=simulate,
-                           residuals_of=residuals_of), calls
+                           residuals_of=residuals_of, linear_features=linear_features,
+                           residuals_of_amplitudes=lambda amps: amps[0] - measured,
+                           spectra=spectra), calls
 
 
 def test_several_values_are_found_from_one_simulation_more_than_parameters():
@@ -76,3 +88,21 @@ def test_several_values_beyond_the_range_stop_at_its_end():
     p, _ = lines([12.0, 3.0, 0.5])
     fitted, _ = fit_affine(p)
     assert [fitted[f"a{j}"] for j in range(3)] == pytest.approx([10.0, 3.0, 0.5], abs=1e-2)
+
+
+def test_features_linear_in_the_signal_are_taken_once_a_simulation():
+    """The same fit with a spectrum of each simulation only (not one an evaluation of the
+    least squares), for signed coefficients too (their off value, 0, in mid-range; an
+    amplitude spectrum of lines apart does not tell a coefficient's sign)."""
+    found = {}
+    for linear in (False, True):
+        p, _ = lines([2.5, -1.0, 7.25], linear=linear, low=-10.0)
+        fitted, error = fit_affine(p)
+        found[linear] = [fitted[f"a{j}"] for j in range(3)]
+        assert np.abs(found[linear]) == pytest.approx([2.5, 1.0, 7.25], abs=1e-2)
+        assert error < 1e-2
+        if linear:
+            assert len(p.spectra) == 4  # one a simulation
+        else:
+            assert len(p.spectra) > 10  # one an evaluation
+    assert found[True] == pytest.approx(found[False], abs=1e-6)
