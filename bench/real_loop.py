@@ -19,7 +19,7 @@ the first half chose) of the base model and of the accepted effect.
 
 Usage:
     .venv/bin/python bench/real_loop.py [--data ../shared/data/gfd] [--records b30hz90,...]
-                                        [--steps 3]
+                                        [--steps 3] [--gain curve]
 """
 
 from __future__ import annotations
@@ -48,13 +48,13 @@ SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
 BASE_FMU = str(ROOT / "build" / "GearPair.fmu")
 
 
-def loop(path: Path, steps: int, build: Path) -> list[str]:
+def loop(path: Path, steps: int, build: Path, gain_curve: bool = False) -> list[str]:
     """The markdown rows of one record's sequence (:func:`pydiag.loop.accumulate.accumulate`);
     prints each step as it is made."""
     m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
     name = path.name.split(".")[0]
     problem = build_problem(BASE_FMU, m, operating_point=OPERATING_POINT,
-                            speed=SpeedSettings("auto"), fit_gain=True)
+                            speed=SpeedSettings("auto"), fit_gain=True, gain_curve=gain_curve)
     rows, clock = [], [time.perf_counter()]
 
     def report(step: LoopStep) -> None:
@@ -94,6 +94,8 @@ def main() -> None:
     ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "gfd"))
     ap.add_argument("--records", help="comma-separated record names (default: every *.csv.gz)")
     ap.add_argument("--steps", type=int, default=3, help="at most this many compares per record")
+    ap.add_argument("--gain", choices=("fit", "curve"), default="fit",
+                    help="a gain a channel, or a gain curve with a node at every mesh harmonic")
     args = ap.parse_args()
     paths = sorted(Path(args.data).glob("*.csv.gz"))
     if args.records:
@@ -106,7 +108,7 @@ def main() -> None:
           f"{', '.join(p.name for p in paths)}")
     rows = []
     for p in paths:
-        rows += loop(p, args.steps, build)
+        rows += loop(p, args.steps, build, args.gain == "curve")
     print("\n| record | step | model | error | held-out error, base | accepted | held-out "
           "error, with it | held-out verdicts | s |\n|---|---|---|---|---|---|---|---|---|")
     print("\n".join(rows))

@@ -126,7 +126,8 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
                               settings.get("speed") or SpeedSettings(),
                               FaultEstimator(n_workers=1, **task.estimator),
                               task.baselines, adapter,
-                              settings.get("feature_mode", "lines"), settings.get("fit_gain"))
+                              settings.get("feature_mode", "lines"), settings.get("fit_gain"),
+                              settings.get("gain_curve", False))
     row: dict = {"status": "ok", "message": "; ".join(result.warnings),
                  **{k: v for k, v in result.speed.to_dict().items()
                     if k != "nominal_speed_hz"}}

@@ -115,9 +115,12 @@ def _record_args(p: argparse.ArgumentParser) -> None:
     _reading_args(p)
     p.add_argument("--adapter", help="adapter TOML describing the FMU")
     _operating_args(p)
-    p.add_argument("--gain", choices=("auto", "fit", "fixed"), default="auto",
+    p.add_argument("--gain", choices=("auto", "fit", "curve", "fixed"), default="auto",
                    help="fit a gain per channel in closed form, or take the model's level as "
-                   "it is; auto (default): fit, except on records pydiag simulate made")
+                   "it is; auto (default): fit, except on records pydiag simulate made; "
+                   "curve: fit a gain curve over frequency, a node at every mesh harmonic "
+                   "(a housing between the gears and the sensor: the model is judged on "
+                   "the lines around each harmonic, not on the spectrum's shape)")
 
 
 def _measurement_args(p: argparse.ArgumentParser) -> None:

@@ -128,8 +128,9 @@ def problem_settings(args) -> dict:
         op["other_shaft_ratio"] = args.other_shaft
     if getattr(args, "bearing", None) is not None:  # compare and discover
         op["bearing"] = args.bearing
-    gain = {"auto": None, "fit": True, "fixed": False}[args.gain]
+    gain = {"auto": None, "fit": True, "curve": True, "fixed": False}[args.gain]
     return {**settings, "operating_point": op or None, "fit_gain": gain,
+            "gain_curve": args.gain == "curve",
             "speed": SpeedSettings(args.speed, tacho=args.tacho,
                                    pulses_per_rev=args.pulses_per_rev)}
 
@@ -145,7 +146,8 @@ def problem_of(args, measurement: Measurement,
     return stage_problem(args.fmu, measurement, machine, args.stage_index,
                          machine_speed(measurement, machine, args.rpm / 60.0, speed),
                          adapter_of(args), settings["feature_mode"], settings["fit_gain"],
-                         (speed.tacho,) if speed.tacho else (), fixed_values)
+                         (speed.tacho,) if speed.tacho else (), fixed_values,
+                         settings["gain_curve"])
 
 
 def fit(args, problem: FitProblem) -> Diagnosis:
@@ -217,7 +219,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
         result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
                                   FaultEstimator(**estimator_settings(args), progress=update),
                                   baselines, adapter_of(args), settings["feature_mode"],
-                                  settings["fit_gain"])
+                                  settings["fit_gain"], settings["gain_curve"])
     finally:
         close()
     print(format_machine_diagnosis(result))

@@ -86,7 +86,7 @@ def _machine_problem(args, m: Measurement, build: Callable[[Machine], tuple[Mach
     model, built = build(machine)
     found, settings, drop = _machine_record(args, m)
     problem = machine_problem(built.fmu, model, m, machine, found, settings["fit_gain"],
-                              settings["feature_mode"], drop)
+                              settings["feature_mode"], drop, settings["gain_curve"])
     return problem, (model, built)
 
 
@@ -282,7 +282,8 @@ def _machine_loop(args) -> tuple[list, str]:
                          args.max_steps, FaultEstimator(**estimator_settings(args)),
                          _effect_estimator(args), settings["fit_gain"],
                          settings["feature_mode"], drop,
-                         lambda step: print(format_loop_step(step), flush=True))
+                         progress=lambda step: print(format_loop_step(step), flush=True),
+                         gain_curve=settings["gain_curve"])
     return steps, str(copy)
 
 

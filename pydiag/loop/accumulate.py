@@ -1,7 +1,8 @@
 """The loop that accumulates: compare, accept the one confident effect, compare the model
 with it, and again, until nothing is confident.
 
-Each step validates the comparison's suggestions held out (:mod:`pydiag.loop.validate`);
+Each step validates the comparison's suggestions held out (:mod:`pydiag.loop.validate`),
+every synchronous one whatever its score;
 the confident one with the largest held-out z is accepted: its parameters join the
 model's (bounds as the residual narrowed them) and are fitted on the whole record from the
 fit before (:func:`~pydiag.loop.compare.refit_with_effect`, as ``compare --effect``
@@ -57,7 +58,8 @@ def accumulate(problem: FitProblem, effect_fmu: Callable[[Effect], str],
     final model. ``effect_fmu``/``composed``: an effect's FMU, the FMU of several;
     ``estimator``: the base fit's; ``refit``: every effect's (default EFFECT_REFIT's)."""
     refit = refit or FaultEstimator(**EFFECT_REFIT)
-    c = validate(problem, compare(problem, estimator), effect_fmu, refit, composed=composed)
+    c = validate(problem, compare(problem, estimator), effect_fmu, refit, composed=composed,
+                 every_synchronous=True)
     accepted: tuple[str, ...] = ()
     steps: list[LoopStep] = []
     while True:
@@ -81,4 +83,5 @@ def accumulate(problem: FitProblem, effect_fmu: Callable[[Effect], str],
         fitted = refit_with_effect(problem, c, effect, fmu, refit)
         problem = with_effect(problem, c, effect, fmu)
         accepted += (effect.key,)
-        c = validate(problem, fitted, effect_fmu, refit, present=accepted, composed=composed)
+        c = validate(problem, fitted, effect_fmu, refit, present=accepted, composed=composed,
+                     every_synchronous=True)

@@ -133,13 +133,15 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
 def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                      comparison: Comparison, effect_model: Callable[[Machine], str],
                      estimator: FaultEstimator | None = None,
-                     progress: Callable[[str], None] | None = None) -> Comparison:
+                     progress: Callable[[str], None] | None = None,
+                     every_synchronous: bool = False) -> Comparison:
     """``comparison`` (of ``problem``, the machine's model at its fit) with the effects
     its residual points to on each stage tried held out (:func:`pydiag.loop.validate.
     validate`, on :func:`~pydiag.loop.machine_model.stage_view`), every stage's
     suggestions in one list, each with its stage; ``effect_model``: the FMU of a machine
     (the machine with one more effect). The fits of every stage run side by side, one a
-    core (module docstring); ``progress`` gets each as it starts, as "effect on stage"."""
+    core (module docstring); ``progress`` gets each as it starts, as "effect on stage";
+    ``every_synchronous``: :func:`~pydiag.loop.validate.validate`'s."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     stages, tasks, fmus = {}, [], {}
     for k in range(len(machine.stages)):
@@ -147,7 +149,8 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
                        parameters=comparison.parameters, effects=effects)
         keys = []
-        for key in effects_to_fit(view, seen, effects=effects):
+        for key in effects_to_fit(view, seen, effects=effects,
+                                  every_synchronous=every_synchronous):
             try:  # built here: two workers must not build one model at once
                 fmus[k, key] = effect_model(_with_effect(machine, key, k))
                 keys.append(key)
@@ -171,6 +174,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         checked = validate(stage.view, stage.seen, fmu, estimator,
                            effects=stage_effects(model, k),
                            tried={key: h for (j, key), h in tried.items() if j == k},
+                           every_synchronous=every_synchronous,
                            progress=None if progress is None else
                            functools.partial(_said, progress, name[k]))
         found += [dataclasses.replace(s, stage=name[k]) for s in checked.suggested_effects]

@@ -33,12 +33,14 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
                  max_steps: int = 4, estimator: FaultEstimator | None = None,
                  refit: FaultEstimator | None = None, fit_gain: bool | None = None,
                  feature_mode: str = "lines", drop: tuple[str, ...] = (),
-                 progress: Callable[[LoopStep], None] | None = None) -> list[LoopStep]:
+                 progress: Callable[[LoopStep], None] | None = None,
+                 gain_curve: bool = False) -> list[LoopStep]:
     """The loop (module docstring) on the machine file ``path``, which gets every accepted
     effect: its steps, the last the comparison nothing more was accepted after (or the
     ``max_steps``-th). ``speed``: the input shaft's in ``measurement``; ``build``: a
     machine's model and its FMU; ``estimator``: the stages' fit; ``refit``: the effects'
-    (default EFFECT_REFIT's); ``drop``: channels that are not sensors (the tacho)."""
+    (default EFFECT_REFIT's); ``drop``: channels that are not sensors (the tacho);
+    ``gain_curve``: :func:`~pydiag.loop.machine_model.machine_problem`'s."""
     estimator = estimator or FaultEstimator()
     refit = refit or FaultEstimator(**EFFECT_REFIT)
     steps: list[LoopStep] = []
@@ -47,10 +49,11 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
         machine = load_machine(path)
         model, built = build(machine)
         problem = machine_problem(built.fmu, model, measurement, machine, speed, fit_gain,
-                                  feature_mode, drop)
+                                  feature_mode, drop, gain_curve)
         c = compare_machine(problem, model, estimator, refit, start=start)
         c = validate_machine(problem, machine, model, c,
-                             lambda other: str(build(other)[1].fmu), refit)
+                             lambda other: str(build(other)[1].fmu), refit,
+                             every_synchronous=True)
         effects = tuple(f"{e.key} on {machine.stages[e.stage].name}" for e in machine.effects)
         confident = sorted((s for s in c.suggested_effects if s.confident),
                            key=lambda s: -s.held_out.z)

@@ -55,6 +55,7 @@ from pathlib import Path
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import Parameter, fmu_values
+from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, HEALTHY_TOOTH
@@ -116,6 +117,8 @@ class MachineModel:
     first_stage: tuple[int, int]
     effect_parameters: tuple[Parameter, ...] = ()
     fixed_values: dict[str, float] = field(default_factory=dict)
+    # those of the effect parameters the outputs are affine in (an affine effect's)
+    affine_parameters: frozenset[str] = frozenset()
 
     def parameters(self, with_healthy_tooth: bool, outputs: set[str]
                    ) -> tuple[Parameter, ...]:
@@ -211,6 +214,13 @@ def _effect_parameters(machine: Machine, k: int, instance: str
     return fitted, fixed
 
 
+def _affine_parameter(machine: Machine, k: int, instance: str, p: Parameter) -> bool:
+    """Whether the parameter ``p`` of stage ``k``'s effects is an affine effect's."""
+    return any(EFFECTS[s.key].affine and p.name in
+               {q.name for q in stage_effect(EFFECTS[s.key], instance, ()).parameters}
+               for s in machine.effects if s.stage == k)
+
+
 def _drive_train(machine: Machine, k: int, mesh: str, taken: set[str]
                  ) -> tuple[list[str], list[str]]:
     """The drive train of stage ``k``'s mesh (instance ``mesh``), as declarations and
@@ -244,6 +254,7 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     nested: dict[str, str] = {}
     phases: list[Parameter] = []
     effect_parameters: list[Parameter] = []
+    affine_flags: list[bool] = []
     fixed: dict[str, float] = {}
     connects: list[str] = []
     for k, (s, inst) in enumerate(zip(machine.stages, stages)):
@@ -251,6 +262,7 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
         speed = SPEED_PARAMETER if ratio == 1 else \
             f"{SPEED_PARAMETER}*{ratio.numerator}/{ratio.denominator}"
         params, values = _effect_parameters(machine, k, inst)
+        affine_flags += [_affine_parameter(machine, k, inst, p) for p in params]
         cls = _stage_class(machine, k, modelica_root, nested)
         effect_parameters += params
         fixed.update(values)
@@ -303,17 +315,21 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     first = machine.stages[0]
     return MachineModel(name, source, stages, tuple(outputs),
                         (first.pinion_teeth, first.gear_teeth),
-                        tuple(phases) + tuple(effect_parameters), fixed)
+                        tuple(phases) + tuple(effect_parameters), fixed,
+                        frozenset(p.name for p, affine in zip(effect_parameters, affine_flags)
+                                  if affine))
 
 
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
                     machine: Machine, speed: SpeedEstimate, fit_gain: bool | None = None,
-                    feature_mode: str = "lines", drop: tuple[str, ...] = ()) -> FitProblem:
+                    feature_mode: str = "lines", drop: tuple[str, ...] = (),
+                    gain_curve: bool = False) -> FitProblem:
     """The fit problem of ``measurement`` on the machine model ``model`` (its FMU at
     ``fmu_path``): the record order-tracked at the input shaft (``speed``, found from every
     mesh or the tacho; the channels ``drop`` left out), every stage's lines analysed over
     the machine's fundamental period
-    (:meth:`~pydiag.gear.machine.Machine.model_kinematics`)."""
+    (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
+    gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`)."""
     tracked = order_track(measurement, speed, drop=drop)
     channels = [c for c in tracked.channels if c not in drop]
     adapter = model.adapter(channels)
@@ -323,7 +339,8 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
     return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
                          fixed_values=model.fixed_values,
                          kinematics=machine.model_kinematics(speed.speed_hz),
-                         feature_mode=feature_mode, fit_gain=fit_gain, speed_estimate=speed)
+                         feature_mode=feature_mode, fit_gain=fit_gain, speed_estimate=speed,
+                         gain_curve=gain_curve)
 
 
 def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
@@ -331,8 +348,9 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
                 start: dict[str, float] | None = None) -> FitResult:
     """The fit of a machine's model with its effects, in steps: the stages alone (every
     effect off), then the effects' parameters with the stages held there
-    (``effect_estimator``, default ``estimator``), then every parameter polished from the
-    better of the two. Its error is never above the stages' fit it starts from, which one
+    (``effect_estimator``, default ``estimator``; the parameters of an effect whose outputs
+    are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`), then
+    every parameter polished from the better of the two. Its error is never above the stages' fit it starts from, which one
     swarm over every parameter at once does not promise (more parameters, the same budget;
     a swarm run on another model, even one that adds nothing, may land elsewhere).
 
@@ -347,15 +365,24 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     if not added:
         best = estimator.fit(problem)
     else:
-        off = {p.name: p.low for p in added}
+        off = {p.name: p.off for p in added}
         base = estimator.fit(problem.derive(parameters=own,
                                             fixed_values=fmu_values(added, off)))
-        effects = later.fit(problem.derive(parameters=added,
-                                           fixed_values=fmu_values(own, base.parameters)))
-        best = later.refine(problem, {**base.parameters, **(
-            effects.parameters if effects.error < base.error else off)})
+        affine = tuple(p for p in added if p.name in model.affine_parameters)
+        other = tuple(p for p in added if p.name not in model.affine_parameters)
+        values, error = {}, base.error
+        if other:
+            effects = later.fit(problem.derive(parameters=other, fixed_values={
+                **fmu_values(own, base.parameters), **fmu_values(affine, off)}))
+            values, error = dict(effects.parameters), effects.error
+        if affine:  # n + 1 simulations, however many parameters
+            fitted, error = fit_affine(problem.derive(parameters=affine, fixed_values={
+                **fmu_values(own, base.parameters), **fmu_values(other, {**off, **values})}))
+            values.update(fitted)
+        best = later.refine(problem, {**base.parameters,
+                                     **(values if error < base.error else off)})
     if start is not None:
-        again = later.refine(problem, {p.name: start.get(p.name, p.low)
+        again = later.refine(problem, {p.name: start.get(p.name, p.off)
                                        for p in problem.parameters})
         best = again if again.error < best.error else best
     return best

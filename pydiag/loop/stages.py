@@ -113,10 +113,12 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
                   speed: SpeedEstimate, adapter: Adapter | None = None,
                   feature_mode: str = "lines", fit_gain: bool | None = None,
                   drop: tuple[str, ...] = (),
-                  fixed_values: dict[str, float] | None = None) -> FitProblem:
+                  fixed_values: dict[str, float] | None = None,
+                  gain_curve: bool = False) -> FitProblem:
     """The fit problem of stage ``stage``: the record tracked at its pinion shaft, the
     other stages' lines left out (module docstring); its kinematics name every line of
-    the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`)."""
+    the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`); ``gain_curve``:
+    :func:`~pydiag.fit.problem.build_problem`'s."""
     ratio = float(machine.shaft_ratio(stage))
     estimate = dataclasses.replace(
         speed, speed_hz=speed.speed_hz * ratio, nominal_hz=speed.nominal_hz * ratio,
@@ -129,7 +131,8 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
     tracked = _stage_channels(order_track(measurement, estimate, drop=drop), machine, stage)
     return build_problem(fmu_path, tracked, adapter, kinematics=kin,
                          featurizer=KinematicFeaturizer(kin, feature_mode, others),
-                         fit_gain=fit_gain, speed_estimate=estimate, fixed_values=fixed_values)
+                         fit_gain=fit_gain, speed_estimate=estimate, fixed_values=fixed_values,
+                         gain_curve=gain_curve)
 
 
 def _stage_channels(measurement: Measurement, machine: Machine, stage: int) -> Measurement:
@@ -176,8 +179,8 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
                      input_hz: float, speed: SpeedSettings = SpeedSettings(),
                      estimator: FaultEstimator | None = None,
                      baselines: Sequence[MachineRecord] = (), adapter: Adapter | None = None,
-                     feature_mode: str = "lines", fit_gain: bool | None = None
-                     ) -> MachineDiagnosis:
+                     feature_mode: str = "lines", fit_gain: bool | None = None,
+                     gain_curve: bool = False) -> MachineDiagnosis:
     """Every stage of ``measurement`` diagnosed (module docstring), around the nominal input
     speed ``input_hz``; ``baselines``: records of the machine in a known healthy state, as
     :func:`~pydiag.gear.machine_indicators.machine_record` sees them (made once for a
@@ -194,7 +197,7 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
-                                feature_mode, fit_gain, drop)
+                                feature_mode, fit_gain, drop, gain_curve=gain_curve)
         fit = diagnose(problem, estimator)
         verdict = verdicts[k]
         fault_mode, severity, suspect = fit.fault_mode, fit.severity, None

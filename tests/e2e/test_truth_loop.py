@@ -485,3 +485,23 @@ def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, 
     data = json.loads(out.read_text())
     assert [s["effect"] for s in data["steps"]] == [None]
     assert data["model_fmu"] == str(gear_fmu)
+
+
+def test_a_gain_curve_takes_the_housing_mode_one_gain_cannot(gear_fmu, truth_records):
+    """The simulator's accelerometer behind a housing mode at 2.5 kHz (between the first
+    and second mesh harmonics): one gain a channel leaves the mode's shape over the band
+    in the error; a gain curve with a node at every mesh harmonic takes it, and the error
+    of the mesh harmonics, which the mode sets, with it."""
+    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["housing_sensor"])
+    found = {}
+    for curve in (False, True):
+        problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
+                                operating_point=OPERATING_POINT, fit_gain=True,
+                                gain_curve=curve)
+        found[curve] = compare(problem, FaultEstimator(**FAST))
+    one, curve = found[False], found[True]
+    assert curve.error < 0.6 * one.error, (one.error, curve.error)
+    mesh = [c.residual_by_family["acc"]["mesh_harmonics"]["error"] * c.error ** 2
+            for c in (one, curve)]
+    assert mesh[1] < 0.5 * mesh[0], mesh
+    assert set(curve.gains) == {"acc", "disp"} and all(g > 0 for g in curve.gains.values())
