@@ -161,7 +161,8 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     """Two effects with models of their own on one stage make its mesh their composed
     model, declared inside the machine's; one of the pair's own parameters frees them; a tooth's
     index ranges over the stage's own teeth; an effect with nothing to fit on the stage
-    (every order of a 32-tooth pinion driving 96 is also one of its gear's) is refused."""
+    (every order of a 32-tooth pinion driving 96 is also one of its gear's) is refused; the
+    parameters of an affine effect are known as such."""
     import dataclasses
 
     from pydiag.core.errors import UsageError
@@ -181,6 +182,13 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     assert ranges["output_stage.k2"] == (0.0, 0.3) and "input_stage.k2" not in ranges
     with pytest.raises(UsageError, match="pinion_shaft_orders has nothing to fit on input"):
         machine_model(dataclasses.replace(phm, effects=(StageEffect("pinion_shaft_orders", 0),)))
+    # the parameters fit_machine fits affinely: an affine effect's, not another's or a phase
+    both = machine_model(dataclasses.replace(phm, effects=(
+        StageEffect("pinion_shaft_orders", 1), StageEffect("mesh_modulation", 1))), MODELICA)
+    names = {p.name for p in both.effect_parameters}
+    assert {"output_stage.A_s1", "output_stage.m_p", "output_stage_mesh_phase"} <= names
+    assert both.affine_parameters == {n for n in names if n.startswith("output_stage.A_s")}
+    assert not model.affine_parameters
 
 
 def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
