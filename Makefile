@@ -13,7 +13,7 @@ FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)
 
-.PHONY: venv fmu demo lint test test-fast test-slow regress bless bench loop loop-real clean
+.PHONY: venv fmu demo lint test test-fast test-slow regress bless bench loop loop-real loop-phm09 clean
 
 venv: $(STAMP)
 
@@ -66,7 +66,16 @@ loop: fmu
 # records in ../shared/data/gfd; GFD_DATA=folder for another set in that layout)
 GFD_DATA ?= ../shared/data/gfd
 loop-real: fmu
-	$(PY) bench/real_loop.py --data "$(GFD_DATA)" --steps 4
+	$(PY) bench/real_loop.py --data "$(GFD_DATA)" --steps 5 --gain curve
+
+# the loop on the machine's own model of the PHM09 gearbox, as section 13 has it (a copy of
+# the example machine file in build/ gets the accepted effects: build/phm09.loop.toml)
+PHM09_DATA ?= ../shared/data/phm09
+loop-phm09: fmu
+	cp examples/phm09_spur.toml build/phm09.toml
+	$(PY) -m pydiag loop --machine build/phm09.toml --channel ch1 --sample-rate 66666.67 \
+	    --measurement "$(PHM09_DATA)/spur 1_30hz_High_1.zip" --rpm 1800 --gain curve \
+	    --max-steps 5 --force --history build/phm09_loop.sqlite
 
 clean:
 	rm -rf build
