@@ -350,8 +350,9 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     effect off), then the effects' parameters with the stages held there
     (``effect_estimator``, default ``estimator``; the parameters of an effect whose outputs
     are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`), then
-    every parameter polished from the better of the two. Its error is never above the stages' fit it starts from, which one
-    swarm over every parameter at once does not promise (more parameters, the same budget;
+    every parameter polished from the better of the two. Its error is never above the
+    stages' fit it starts from, which one swarm over every parameter at once does not
+    promise (more parameters, the same budget;
     a swarm run on another model, even one that adds nothing, may land elsewhere).
 
     ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
