@@ -53,7 +53,9 @@ def format_facts(facts: dict) -> str:
                      f"{facts['duration_s']:.3f} s")
     if facts.get("gains"):
         lines.append("gains      : " + ", ".join(f"{c} x{g:.4g}" for c, g in facts["gains"].items())
-                     + " (model -> measurement level)")
+                     + (" (model -> measurement: each a gain curve, its value at the first "
+                        "mesh harmonic)" if facts.get("gain_curve")
+                        else " (model -> measurement level)"))
     return "\n".join(lines)
 
 

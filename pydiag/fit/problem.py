@@ -126,12 +126,16 @@ class FitProblem:
         return whole_periods(m.n_samples, m.sample_rate_hz, self.kinematics.period_s)[0]
 
     def record_facts(self) -> dict:
-        """What was analysed: speed (when found), periods and seconds of the record."""
+        """What was analysed: speed (when found), periods and seconds of the record, and
+        ``gain_curve`` when the gains are curves (:meth:`gains` gives their level at the
+        first mesh harmonic)."""
         facts = dict(self.speed.to_dict()) if self.speed is not None else {}
         n = self.n_periods
         facts["n_periods"] = n
         facts["duration_s"] = (n * self.kinematics.period_s if n is not None
                                else self.featurizer.duration_s)
+        if self.gain_curve:
+            facts["gain_curve"] = True
         return facts
 
     def facts(self, estimates: dict[str, float]) -> dict:
