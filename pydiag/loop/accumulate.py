@@ -2,7 +2,7 @@
 with it, and again, until nothing is confident.
 
 Each step validates the comparison's suggestions held out (:mod:`pydiag.loop.validate`),
-every synchronous one whatever its score;
+every synchronous one whose fit keeps the base whatever its score;
 the confident one with the largest held-out z is accepted: its parameters join the
 model's (bounds as the residual narrowed them) and are fitted on the whole record from the
 fit before (:func:`~pydiag.loop.compare.refit_with_effect`, as ``compare --effect``
