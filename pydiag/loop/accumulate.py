@@ -2,7 +2,8 @@
 with it, and again, until nothing is confident.
 
 Each step validates the comparison's suggestions held out (:mod:`pydiag.loop.validate`),
-every synchronous one whose fit keeps the base whatever its score;
+every synchronous one whose fit keeps the base whatever its score while the model leaves
+anything above the noise (an error of 0, less its noise part, has nothing left to explain);
 the confident one with the largest held-out z is accepted: its parameters join the
 model's (bounds as the residual narrowed them) and are fitted on the whole record from the
 fit before (:func:`~pydiag.loop.compare.refit_with_effect`, as ``compare --effect``
@@ -58,8 +59,8 @@ def accumulate(problem: FitProblem, effect_fmu: Callable[[Effect], str],
     final model. ``effect_fmu``/``composed``: an effect's FMU, the FMU of several;
     ``estimator``: the base fit's; ``refit``: every effect's (default EFFECT_REFIT's)."""
     refit = refit or FaultEstimator(**EFFECT_REFIT)
-    c = validate(problem, compare(problem, estimator), effect_fmu, refit, composed=composed,
-                 every_synchronous=True)
+    c = compare(problem, estimator)
+    c = validate(problem, c, effect_fmu, refit, composed=composed, every_synchronous=c.error > 0)
     accepted: tuple[str, ...] = ()
     steps: list[LoopStep] = []
     while True:
@@ -84,4 +85,4 @@ def accumulate(problem: FitProblem, effect_fmu: Callable[[Effect], str],
         problem = with_effect(problem, c, effect, fmu)
         accepted += (effect.key,)
         c = validate(problem, fitted, effect_fmu, refit, present=accepted, composed=composed,
-                     every_synchronous=True)
+                     every_synchronous=fitted.error > 0)

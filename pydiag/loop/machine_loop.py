@@ -53,7 +53,7 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
         c = compare_machine(problem, model, estimator, refit, start=start)
         c = validate_machine(problem, machine, model, c,
                              lambda other: str(build(other)[1].fmu), refit,
-                             every_synchronous=True)
+                             every_synchronous=c.error > 0)
         effects = tuple(f"{e.key} on {machine.stages[e.stage].name}" for e in machine.effects)
         confident = sorted((s for s in c.suggested_effects if s.confident),
                            key=lambda s: -s.held_out.z)
