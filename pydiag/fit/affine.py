@@ -59,7 +59,7 @@ def fit_affine(problem: FitProblem) -> tuple[dict[str, float], float]:
 
 #: Steps from a parameter's off value towards each end of its range, as shares of the way,
 #: where its own best is looked for (:func:`_alone`): a line's amplitude may be anywhere
-#: from a thousandth of its range up.
+#: from a ten-thousandth of its range up.
 ALONE_GRID = np.geomspace(1e-4, 1.0, 25)
 
 

@@ -174,10 +174,13 @@ class FitProblem:
         return curve_nodes(self.kinematics, max(float(s.freq_hz[-1])
                                                 for s in self.reference.values()))
 
+    def _basis(self, channel: str) -> np.ndarray:
+        """The gain curve's hat functions at ``channel``'s feature bins."""
+        return curve_basis(self.reference[channel].freq_hz, self.curve_nodes_hz())
+
     def _curve(self, model: np.ndarray, channel: str) -> np.ndarray:
         """The gain curve's node values that fit ``model`` (features) to ``channel``."""
-        basis = curve_basis(self.reference[channel].freq_hz, self.curve_nodes_hz())
-        return fitted_curve(model, self._clean(channel), basis)
+        return fitted_curve(model, self._clean(channel), self._basis(channel))
 
     def _gain(self, model: np.ndarray, channel: str) -> float | np.ndarray:
         """The gain of ``model`` (features) onto ``channel``: a number, or with
@@ -186,9 +189,9 @@ class FitProblem:
             return self.fixed_gains[channel]
         if not self.fit_gain:
             return 1.0
-        if self.gain_curve:
-            return (curve_basis(self.reference[channel].freq_hz, self.curve_nodes_hz())
-                    @ self._curve(model, channel))
+        if self.gain_curve:  # the basis once: this runs at every evaluation of a fit
+            basis = self._basis(channel)
+            return basis @ fitted_curve(model, self._clean(channel), basis)
         return fitted_gain(model, self._clean(channel))
 
     def gains(self, plant: FmuPlant, x: np.ndarray) -> dict[str, float]:

@@ -195,12 +195,12 @@ def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
 
 
 def _effect_parameters(machine: Machine, k: int, instance: str
-                       ) -> tuple[list[Parameter], dict[str, float]]:
+                       ) -> tuple[list[Parameter], dict[str, float], set[str]]:
     """Stage ``k``'s effects' parameters as ``<instance>.<name>`` (ranges as the stage's
-    teeth say: a tooth's index), and the values of those not fitted (off, or the
-    machine's)."""
+    teeth say: a tooth's index), the values of those not fitted (off, or the machine's),
+    and the names of those fitted that an affine effect's outputs are affine in."""
     kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
-    fitted, fixed = [], {}
+    fitted, fixed, affine = [], {}, set()
     for e in (stage_effect(EFFECTS[s.key], instance, ()) for s in machine.effects
               if s.stage == k):
         if why := nothing_to_fit(machine, k, e.key):
@@ -211,14 +211,9 @@ def _effect_parameters(machine: Machine, k: int, instance: str
                       if name not in names})
         fixed.update(e.values_from(kin))
         fitted += chosen
-    return fitted, fixed
-
-
-def _affine_parameter(machine: Machine, k: int, instance: str, p: Parameter) -> bool:
-    """Whether the parameter ``p`` of stage ``k``'s effects is an affine effect's."""
-    return any(EFFECTS[s.key].affine and p.name in
-               {q.name for q in stage_effect(EFFECTS[s.key], instance, ()).parameters}
-               for s in machine.effects if s.stage == k)
+        if e.affine:
+            affine.update(p.name for p in chosen)
+    return fitted, fixed, affine
 
 
 def _drive_train(machine: Machine, k: int, mesh: str, taken: set[str]
@@ -254,15 +249,15 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     nested: dict[str, str] = {}
     phases: list[Parameter] = []
     effect_parameters: list[Parameter] = []
-    affine_flags: list[bool] = []
+    affine: set[str] = set()
     fixed: dict[str, float] = {}
     connects: list[str] = []
     for k, (s, inst) in enumerate(zip(machine.stages, stages)):
         ratio = machine.shaft_ratio(k)
         speed = SPEED_PARAMETER if ratio == 1 else \
             f"{SPEED_PARAMETER}*{ratio.numerator}/{ratio.denominator}"
-        params, values = _effect_parameters(machine, k, inst)
-        affine_flags += [_affine_parameter(machine, k, inst, p) for p in params]
+        params, values, linear = _effect_parameters(machine, k, inst)
+        affine |= linear
         cls = _stage_class(machine, k, modelica_root, nested)
         effect_parameters += params
         fixed.update(values)
@@ -315,9 +310,7 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     first = machine.stages[0]
     return MachineModel(name, source, stages, tuple(outputs),
                         (first.pinion_teeth, first.gear_teeth),
-                        tuple(phases) + tuple(effect_parameters), fixed,
-                        frozenset(p.name for p, affine in zip(effect_parameters, affine_flags)
-                                  if affine))
+                        tuple(phases) + tuple(effect_parameters), fixed, frozenset(affine))
 
 
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,

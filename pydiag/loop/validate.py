@@ -65,12 +65,11 @@ def validate(problem: FitProblem, comparison: Comparison,
     (``Effect.reshapes_base``) is tried whatever its score (the loop's: a fit over one
     period's simulations, and the loop must not stop for want of a try; an effect's
     signature says where its lines are, not how much of the error it moves, which a
-    modulation deep enough to make sidebands past its first does: on a real record the
-    most confident effect held 3 % of the unexplained energy, RESULTS section 10), and
-    each is held to ``false_alarm_rate`` over the number tried (Bonferroni: the tries
-    together raise a false alarm no more often than one did). One that reshapes the base is fitted with
-    every base parameter free as well: tried on a residual at the noise level (two hidden
-    effects of the independent simulator accepted), backlash was confident there."""
+    modulation deep enough to make sidebands past its first does), and each is held to
+    ``false_alarm_rate`` over the number tried (Bonferroni: the tries together raise a
+    false alarm no more often than one did). One that reshapes the base is fitted with
+    every base parameter free as well, a freedom that can pass the test on a residual at
+    the noise level: it is tried on its score alone (docs/loop.md, section 5)."""
     model = read_model_description(problem.spec.fmu_path)[0]
     catalogue = EFFECTS if effects is None else effects
     if effects is None and not GEARPAIR_PARAMETERS <= {v.name for v in model.modelVariables}:
