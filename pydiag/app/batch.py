@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import glob
 import os
+import signal
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -188,6 +189,9 @@ class _WorkerTerminated(BaseException):
 
 
 def _worker_terminated(signum, frame) -> None:
+    # the first TERM unwinds the task; the next ones (the executor's, once another worker
+    # has ended, and the parent's death signal) must not cut its cleanup short
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     raise _WorkerTerminated
 
 
@@ -205,7 +209,6 @@ def _die_with_parent() -> None:
     whatever killed it (Linux prctl PR_SET_PDEATHSIG; elsewhere nothing): its task's own
     workers and run folder go with it (:mod:`pydiag.fmu.isolation`)."""
     import ctypes
-    import signal
     signal.signal(signal.SIGTERM, _worker_terminated)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
     try:

@@ -49,6 +49,9 @@ from pydiag.core.leftovers import owner_tag, reclaim
 RUN_PREFIX = "pydiag_run_"
 #: Wall time a new worker has to prepare its objective (load its FMU) before it is failed.
 STARTUP_S = 120.0
+#: Wall time the run folder's removal is retried while a process that was just killed may
+#: still be writing or removing in it.
+REMOVE_S = 2.0
 
 
 @dataclass
@@ -121,6 +124,33 @@ def _serve(conn, objective) -> None:
             conn.send(("error", f"{type(err).__name__}: {err}"))
 
 
+def _remove_folder(folder: str, timeout_s: float = REMOVE_S) -> None:
+    """Remove ``folder`` and what it holds, retried for ``timeout_s``: a worker killed a
+    moment ago may still be removing its own files there (or writing them), so that one
+    pass finds a folder not empty that is empty an instant later."""
+    end = time.monotonic() + timeout_s
+    while True:
+        shutil.rmtree(folder, ignore_errors=True)
+        if not os.path.lexists(folder) or time.monotonic() >= end:
+            return
+        time.sleep(0.02)
+
+
+def _gone(pid: int) -> bool:
+    """Whether process ``pid`` has ended (a zombie, not yet reaped, has)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            return f.read().rsplit(b")", 1)[1].split()[0] == b"Z"
+    except FileNotFoundError:
+        return True
+    except OSError:  # no /proc: ask the kernel whether the pid is still there
+        try:
+            os.kill(pid, 0)
+        except OSError:
+            return True
+        return False
+
+
 def _janitor(read_fd: int, inherited: list[int], folder: str) -> None:
     """Wait for the parent's pipe to close; then kill the workers it named, remove the folder.
 
@@ -146,12 +176,16 @@ def _janitor(read_fd: int, inherited: list[int], folder: str) -> None:
                 (pids.add if line[:1] == b"+" else pids.discard)(pid)
     except Terminated:
         pass
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second TERM must not stop the cleanup
     for pid in pids:
         try:
             os.kill(pid, signal.SIGKILL)
         except OSError:
             pass
-    shutil.rmtree(folder, ignore_errors=True)
+    end = time.monotonic() + REMOVE_S  # a killed worker runs on until the kill lands
+    while not all(_gone(pid) for pid in pids) and time.monotonic() < end:
+        time.sleep(0.01)
+    _remove_folder(folder)
 
 
 def _describe_exit(code: int | None) -> str:
@@ -183,12 +217,13 @@ class IsolatedPool:
         self.successes = 0
         self.timeouts = 0
         reclaim(tempfile.gettempdir(), RUN_PREFIX)  # folders of runs killed outright
-        self.folder = tempfile.mkdtemp(prefix=f"{RUN_PREFIX}{owner_tag()}_")
+        self.folder = ""
         self.workers: list[tuple[Any, Any]] = []
         self.starting: dict[int, float] = {}  # worker -> when it was started, until ready
         self._janitor_fd = -1
         self._janitor = None
-        try:
+        try:  # from the folder on: an exception (a SIGTERM) on the way removes what was made
+            self.folder = tempfile.mkdtemp(prefix=f"{RUN_PREFIX}{owner_tag()}_")
             read_fd, self._janitor_fd = os.pipe()
             self._janitor = self.ctx.Process(target=_janitor, daemon=True, args=(
                 read_fd, [self._janitor_fd], self.folder))
@@ -316,7 +351,8 @@ class IsolatedPool:
             proc.join(5)
             self._reap(proc, conn)
         self.workers = []
-        shutil.rmtree(self.folder, ignore_errors=True)
+        if self.folder:
+            _remove_folder(self.folder)
         if self._janitor_fd >= 0:
             os.close(self._janitor_fd)  # the janitor finds nothing left to do, and exits
             self._janitor_fd = -1
