@@ -21,12 +21,14 @@ import os
 import signal
 import time
 from concurrent.futures import ProcessPoolExecutor
+from multiprocessing.connection import wait
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
 
 from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
+from pydiag.core.termination import raise_once
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.gear.classify import SEVERITIES
@@ -188,11 +190,9 @@ class _WorkerTerminated(BaseException):
     """SIGTERM in a local worker: unwinds the task (its cleanup runs), then the worker ends."""
 
 
-def _worker_terminated(signum, frame) -> None:
-    # the first TERM unwinds the task; the next ones (the executor's, once another worker
-    # has ended, and the parent's death signal) must not cut its cleanup short
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    raise _WorkerTerminated
+#: SIGTERM in a local worker unwinds its task; the TERMs that follow while it does (the
+#: executor's, once another worker has ended; the parent's death signal) wait for it.
+_worker_terminated = raise_once(_WorkerTerminated)
 
 
 def _task_in_worker(task: BatchTask) -> dict:
@@ -220,11 +220,27 @@ def _die_with_parent() -> None:
         os.kill(os.getpid(), signal.SIGTERM)
 
 
+#: Wall time a local worker has to end after a SIGTERM (its task's cleanup: its fit's
+#: workers joined, 5 s each at most) before it is sent another, and then killed.
+STOP_S = 15.0
+
+
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
-    """Terminate the pool's workers (a SIGTERM each runs their cleanup), drop the queue."""
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
-        if proc.is_alive():
-            proc.terminate()
+    """End the pool's workers and drop the queue: a SIGTERM each (its task's cleanup runs),
+    another to those still running after STOP_S (Python drops a TERM whose exception is
+    raised in a fork hook or a finaliser), then SIGKILL (the janitor of a killed worker's
+    run folder removes what it held, :mod:`pydiag.fmu.isolation`)."""
+    running = [p for p in list((getattr(pool, "_processes", None) or {}).values())
+               if p.is_alive()]
+    for send in ("terminate", "terminate", "kill"):
+        for proc in running:
+            getattr(proc, send)()
+        end = time.monotonic() + STOP_S
+        while running and time.monotonic() < end:  # a sentinel is ready once its worker ended
+            ended = wait([p.sentinel for p in running], end - time.monotonic())
+            running = [p for p in running if p.sentinel not in ended]
+        if not running:
+            break
     pool.shutdown(wait=True, cancel_futures=True)
 
 

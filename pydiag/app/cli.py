@@ -24,6 +24,7 @@ from pydiag.app.loop_commands import (cmd_accept, cmd_compare, cmd_discover, cmd
                                       cmd_loop)
 from pydiag.app.machine_options import apply_machine
 from pydiag.core.errors import PydiagError
+from pydiag.core.termination import raise_once
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.indicators import SHAFTS
@@ -294,9 +295,8 @@ class Terminated(BaseException):
     temporary files removed) before the process ends."""
 
 
-def _raise_terminated(signum, frame) -> None:
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second TERM must not cut the cleanup short
-    raise Terminated
+#: A second TERM waits for the first one's cleanup (:mod:`pydiag.core.termination`).
+_raise_terminated = raise_once(Terminated)
 
 
 def _check_workers(parser: Parser, args: argparse.Namespace) -> None:
