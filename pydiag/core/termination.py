@@ -1,18 +1,38 @@
 """SIGTERM as an exception that unwinds the process, once.
 
 A handler that raises on SIGTERM lets every ``finally`` run (workers stopped, temporary
-files removed). Two things can go wrong with a plain ``raise``: a second TERM (a
-supervisor's, an executor's, the parent's death signal) raises again inside that
-cleanup and cuts it short; and an exception raised where Python cannot propagate it (an
-``os.fork`` hook, a finaliser) is printed and dropped, so the TERM is lost. The handler
-here raises unless the exception of an earlier TERM is still being handled: a TERM during
-the cleanup waits for it to finish, and a TERM after a lost one raises again.
+files removed). Three things can go wrong with a plain ``raise``: a second TERM (a
+supervisor's, an executor's, the parent's death signal) raises again inside that cleanup
+and cuts it short; a TERM that arrives while the process forks is handled in the fork's
+hooks (``os.register_at_fork``: logging has one), where Python prints the exception and
+drops it, so the process runs on; and the same in a finaliser. The handler here
+(:func:`raise_once`) raises unless the exception of an earlier TERM is being handled, so a
+TERM during the cleanup waits for it and a TERM after a lost one raises again; and inside
+:func:`forking` it holds the TERM until the fork has returned, then raises it.
+
+A signal handler is the process's, so what it shares with :func:`forking` is too: one
+module-level record, reset in every forked child.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import sys
+from collections.abc import Iterator
 from typing import Callable
+
+
+class _Held:
+    """The forks under way in this process and the TERM held until they return."""
+
+    def __init__(self) -> None:
+        self.forks = 0
+        self.pending: type[BaseException] | None = None
+
+
+_HELD = _Held()
+os.register_at_fork(after_in_child=_HELD.__init__)
 
 
 def unwinding(exc_type: type[BaseException]) -> bool:
@@ -28,8 +48,29 @@ def unwinding(exc_type: type[BaseException]) -> bool:
 
 
 def raise_once(exc_type: type[BaseException]) -> Callable[[int, object], None]:
-    """A signal handler that raises ``exc_type``, unless one is being handled already."""
+    """A signal handler that raises ``exc_type``, unless one is being handled already;
+    inside :func:`forking`, once the fork has returned."""
     def handler(signum: int, frame: object) -> None:
-        if not unwinding(exc_type):
-            raise exc_type()
+        if unwinding(exc_type):
+            return
+        if _HELD.forks:
+            _HELD.pending = exc_type
+            return
+        raise exc_type()
     return handler
+
+
+@contextlib.contextmanager
+def forking() -> Iterator[None]:
+    """Around a fork (a multiprocessing start): a TERM :func:`raise_once` handles in the
+    meantime is raised when the block ends, not in the fork's hooks, where it would be
+    lost."""
+    _HELD.forks += 1
+    try:
+        yield
+    finally:
+        _HELD.forks -= 1
+        if not _HELD.forks and _HELD.pending is not None:
+            exc_type, _HELD.pending = _HELD.pending, None
+            if not unwinding(exc_type):
+                raise exc_type()

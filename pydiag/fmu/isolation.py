@@ -44,6 +44,7 @@ import numpy as np
 
 from pydiag.core.errors import TooManyFailures
 from pydiag.core.leftovers import owner_tag, reclaim
+from pydiag.core.termination import forking
 
 #: The run folders' names begin with this, then their owner (:mod:`pydiag.core.leftovers`).
 RUN_PREFIX = "pydiag_run_"
@@ -227,7 +228,8 @@ class IsolatedPool:
             read_fd, self._janitor_fd = os.pipe()
             self._janitor = self.ctx.Process(target=_janitor, daemon=True, args=(
                 read_fd, [self._janitor_fd], self.folder))
-            self._janitor.start()
+            with forking():  # a TERM meanwhile is raised after the fork, not lost in its hooks
+                self._janitor.start()
             os.close(read_fd)
             for i in range(max(1, n_workers)):
                 self.workers.append(self._spawn())
@@ -248,7 +250,8 @@ class IsolatedPool:
                                                        if not c.closed]
         proc = self.ctx.Process(target=_worker_loop, daemon=True,
                                 args=(child, self.objective, inherited, self.folder))
-        proc.start()
+        with forking():
+            proc.start()
         child.close()
         self._tell_janitor(f"+{proc.pid}")
         return proc, parent

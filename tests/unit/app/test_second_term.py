@@ -68,3 +68,38 @@ def test_a_worker_that_does_not_end_on_term_is_killed(tmp_path, monkeypatch):
     batch._stop_workers(pool)
     assert time.monotonic() - started < 10
     assert workers and not any(p.is_alive() for p in workers)
+
+
+FORK = """
+import multiprocessing as mp, os, signal, time
+from pydiag.app import cli
+from pydiag.core.termination import forking
+signal.signal(signal.SIGTERM, cli._raise_terminated)
+
+def term_during_the_fork():  # as a TERM that lands while the process forks
+    os.kill(os.getpid(), signal.SIGTERM)
+    for _ in range(10000):
+        pass
+
+os.register_at_fork(after_in_parent=term_during_the_fork)
+try:
+    {guard}
+        child = mp.get_context("fork").Process(target=time.sleep, args=(0,))
+        child.start()
+    time.sleep(0.5)
+    print("ran on")
+except cli.Terminated:
+    print("raised after the fork")
+child.join()
+"""
+
+
+@pytest.mark.parametrize("guard, said", [("with forking():", "raised after the fork"),
+                                         ("if True:", "ran on")])
+def test_a_term_during_a_fork_is_raised_after_it(guard, said):
+    """Python drops an exception raised in a fork's hooks: unguarded, the process runs on
+    (the control case); inside forking() the TERM is raised once the fork has returned."""
+    res = subprocess.run([sys.executable, "-c", FORK.format(guard=guard)], capture_output=True,
+                         text=True, timeout=60)
+    assert res.returncode == 0, res.stderr[-300:]
+    assert res.stdout.strip() == said, (res.stdout, res.stderr[-300:])
