@@ -25,6 +25,7 @@ Usage:
 from __future__ import annotations
 
 import argparse
+import math
 import platform
 import sys
 import tempfile
@@ -36,6 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.accumulate import LoopStep, accumulate  # noqa: E402
@@ -71,13 +73,18 @@ def loop(path: Path, steps: int, build: Path, gain_curve: bool = False) -> list[
         for s in c.suggested_effects:
             print(f"  {s.effect}: {s.message}", flush=True)
         tried = [s for s in c.suggested_effects if s.held_out]
-        base_held = f"{tried[0].held_out.error_base:.3f}" if tried else "-"
+        # the base an effect is scored against: the fit held, or for one that reshapes the
+        # base that fit polished free on half A; the held one unless an effect is accepted
+        held = [s for s in tried if not EFFECTS[s.effect].reshapes_base
+                and math.isfinite(s.held_out.error_base)]
+        base_held = f"{held[0].held_out.error_base:.3f}" if held else "-"
         verdicts = "; ".join(f"{s.effect}: {s.status.value}" for s in tried) or "nothing tried"
         if step.accepted is None:
             rows.append(f"| {name} | {len(rows)} | {model} | {c.error:.3f} | {base_held} | - | "
                         f"- | {verdicts} | {wall:.0f} |")
             return
         s = next(s for s in c.suggested_effects if s.effect == step.accepted)
+        base_held = f"{s.held_out.error_base:.3f}"
         values = ", ".join(f"{k} {v:.3g}" for k, v in s.held_out.parameters.items())
         rows.append(f"| {name} | {len(rows)} | {model} | {c.error:.3f} | {base_held} | "
                     f"**{s.effect}** ({values}, z {s.held_out.z:.0f}) | "

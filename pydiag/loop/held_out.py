@@ -28,8 +28,11 @@ is standard normal: the effect lowers the held-out error by more than noise woul
 exceeds the (1 - alpha) quantile (:data:`FALSE_ALARM_RATE`). A misfit of the base's form
 is in both halves, so a confident effect must also **explain its lines**: on B, the part
 of the residual above noise on the lines its signature claims, sum w [(R - mu0)^2 - V0],
-must fall by at least :data:`pydiag.loop.results.MIN_EXPLAINED`; and no fitted parameter
-may sit at a bound of its range (an angle has none).
+must fall by at least :data:`pydiag.loop.results.MIN_EXPLAINED`; no fitted parameter
+may sit at a bound of its range (an angle has none); and the model with it must predict B
+better than the base: its held-out error (noise-corrected Eq. 12 on the bins A chose)
+falls. z tests only that the change is more than A's noise: a change the right way that
+overshoots, or bends lines the effect does not claim, passes it and predicts B worse.
 
 An effect whose lines are in the envelope of a band above the gear's (``Effect.envelope``:
 a bearing's strikes ringing a structural mode) is fitted and scored the same way on the

@@ -24,6 +24,7 @@ class Status(str, Enum):
     NOT_CONFIRMED = "not confirmed"  # held out, no better than noise
     PARTIAL = "partial"  # beats noise, explains under MIN_EXPLAINED of its lines
     SATURATES = "saturates"  # a parameter at a bound of its range
+    WORSE = "worse held out"  # explains its lines, but predicts the other half worse
     CONFIRMED = "confirmed"
     OUTCOMPETED = "outcompeted"  # confirmed, but a competitor explains its lines as well
 
@@ -64,8 +65,17 @@ class HeldOut:
         return self.tried and self.z > self.threshold
 
     @property
+    def predicts_better(self) -> bool:
+        """Whether the model with it predicts half B better than the base: its held-out
+        error falls. z asks only whether the change it makes is more than half A's noise;
+        a change the right way that overshoots, or that bends lines it does not claim,
+        passes that and still predicts B worse."""
+        return self.error_effect < self.error_base
+
+    @property
     def confident(self) -> bool:
-        return self.significant and self.explained >= MIN_EXPLAINED and not self.at_bound
+        return (self.significant and self.explained >= MIN_EXPLAINED and not self.at_bound
+                and self.predicts_better)
 
     @property
     def status(self) -> Status:
@@ -75,7 +85,9 @@ class HeldOut:
             return Status.NOT_CONFIRMED
         if self.explained < MIN_EXPLAINED:
             return Status.PARTIAL
-        return Status.SATURATES if self.at_bound else Status.CONFIRMED
+        if self.at_bound:
+            return Status.SATURATES
+        return Status.CONFIRMED if self.predicts_better else Status.WORSE
 
     @property
     def message(self) -> str:
@@ -101,6 +113,11 @@ class HeldOut:
         if status is Status.SATURATES:
             return (f"the effect saturates ({', '.join(self.at_bound)} at a bound): its range "
                     "or the model form is wrong")
+        if status is Status.WORSE:
+            return (f"worse held out: it explains {100 * self.explained:.0f} % of the residual "
+                    "on its lines, but the model with it predicts the other half worse (error "
+                    f"{self.error_base:.3f} -> {self.error_effect:.3f}): it overshoots, or "
+                    "moves lines it does not claim")
         return (f"confirmed held out (z {self.z:.1f}, explains {100 * self.explained:.0f} % "
                 "of the residual on its lines)")
 

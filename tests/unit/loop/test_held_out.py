@@ -13,7 +13,7 @@ from pydiag.loop.competition import outcompeted, rivals
 from pydiag.loop.effect_fit import in_model
 from pydiag.core.parameters import Parameter
 from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out_statistic, pressed_bounds
-from pydiag.loop.results import HeldOut
+from pydiag.loop.results import HeldOut, Status
 
 
 def rician(amplitude, noise_power, rng, size):
@@ -252,3 +252,14 @@ def test_a_bound_saturates_only_where_the_fit_presses_against_it():
     assert pressed_bounds(zero, np.array([0.0]), lambda x: 1.0 + 1e4 * x[0], {"runout"}) == []
     tooth = (Parameter("tooth", 0.5, 13.5, step=1.0),)
     assert pressed_bounds(tooth, np.array([13.5]), lambda x: 2.0 - x[0], {"tooth"}) == []
+
+
+def test_an_effect_that_predicts_the_other_half_worse_is_not_confident():
+    """z, the share explained and the bounds all pass; the held-out error rises: "worse
+    held out", not confident, and the sentence gives both errors."""
+    better = HeldOut("wave", 11.4, 2.3, 0.51, 0.699, 0.690, {})
+    worse = HeldOut("wave", 11.4, 2.3, 0.51, 0.699, 0.721, {})
+    assert better.confident and better.status is Status.CONFIRMED
+    assert not worse.confident and worse.status is Status.WORSE
+    assert "0.699 -> 0.721" in worse.message
+    assert worse.to_dict()["status"] == "worse held out"
