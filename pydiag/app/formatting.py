@@ -24,6 +24,7 @@ def format_result(result: Diagnosis, truth: dict | None = None) -> str:
               f"fault mode : {result.fault_mode}",
               f"severity   : {result.severity} (tooth: {result.tooth_severity}, "
               f"transmission error: {result.te_severity})"]
+    lines += _not_counted(result)
     if result.tooth_contrast is not None:
         lines.append(f"tooth      : contrast {result.tooth_contrast:.3f} (|a_f/a0 - 1|: the faulty "
                      "tooth's stiffness variation against the others')")
@@ -34,6 +35,13 @@ def format_result(result: Diagnosis, truth: dict | None = None) -> str:
         lines.append(f"failed     : {fit.failed_evaluations} simulations, penalised: " + "; ".join(
             f"{n} x {reason}" for reason, n in fit.failure_reasons.items()))
     return "\n".join(lines)
+
+
+def _not_counted(result: Diagnosis, where: str = "") -> list[str]:
+    """A line for each fault group the fit found and the record does not support."""
+    return [f"not counted: {where}{t.group.replace('_', ' ')} ({', '.join(t.parameters)}): "
+            f"the record does not pin it down (likelihood ratio {t.statistic:.3g} <= "
+            f"{t.threshold:.3g}), read as healthy" for t in result.support if not t.supported]
 
 
 def format_facts(facts: dict) -> str:
@@ -210,6 +218,8 @@ def format_machine_diagnosis(result: MachineDiagnosis) -> str:
                      f"{p.get('f_ate', float('nan')):>7.3f}{p.get('f_dte', float('nan')):>7.3f}"
                      f"{st.fit.error:>8.3f}  {st.fault_mode:<20}{st.severity:<10}"
                      f"{st.suspect or '-'}")
+    for st in result.stages:
+        lines += _not_counted(st.fit, f"{st.name}'s ")
     scale = result.to_dict()["severity_scale"]
     lines += ["", f"severity   : {scale}"]
     if result.baselines:

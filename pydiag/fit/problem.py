@@ -231,18 +231,25 @@ class FitProblem:
 
     def residuals_of(self, y: np.ndarray) -> np.ndarray:
         """Eq. (12) residuals of every channel of the signals ``y`` (:meth:`simulate`'s)."""
-        return self.residuals_of_amplitudes(
-            [self.featurizer(y[i], self.spec.sample_rate_hz).amplitude
-             for i in range(len(self.channels))])
+        return self.residuals_of_amplitudes(self._amplitudes(y))
+
+    def _amplitudes(self, y: np.ndarray) -> list[np.ndarray]:
+        return [self.featurizer(y[i], self.spec.sample_rate_hz).amplitude
+                for i in range(len(self.channels))]
+
+    def _scaled(self, amplitudes: list[np.ndarray]) -> list[np.ndarray]:
+        return [self._gain(model, c) * model for model, c in zip(amplitudes, self.channels)]
 
     def residuals_of_amplitudes(self, amplitudes: list[np.ndarray]) -> np.ndarray:
         """Eq. (12) residuals of the model's feature amplitudes, one array a channel."""
-        out = []
-        for model, c in zip(amplitudes, self.channels):
-            ref = self.reference[c]
-            out.append(spectral_residuals(self._gain(model, c) * model, ref.amplitude,
-                                          ref.noise_power))
-        return np.concatenate(out)
+        return np.concatenate([spectral_residuals(model, self.reference[c].amplitude,
+                                                  self.reference[c].noise_power)
+                               for model, c in zip(self._scaled(amplitudes), self.channels)])
+
+    def fitted_features(self, plant: FmuPlant, x: np.ndarray) -> list[np.ndarray]:
+        """The model's feature amplitudes at ``x``, one array a channel, with the gains
+        the error fits (what :meth:`residuals` compares with the reference)."""
+        return self._scaled(self._amplitudes(self.simulate(plant, x)))
 
     def linear_features(self, y: np.ndarray) -> list[np.ndarray] | None:
         """Complex values a channel whose moduli are the feature amplitudes of the signals

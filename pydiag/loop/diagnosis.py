@@ -11,8 +11,9 @@ import numpy as np
 
 from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.classify import classify, tooth_contrast
+from pydiag.gear.classify import GROUPS, classify, group_level, healthy, tooth_contrast
 from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
+from pydiag.loop.support import GroupSupport, fault_support
 
 #: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
 #: not a diagnosis: a model with no lines at all scores about 1.
@@ -44,7 +45,9 @@ class Diagnosis:
     them; :data:`NO_DIAGNOSIS` / "unknown" for a fit that explains none of the record,
     :attr:`explained`); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated;
     ``facts``: what was analysed (speed, periods, gains); ``warnings``: why it may not be
-    trusted."""
+    trusted; ``support``: the test of each group the fit found faulty
+    (:mod:`pydiag.loop.support`): a group the record does not support is classified
+    healthy."""
 
     fit: FitResult
     fault_mode: str
@@ -54,6 +57,7 @@ class Diagnosis:
     tooth_contrast: float | None = None
     facts: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    support: list[GroupSupport] = field(default_factory=list)
 
     @property
     def explained(self) -> bool:
@@ -73,6 +77,7 @@ class Diagnosis:
         return {**self.fit.to_dict(), "fault_mode": self.fault_mode, "severity": self.severity,
                 "tooth_severity": self.tooth_severity, "te_severity": self.te_severity,
                 "tooth_contrast": self.tooth_contrast, **self.facts,
+                "fault_support": [g.to_dict() for g in self.support],
                 "warnings": self.warnings}
 
 
@@ -81,16 +86,25 @@ def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -
     them (default: the record's alone, no gains)."""
     values = {**problem.fixed_values, **fit.parameters}
     facts = problem.record_facts() if facts is None else facts
+    support: list[GroupSupport] = []
     if unexplained(problem, fit.error):
         labels, contrast = (NO_DIAGNOSIS,) + ("unknown",) * 3, None
     elif any(name in fit.parameters for name in CLASSIFIED_PARAMETERS):
-        cls = classify(values)
+        found = classify(values)
+        support = fault_support(problem, fit.parameters,
+                                [g for g in GROUPS if group_level(found, g) != "none"])
+        supported = values
+        for test in support:
+            if not test.supported:
+                supported = healthy(supported, test.group)
+        cls = classify(supported)
         labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
         contrast = tooth_contrast(values) if "a_f" in fit.parameters else None
     else:
         labels, contrast = ("not_classified",) + ("unknown",) * 3, None
     return Diagnosis(fit, *labels, contrast, facts,
-                     fit_warnings(problem, fit.error, facts.get("gains"), fit.parameters))
+                     fit_warnings(problem, fit.error, facts.get("gains"), fit.parameters),
+                     support)
 
 
 def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None) -> Diagnosis:

@@ -102,3 +102,25 @@ def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, 
     assert stages[0]["baseline"]["verdict"] == "changed"
     assert stages[1]["suspect"] == "pinion" and stages[1]["baseline"]["verdict"] == "changed"
     assert {"tooth_contrast", "transmission_error", "severity", "model"} <= set(stages[0])
+
+
+
+def test_a_stages_class_does_not_hang_on_the_last_bits_of_the_speed(gear_fmu):
+    """The output stage of the 45 Hz healthy record: its fitted transmission error was 0.005
+    or 0.28 as the speed moved by 1e-13 either way (the record barely sees it), and its
+    class with it; the class is read only from what the record supports
+    (pydiag.loop.support)."""
+    import dataclasses
+
+    from pydiag.loop.diagnosis import diagnose
+    from pydiag.loop.stages import machine_speed, stage_problem
+
+    machine = load_machine(MACHINE)
+    m = read_measurement(DATA / "spur 1_45hz_Low_1.zip", float(RATE))
+    found = machine_speed(m, machine, 45.0, SpeedSettings("mesh", tacho="ch3"))
+    classes = set()
+    for shift in (1e-13, -1e-13):
+        moved = dataclasses.replace(found, speed_hz=found.speed_hz * (1 + shift))
+        result = diagnose(stage_problem(str(gear_fmu), m, machine, 1, moved, drop=("ch3",)))
+        classes.add((result.fault_mode, result.severity, result.te_severity))
+    assert len(classes) == 1 and classes.pop()[2] == "none", classes
