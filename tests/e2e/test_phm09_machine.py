@@ -104,7 +104,6 @@ def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, 
     assert {"tooth_contrast", "transmission_error", "severity", "model"} <= set(stages[0])
 
 
-
 def test_a_stages_class_does_not_hang_on_the_last_bits_of_the_speed(gear_fmu):
     """The output stage of the 45 Hz healthy record: its fitted transmission error was 0.005
     or 0.28 as the speed moved by 1e-13 either way (the record barely sees it), and its
