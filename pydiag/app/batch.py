@@ -28,7 +28,7 @@ from typing import Callable, Iterable
 
 from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.core.termination import forking, raise_once
+from pydiag.core.termination import deferred, raise_once
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.gear.classify import SEVERITIES
@@ -170,7 +170,7 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
             return _collect(tasks, diagnose_task, progress)
         pool = ProcessPoolExecutor(workers, initializer=_die_with_parent)
         try:
-            with forking():  # the first submits start the workers
+            with deferred():  # the first submits start the workers
                 futures = [pool.submit(_task_in_worker, t) for t in tasks]
             rows = _collect(futures, lambda f: f.result(), progress)
         except BaseException:  # Ctrl-C, SIGTERM: stop the workers now, not after their tasks

@@ -5,12 +5,14 @@ files removed). Three things can go wrong with a plain ``raise``: a second TERM 
 supervisor's, an executor's, the parent's death signal) raises again inside that cleanup
 and cuts it short; a TERM that arrives while the process forks is handled in the fork's
 hooks (``os.register_at_fork``: logging has one), where Python prints the exception and
-drops it, so the process runs on; and the same in a finaliser. The handler here
+drops it, so the process runs on; and the same in a finaliser. A TERM can also land
+between making a thing and recording it (a folder made, its name not yet kept; a worker
+forked, not yet in the pool's list), and the cleanup then misses it. The handler here
 (:func:`raise_once`) raises unless the exception of an earlier TERM is being handled, so a
 TERM during the cleanup waits for it and a TERM after a lost one raises again; and inside
-:func:`forking` it holds the TERM until the fork has returned, then raises it.
+:func:`deferred` it holds the TERM until the block ends, then raises it.
 
-A signal handler is the process's, so what it shares with :func:`forking` is too: one
+A signal handler is the process's, so what it shares with :func:`deferred` is too: one
 module-level record, reset in every forked child.
 """
 
@@ -24,10 +26,11 @@ from typing import Callable
 
 
 class _Held:
-    """The forks under way in this process and the TERM held until they return."""
+    """The :func:`deferred` blocks under way in this process and the TERM held until they
+    end."""
 
     def __init__(self) -> None:
-        self.forks = 0
+        self.depth = 0
         self.pending: type[BaseException] | None = None
 
 
@@ -49,11 +52,11 @@ def unwinding(exc_type: type[BaseException]) -> bool:
 
 def raise_once(exc_type: type[BaseException]) -> Callable[[int, object], None]:
     """A signal handler that raises ``exc_type``, unless one is being handled already;
-    inside :func:`forking`, once the fork has returned."""
+    inside :func:`deferred`, once the block has ended."""
     def handler(signum: int, frame: object) -> None:
         if unwinding(exc_type):
             return
-        if _HELD.forks:
+        if _HELD.depth:
             _HELD.pending = exc_type
             return
         raise exc_type()
@@ -61,16 +64,17 @@ def raise_once(exc_type: type[BaseException]) -> Callable[[int, object], None]:
 
 
 @contextlib.contextmanager
-def forking() -> Iterator[None]:
-    """Around a fork (a multiprocessing start): a TERM :func:`raise_once` handles in the
-    meantime is raised when the block ends, not in the fork's hooks, where it would be
-    lost."""
-    _HELD.forks += 1
+def deferred() -> Iterator[None]:
+    """A TERM :func:`raise_once` handles in the block is raised when the block ends. Around
+    a fork (a multiprocessing start), so that it is not lost in the fork's hooks; around
+    making a thing and recording it, so that the cleanup the TERM starts finds it. Keep the
+    block short: it is a TERM's delay."""
+    _HELD.depth += 1
     try:
         yield
     finally:
-        _HELD.forks -= 1
-        if not _HELD.forks and _HELD.pending is not None:
+        _HELD.depth -= 1
+        if not _HELD.depth and _HELD.pending is not None:
             exc_type, _HELD.pending = _HELD.pending, None
             if not unwinding(exc_type):
                 raise exc_type()

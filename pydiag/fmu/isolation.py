@@ -44,7 +44,7 @@ import numpy as np
 
 from pydiag.core.errors import TooManyFailures
 from pydiag.core.leftovers import owner_tag, reclaim
-from pydiag.core.termination import forking
+from pydiag.core.termination import deferred
 
 #: The run folders' names begin with this, then their owner (:mod:`pydiag.core.leftovers`).
 RUN_PREFIX = "pydiag_run_"
@@ -224,16 +224,15 @@ class IsolatedPool:
         self._janitor_fd = -1
         self._janitor = None
         try:  # from the folder on: an exception (a SIGTERM) on the way removes what was made
-            self.folder = tempfile.mkdtemp(prefix=f"{RUN_PREFIX}{owner_tag()}_")
-            read_fd, self._janitor_fd = os.pipe()
-            self._janitor = self.ctx.Process(target=_janitor, daemon=True, args=(
-                read_fd, [self._janitor_fd], self.folder))
-            with forking():  # a TERM meanwhile is raised after the fork, not lost in its hooks
+            with deferred():  # a TERM meanwhile is raised once all this is recorded
+                self.folder = tempfile.mkdtemp(prefix=f"{RUN_PREFIX}{owner_tag()}_")
+                read_fd, self._janitor_fd = os.pipe()
+                self._janitor = self.ctx.Process(target=_janitor, daemon=True, args=(
+                    read_fd, [self._janitor_fd], self.folder))
                 self._janitor.start()
-            os.close(read_fd)
+                os.close(read_fd)
             for i in range(max(1, n_workers)):
-                self.workers.append(self._spawn())
-                self.starting[i] = time.monotonic()
+                self._start(i)
         except BaseException:
             self.close()
             raise
@@ -244,17 +243,24 @@ class IsolatedPool:
         except OSError:
             pass
 
-    def _spawn(self):
+    def _start(self, i: int) -> None:
+        """Start worker ``i``: a new one at the end, or in the place of one reaped. A TERM
+        meanwhile is raised once the pool and the janitor know the worker, so that the
+        cleanup it starts stops the worker too."""
         parent, child = self.ctx.Pipe()
         inherited = [self._janitor_fd, parent.fileno()] + [c.fileno() for _, c in self.workers
                                                        if not c.closed]
         proc = self.ctx.Process(target=_worker_loop, daemon=True,
                                 args=(child, self.objective, inherited, self.folder))
-        with forking():
+        with deferred():
             proc.start()
-        child.close()
-        self._tell_janitor(f"+{proc.pid}")
-        return proc, parent
+            child.close()
+            self._tell_janitor(f"+{proc.pid}")
+            if i < len(self.workers):
+                self.workers[i] = (proc, parent)
+            else:
+                self.workers.append((proc, parent))
+            self.starting[i] = time.monotonic()
 
     def _reap(self, proc, conn) -> None:
         if proc.is_alive():
@@ -267,8 +273,7 @@ class IsolatedPool:
 
     def _replace(self, i: int) -> None:
         self._reap(*self.workers[i])
-        self.workers[i] = self._spawn()
-        self.starting[i] = time.monotonic()
+        self._start(i)
 
     def map(self, xs: np.ndarray) -> list[np.ndarray | None]:
         xs = list(xs)
@@ -345,12 +350,13 @@ class IsolatedPool:
 
     def close(self) -> None:
         """Stop the workers (each removes its files), then the janitor; remove the run folder."""
-        for _, conn in self.workers:
+        running = [(p, c) for p, c in self.workers if not c.closed]  # not those reaped already
+        for _, conn in running:
             try:
                 conn.send(None)
             except (OSError, BrokenPipeError):
                 pass
-        for proc, conn in self.workers:
+        for proc, conn in running:
             proc.join(5)
             self._reap(proc, conn)
         self.workers = []

@@ -29,6 +29,7 @@ import fmpy
 import numpy as np
 
 from pydiag.core.errors import PlantError
+from pydiag.core.termination import deferred
 from pydiag.fmu import native_engine
 from pydiag.fmu.archive import check_binary, safe_extract
 from pydiag.fmu.description import (outputs_of, read_model_description, require_settable,
@@ -97,7 +98,8 @@ class FmuPlant:
         self._check_settable(self.fixed_values)
         self._fmi_type = ("ModelExchange" if self.model_description.modelExchange is not None
                           else "CoSimulation")
-        self._unzipdir = tempfile.mkdtemp(prefix="pydiag_fmu_")
+        with deferred():  # a TERM meanwhile is raised once the name is kept, for close()
+            self._unzipdir = tempfile.mkdtemp(prefix="pydiag_fmu_")
         try:
             safe_extract(self.fmu_path, self._unzipdir)
             check_binary(self._unzipdir, self.model_description, self.fmu_path.name)

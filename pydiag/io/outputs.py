@@ -22,6 +22,7 @@ from typing import Iterator
 
 from pydiag.core.errors import OutputError
 from pydiag.core.leftovers import owner_tag, reclaim
+from pydiag.core.termination import deferred
 
 
 def check_output(path: str | Path, force: bool = False) -> Path:
@@ -57,13 +58,12 @@ def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
     path = check_output(path, force)
     folder = path.parent if str(path.parent) else Path(".")
     reclaim(folder, f".{path.name}.", ".tmp")  # left by a writer killed outright
+    tmp = ""
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{owner_tag()}.", suffix=".tmp",
-                                   dir=folder)
-    except OSError as err:
-        raise OutputError(f"cannot write {path}: {err.strerror or err}") from err
-    os.close(fd)
-    try:
+        with deferred():  # a TERM meanwhile is raised once the name is kept, for the finally
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{owner_tag()}.", suffix=".tmp",
+                                       dir=folder)
+            os.close(fd)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give what open() would
         yield Path(tmp)
         check_output(path, force)  # nothing appeared at the target in the meantime
@@ -71,8 +71,9 @@ def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
     except OSError as err:
         raise OutputError(f"cannot write {path}: {err.strerror or err}") from err
     finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        if tmp:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
 
 
 def _umask() -> int:

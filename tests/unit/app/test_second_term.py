@@ -73,7 +73,7 @@ def test_a_worker_that_does_not_end_on_term_is_killed(tmp_path, monkeypatch):
 FORK = """
 import multiprocessing as mp, os, signal, time
 from pydiag.app import cli
-from pydiag.core.termination import forking
+from pydiag.core.termination import deferred
 signal.signal(signal.SIGTERM, cli._raise_terminated)
 
 def term_during_the_fork():  # as a TERM that lands while the process forks
@@ -94,11 +94,11 @@ child.join()
 """
 
 
-@pytest.mark.parametrize("guard, said", [("with forking():", "raised after the fork"),
+@pytest.mark.parametrize("guard, said", [("with deferred():", "raised after the fork"),
                                          ("if True:", "ran on")])
 def test_a_term_during_a_fork_is_raised_after_it(guard, said):
     """Python drops an exception raised in a fork's hooks: unguarded, the process runs on
-    (the control case); inside forking() the TERM is raised once the fork has returned."""
+    (the control case); inside deferred() the TERM is raised once the fork has returned."""
     res = subprocess.run([sys.executable, "-c", FORK.format(guard=guard)], capture_output=True,
                          text=True, timeout=60)
     assert res.returncode == 0, res.stderr[-300:]
