@@ -154,9 +154,11 @@ def threshold(false_alarm_rate: float = FALSE_ALARM_RATE) -> float:
 
 
 def held_out_statistic(measured: np.ndarray, base: np.ndarray, effect: np.ndarray,
-                       noise_power: float) -> tuple[float, np.ndarray, np.ndarray]:
+                       noise_power: float | np.ndarray
+                       ) -> tuple[float, np.ndarray, np.ndarray]:
     """The parts of the test (module docstring) on some bins: sum w d^2, each bin's term
-    of D, and each bin's base excess w [(R - mu0)^2 - V0]."""
+    of D, and each bin's base excess w [(R - mu0)^2 - V0]; ``noise_power``: one for all
+    bins, or each bin's."""
     mu0, mu1 = rician_mean(base, noise_power), rician_mean(effect, noise_power)
     var0 = np.maximum(base ** 2 + noise_power - mu0 ** 2, 1e-300)
     w, d = 1.0 / var0, mu1 - mu0

@@ -43,9 +43,19 @@ def test_a_transmission_error_and_a_tooth_the_record_shows_are_kept(gear_fmu):
     assert [t.group for t in tooth.support if t.supported] == ["tooth"]
 
 
-def test_only_the_groups_asked_for_are_tested_each_against_its_healthy_model(gear_fmu):
-    problem = acc_only(gear_fmu, 1)
-    assert fault_support(problem, dict(case(1).parameters), []) == []
-    # the fit at the healthy values themselves: no evidence either way
-    [same] = fault_support(problem, dict(case(1).parameters), ["transmission_error"])
-    assert same.statistic == 0.0 and not same.supported
+def test_the_statistic_weighs_the_fit_against_the_record(gear_fmu):
+    """On a healthy record a larger fitted transmission error is refuted more strongly; on
+    a record with one, the true level is supported more than half or twice it."""
+    def statistic(problem, parameters, scale):
+        estimate = {**parameters, "f_ate": scale * parameters["f_ate"],
+                    "f_dte": scale * parameters["f_dte"]}
+        [test] = fault_support(problem, estimate, ["transmission_error"])
+        return test.statistic
+
+    healthy = acc_only(gear_fmu, 1)
+    levels = {**case(1).parameters, "f_ate": 0.1, "f_dte": 0.1}
+    falling = [statistic(healthy, levels, s) for s in (0.5, 1.0, 2.0)]
+    assert falling[0] < 0 and falling == sorted(falling, reverse=True), falling
+    te = acc_only(gear_fmu, 5)
+    half, true, twice = (statistic(te, case(5).parameters, s) for s in (0.5, 1.0, 2.0))
+    assert true > max(half, twice) and true > 9.21, (half, true, twice)
