@@ -269,7 +269,7 @@ def _machine_indicators(args, machine: Machine, m: Measurement, speed: SpeedSett
     report = machine_report(m, machine, speed, args.rpm / 60.0,
                             _baseline_records(args, machine, speed))
     print(format_machine_report(report))
-    warning = report.record.speed.tacho_warning()
+    warning = report.record.speed.warning()
     if warning:
         print(f"pydiag indicators: warning: {warning}", file=sys.stderr)
     if args.json:

@@ -81,6 +81,12 @@ CENTROID_PASSES = 3
 #: A tacho's speed and the mesh lines' may differ by this much (%) before a warning: ten
 #: times what the mesh search measures on real records, far below a wrong pulse count.
 TACHO_TOLERANCE_PCT = 0.1
+#: A speed that swings by more than this share of the mesh demodulation's half-band
+#: (half the swing over the record's range against it) may have left the band: the phase
+#: followed is then another line's, and the speed from it may be off, so it is said. On
+#: the synthetic records of tests/unit/gear/test_speed.py (32/80 teeth, a half-band of
+#: +-0.63 %) swings up to +-0.45 % were followed exactly and +-0.5 % came out 0.16 % off.
+SWING_SHARE = 0.6
 
 
 @dataclass(frozen=True)
@@ -123,6 +129,8 @@ class SpeedEstimate:
             candidate's (:func:`comb_speed`); None otherwise
         mesh_speed_hz: with a tacho, the speed the mesh lines give, to check it; None
             when the mesh was not searched or not found
+        band_pct: the half-width of the band the mesh line's phase was followed in, % of
+            the line's frequency; None when no mesh line was followed
     """
 
     speed_hz: float
@@ -134,6 +142,7 @@ class SpeedEstimate:
     source: SpeedSource = SpeedSource.MESH
     confidence_db: float | None = None
     mesh_speed_hz: float | None = None
+    band_pct: float | None = None
 
     @property
     def tacho_disagreement_pct(self) -> float | None:
@@ -142,11 +151,24 @@ class SpeedEstimate:
             return None
         return 100 * (self.mesh_speed_hz / self.speed_hz - 1)
 
-    def tacho_warning(self) -> str | None:
-        """Why the tacho's speed may be wrong (the mesh lines disagree past
-        :data:`TACHO_TOLERANCE_PCT`), or None."""
+    @property
+    def beyond_band(self) -> bool:
+        """Whether the speed swings too far for the mesh phase to be followed
+        (:data:`SWING_SHARE` of the band)."""
+        return (self.band_pct is not None
+                and 0.5 * self.variation_pct > SWING_SHARE * self.band_pct)
+
+    def warning(self) -> str | None:
+        """Why the speed may be wrong, or None: from the mesh, a swing near the edge of
+        the band its phase is followed in; from a tacho, mesh lines that disagree with it
+        past :data:`TACHO_TOLERANCE_PCT` (unless the swing is what kept the mesh off)."""
+        swing = (f"the speed swings by +-{0.5 * self.variation_pct:.3g} % over the record, "
+                 f"near the +-{self.band_pct:.3g} % the mesh line's phase is followed in"
+                 if self.beyond_band else "")
+        if self.source is SpeedSource.MESH and swing:
+            return f"{swing}: the speed may be off; a tacho channel (--tacho) measures it"
         off = self.tacho_disagreement_pct
-        if off is None or abs(off) <= TACHO_TOLERANCE_PCT:
+        if off is None or abs(off) <= TACHO_TOLERANCE_PCT or swing:
             return None
         return (f"the mesh lines give {self.mesh_speed_hz:.5f} Hz, {off:+.3f} % from the "
                 f"tacho's {self.speed_hz:.5f} Hz: check the tacho channel and "
@@ -302,7 +324,7 @@ def comb_speed(signals: list[np.ndarray], sample_rate_hz: float, comb: MeshComb,
     return SpeedEstimate(mean, _variation_pct(revs[inner], sample_rate_hz, mean),
                          f"mesh harmonic {h}{where}", nominal_hz, revs,
                          (int(np.ceil(index[0])), int(np.floor(index[-1]))),
-                         confidence_db=confidence_db)
+                         confidence_db=confidence_db, band_pct=100 * comb.bands[m] / order)
 
 
 def _centroid_hz(spectrum: tuple[np.ndarray, np.ndarray], freq_hz: float, band_hz: float,
@@ -380,14 +402,16 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
                                    f"{', '.join(measurement.channels)}")
         revs = tacho_revolutions(measurement.channels[tacho], pulses_per_rev)
         mean = _mean_speed(revs, fs)
-        mesh_hz = None
+        mesh = None
         if not short and searched:
             try:
-                mesh_hz = from_mesh().speed_hz
+                mesh = from_mesh()
             except MeasurementError:
-                mesh_hz = None  # no mesh line stands out: nothing to check the tacho with
+                mesh = None  # no mesh line stands out: nothing to check the tacho with
         return SpeedEstimate(mean, _variation_pct(revs, fs, mean), "tacho", nominal, revs,
-                             source=SpeedSource.TACHO, mesh_speed_hz=mesh_hz)
+                             source=SpeedSource.TACHO,
+                             mesh_speed_hz=None if mesh is None else mesh.speed_hz,
+                             band_pct=None if mesh is None else mesh.band_pct)
     if method == "nominal":
         revs = np.arange(measurement.n_samples) * (nominal / fs)
         why = (f" (auto: a record of {measurement.duration_s:.3g} s is too short to follow the "

@@ -163,7 +163,7 @@ def fit_warnings(problem: FitProblem, error: float, gains: dict[str, float] | No
                      "measured lines): the model explains none of the record; "
                      f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "
                      "a larger budget")
-    speed = problem.speed.tacho_warning() if problem.speed is not None else None
+    speed = problem.speed.warning() if problem.speed is not None else None
     if speed:
         found.append(speed)
     low, high = PLAUSIBLE_GAINS

@@ -123,3 +123,33 @@ def test_a_speed_that_swings_once_over_the_record_is_found_at_its_mean_not_at_an
     found = estimate_speed(m, GearKinematics(32, 80, 30.0), SpeedSettings("mesh", "a1"))
     assert found.speed_hz == pytest.approx(mean_hz, rel=1e-4)
     assert found.variation_pct == pytest.approx(0.8, abs=0.05)
+
+
+def swinging_record(swing: float, cycles: int = 1, seed: int = 0):
+    """30 s of a 32-tooth mesh whose speed swings by +-``swing`` around 29.9 Hz, ``cycles``
+    times, with a once-per-turn tacho."""
+    fs, duration, mean_hz = 12_800.0, 30.0, 29.9
+    t = np.arange(int(fs * duration)) / fs
+    revs = np.cumsum(mean_hz * (1 + swing * np.sin(2 * np.pi * cycles * t / duration))) / fs
+    mesh = sum(np.cos(2 * np.pi * h * 32 * revs + h) / h for h in range(1, 5))
+    rng = np.random.default_rng(seed)
+    tacho = (np.mod(revs, 1.0) < 0.2).astype(float)
+    return Measurement({"a1": mesh + rng.standard_normal(t.size), "tacho": tacho}, fs), mean_hz
+
+
+def test_a_swing_near_the_edge_of_the_demodulation_band_is_said():
+    """32/80 teeth: the mesh phase is followed within +-0.63 % (half the gear's speed); a
+    swing of +-0.55 % leaves it and the speed comes out off: a warning says so, and the
+    tacho is not blamed for the mesh's miss. A swing of +-0.2 % is followed exactly."""
+    kin = GearKinematics(32, 80, 30.0)
+    calm, mean_hz = swinging_record(0.002)
+    found = estimate_speed(calm, kin, SpeedSettings("mesh", "a1"))
+    assert found.speed_hz == pytest.approx(mean_hz, rel=1e-5) and found.warning() is None
+    assert found.band_pct == pytest.approx(100 * 0.5 * 32 / 80 / 32)
+    wide, _ = swinging_record(0.0055)
+    off = estimate_speed(wide, kin, SpeedSettings("mesh", "a1"))
+    assert abs(off.speed_hz / mean_hz - 1) > 5e-4  # the miss the warning is for
+    assert "near the +-0.625 % the mesh line's phase is followed in" in off.warning()
+    tacho = estimate_speed(wide, kin, SpeedSettings("auto", "a1", tacho="tacho"))
+    assert tacho.speed_hz == pytest.approx(mean_hz, rel=1e-4)
+    assert abs(tacho.tacho_disagreement_pct) > 0.1 and tacho.warning() is None
