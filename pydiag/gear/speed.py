@@ -1,5 +1,9 @@
 """The pinion speed of a real record, and the record order-tracked to that speed.
 
+One concern: the shaft angle over a record, from whatever the record holds (a tacho, the
+mesh lines of one pair or of every stage, or nothing but the nominal speed), with how far
+it can be trusted (its confidence, its warnings).
+
 A real machine turns at a speed that is only nominal (motor slip moves it with the load)
 and drifts within the record, so a synchronous cut at the nominal speed smears the mesh
 harmonics. :func:`estimate_speed` finds the shaft angle over the record:
@@ -16,7 +20,9 @@ harmonics. :func:`estimate_speed` finds the shaft angle over the record:
   shaft-order sidebands, so the phase is the shaft angle times h Np; the band is centred
   on the line's power centroid, its mean frequency (a line that drifts peaks at the ends
   of its swing, where it dwells longest). The mean speed is
-  the slope of that phase (far below one FFT bin);
+  the slope of that phase (far below one FFT bin). A speed that swings near the band's
+  edge leaves it, and the phase followed is partly another line's: a warning
+  (:data:`SWING_SHARE`);
 - ``"mesh"`` on a machine of two or more stages (:class:`~pydiag.gear.machine.Machine`):
   one input speed must put every stage's mesh harmonics and their sideband families
   (1 to ``COMB_SIDEBANDS`` orders of both of a stage's shafts) on lines, summed over every
