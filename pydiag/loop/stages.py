@@ -98,7 +98,14 @@ class MachineDiagnosis:
 
     @property
     def warnings(self) -> list[str]:
-        return [f"{s.name}: {w}" for s in self.stages for w in s.fit.warnings]
+        """The speed's warning once, at the input shaft (each stage's fit has it at its own
+        shaft), then each stage's others."""
+        speed = self.speed.warning()
+        out = [speed] if speed else []
+        for k, stage in enumerate(self.stages):
+            own = stage_speed(self.speed, self.machine, k).warning()
+            out += [f"{stage.name}: {w}" for w in stage.fit.warnings if w != own]
+        return out
 
 
 def machine_speed(measurement: Measurement, machine: Machine, input_hz: float,
@@ -107,6 +114,15 @@ def machine_speed(measurement: Measurement, machine: Machine, input_hz: float,
     the tacho, else from every stage's mesh at once (:mod:`pydiag.gear.speed`)."""
     return estimate_speed(measurement, machine.stage_kinematics(0, input_hz), speed,
                           machine=machine)
+
+
+def stage_speed(speed: SpeedEstimate, machine: Machine, stage: int) -> SpeedEstimate:
+    """The input shaft's ``speed`` at stage ``stage``'s pinion shaft (times its ratio)."""
+    ratio = float(machine.shaft_ratio(stage))
+    return dataclasses.replace(
+        speed, speed_hz=speed.speed_hz * ratio, nominal_hz=speed.nominal_hz * ratio,
+        revolutions=speed.revolutions * ratio,
+        mesh_speed_hz=None if speed.mesh_speed_hz is None else speed.mesh_speed_hz * ratio)
 
 
 def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, stage: int,
@@ -119,11 +135,7 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
     other stages' lines left out (module docstring); its kinematics name every line of
     the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`); ``gain_curve``:
     :func:`~pydiag.fit.problem.build_problem`'s."""
-    ratio = float(machine.shaft_ratio(stage))
-    estimate = dataclasses.replace(
-        speed, speed_hz=speed.speed_hz * ratio, nominal_hz=speed.nominal_hz * ratio,
-        revolutions=speed.revolutions * ratio,
-        mesh_speed_hz=None if speed.mesh_speed_hz is None else speed.mesh_speed_hz * ratio)
+    estimate = stage_speed(speed, machine, stage)
     kin = machine.stage_kinematics(stage, speed.speed_hz)
     top = max_band_freq_hz(kin)
     others = tuple(f for j in range(len(machine.stages)) if j != stage

@@ -1,0 +1,38 @@
+"""A machine's speed is said once, at the input shaft: each stage's fit has the same speed
+at its own shaft, and a tacho on the input is not the stage's."""
+
+import numpy as np
+import pytest
+
+from pydiag.fit.estimator import FitResult
+from pydiag.gear.machine import load_machine
+from pydiag.gear.speed import SpeedEstimate, SpeedSource
+from pydiag.loop.diagnosis import Diagnosis
+from pydiag.loop.stages import MachineDiagnosis, StageDiagnosis, stage_speed
+from conftest import ROOT
+
+MACHINE = load_machine(ROOT / "examples" / "phm09_spur.toml")  # 32/96 then 48/80
+
+
+def machine_diagnosis(speed: SpeedEstimate) -> MachineDiagnosis:
+    stages = []
+    for k, stage in enumerate(MACHINE.stages):
+        own = stage_speed(speed, MACHINE, k)
+        fit = Diagnosis(FitResult({}, 0.5, 1, 0.0, [0.5]), "healthy", "none", "none", "none",
+                        warnings=[own.warning(), "a fit's own warning"])
+        stages.append(StageDiagnosis(stage.name, stage.pinion_teeth, stage.gear_teeth,
+                                     own.speed_hz, own.speed_hz, own.speed_hz, fit, None,
+                                     "healthy", "none", None))
+    return MachineDiagnosis(MACHINE, speed, stages, (), None)
+
+
+@pytest.mark.parametrize("speed, said", [
+    (SpeedEstimate(30.0, 0.1, "tacho", 30.0, np.zeros(3), source=SpeedSource.TACHO,
+                   mesh_speed_hz=30.3, band_pct=0.52), "30.30000 Hz, +1.000 % from the tacho's 30.00000"),
+    (SpeedEstimate(30.0, 0.8, "mesh harmonic 1", 30.0, np.zeros(3), band_pct=0.52),
+     "swings by +-0.4 %"),
+])
+def test_the_speed_is_said_once_at_the_input_shaft(speed, said):
+    warnings = machine_diagnosis(speed).warnings
+    assert said in warnings[0]
+    assert warnings[1:] == ["input stage: a fit's own warning", "output stage: a fit's own warning"]
