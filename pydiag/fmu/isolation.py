@@ -266,10 +266,11 @@ class IsolatedPool:
         if proc.is_alive():
             proc.kill()
         proc.join(5)
-        conn.close()
-        self._tell_janitor(f"-{proc.pid}")
-        if not proc.is_alive():
-            proc.close()  # its sentinel descriptor
+        with deferred():  # a TERM meanwhile is raised once the janitor forgot the pid
+            conn.close()
+            self._tell_janitor(f"-{proc.pid}")
+            if not proc.is_alive():
+                proc.close()  # its sentinel descriptor
 
     def _replace(self, i: int) -> None:
         self._reap(*self.workers[i])
