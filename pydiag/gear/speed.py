@@ -88,10 +88,11 @@ CENTROID_PASSES = 3
 #: times what the mesh search measures on real records, far below a wrong pulse count.
 TACHO_TOLERANCE_PCT = 0.1
 #: A speed that swings by more than this share of the mesh demodulation's half-band
-#: (half the swing over the record's range against it) may have left the band: the phase
-#: followed is then another line's, and the speed from it may be off, so it is said. On
-#: the synthetic records of tests/unit/gear/test_speed.py (32/80 teeth, a half-band of
-#: +-0.63 %) swings up to +-0.45 % were followed exactly and +-0.5 % came out 0.16 % off.
+#: (half the speed's range over the record, against the half-band) may have left it: the
+#: phase followed is then partly another line's, and the speed from it may be off, so it
+#: is said. On the synthetic records of tests/unit/gear/test_speed.py (32/80 teeth, a
+#: half-band of +-0.625 %) swings up to +-0.45 % were followed exactly and +-0.5 % came
+#: out 0.16 % off.
 SWING_SHARE = 0.6
 
 
