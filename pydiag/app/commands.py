@@ -257,6 +257,9 @@ def cmd_indicators(args) -> int:
     baseline = read_input(args, args.baseline[0]) if args.baseline else None
     report = condition_indicators(m, record_kinematics(args, m), speed, args.shaft, baseline)
     print(format_indicators(report))
+    warning = report.speed.warning()
+    if warning:
+        print(f"pydiag indicators: warning: {warning}", file=sys.stderr)
     if args.json:
         out = {**report.to_dict(), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)

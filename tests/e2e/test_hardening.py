@@ -131,3 +131,19 @@ def test_the_housing_is_not_applied_to_a_model_that_has_it(record, housing_fmu, 
     assert res.returncode == 0, res.stderr
     fitted = json.loads(out.read_text())["parameters"]
     assert 20 <= fitted["f_housing"] <= 10_000 and 0.005 <= fitted["zeta_housing"] <= 0.5
+
+
+def test_indicators_say_a_speed_that_swings_past_what_the_mesh_can_follow(tmp_path):
+    """A 32/80 pair whose speed swings +-0.55 % once over 30 s: the mesh phase is followed
+    within +-0.625 %, and the speed comes out off; indicators say so (they said nothing)."""
+    fs, duration = 6400.0, 30.0
+    t = np.arange(int(fs * duration)) / fs
+    revs = np.cumsum(29.9 * (1 + 0.0055 * np.sin(2 * np.pi * t / duration))) / fs
+    acc = sum(np.cos(2 * np.pi * h * 32 * revs + h) / h for h in range(1, 3))
+    acc = acc + np.random.default_rng(0).standard_normal(t.size)
+    path = write_csv(tmp_path / "swing.csv", ["time", "acc"], zip(t, acc.round(5)))
+    res = run_cli("-m", "pydiag", "indicators", "--measurement", str(path), "--rpm", "1800",
+                  "--teeth", "32,80")
+    assert res.returncode == 0, res.stderr
+    assert "warning: the speed swings by +-" in res.stderr, (res.stdout, res.stderr)
+    assert "near the +-0.625 % the mesh line's phase is followed in" in res.stderr
