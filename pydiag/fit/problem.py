@@ -178,9 +178,12 @@ class FitProblem:
         """The gain curve's hat functions at ``channel``'s feature bins."""
         return curve_basis(self.reference[channel].freq_hz, self.curve_nodes_hz())
 
-    def _curve(self, model: np.ndarray, channel: str) -> np.ndarray:
-        """The gain curve's node values that fit ``model`` (features) to ``channel``."""
-        return fitted_curve(model, self._clean(channel), self._basis(channel))
+    def _curve(self, model: np.ndarray, channel: str, basis: np.ndarray | None = None
+               ) -> np.ndarray:
+        """The gain curve's node values that fit ``model`` (features) to ``channel``;
+        ``basis``: :meth:`_basis` of the channel when the caller has it."""
+        basis = self._basis(channel) if basis is None else basis
+        return fitted_curve(model, self._clean(channel), basis)
 
     def _gain(self, model: np.ndarray, channel: str) -> float | np.ndarray:
         """The gain of ``model`` (features) onto ``channel``: a number, or with
@@ -191,7 +194,7 @@ class FitProblem:
             return 1.0
         if self.gain_curve:  # the basis once: this runs at every evaluation of a fit
             basis = self._basis(channel)
-            return basis @ fitted_curve(model, self._clean(channel), basis)
+            return basis @ self._curve(model, channel, basis)
         return fitted_gain(model, self._clean(channel))
 
     def gains(self, plant: FmuPlant, x: np.ndarray) -> dict[str, float]:
