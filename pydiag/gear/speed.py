@@ -271,9 +271,11 @@ def comb_speed(signals: list[np.ndarray], sample_rate_hz: float, comb: MeshComb,
              for h in range(1, SEARCH_HARMONICS + 1)
              if h * comb.orders[m] * high <= 0.45 * sample_rate_hz]
     if not lines:
-        raise MeasurementError(f"the mesh frequency near {min(comb.orders) * nominal_hz:.1f} Hz "
-                               f"is above the record's Nyquist frequency ({sample_rate_hz / 2:.1f}"
-                               " Hz): check the speed, the teeth and the sample rate")
+        top_hz = min(comb.orders) * high
+        raise MeasurementError(
+            f"the mesh frequency near {min(comb.orders) * nominal_hz:.1f} Hz, searched up to "
+            f"{top_hz:.1f} Hz, needs a sample rate above {top_hz / 0.45:.0f} Hz; the record's "
+            f"is {sample_rate_hz:g} Hz: check the speed, the teeth and the sample rate")
     n_side = COMB_SIDEBANDS if comb.sidebands else 0
     finest = max(h * comb.orders[m] for m, h in lines) + max(
         (n_side * max(sb) for sb in comb.sidebands), default=0.0)

@@ -74,6 +74,15 @@ def test_a_record_without_mesh_lines_is_refused():
         estimate_speed(m, GearKinematics(NP, NG, 25.0), SpeedSettings("mesh"))
 
 
+def test_a_record_sampled_below_the_mesh_search_is_refused_with_the_rate_it_needs():
+    """A 32-tooth mesh at 960 Hz sampled at 2 kHz: under Nyquist, but the search reaches
+    973.5 Hz and keeps to 0.45 of the rate (the message said the mesh was above Nyquist)."""
+    m = Measurement({"acc": np.random.default_rng(0).standard_normal(8000)}, 2000.0)
+    with pytest.raises(MeasurementError, match="up to 973.5 Hz, needs a sample rate above "
+                       "2163 Hz; the record's is 2000 Hz"):
+        estimate_speed(m, GearKinematics(32, 80, 30.0), SpeedSettings("mesh"))
+
+
 def test_a_sideband_comb_is_not_taken_for_the_mesh():
     """A strong faulty-tooth modulation puts lines at h f_mesh - h f_pinion; a search wider
     than half a pinion order at the mesh finds that comb at a lower speed (it did)."""
