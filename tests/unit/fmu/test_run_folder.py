@@ -1,5 +1,8 @@
-"""The janitor waits for the workers it killed: a zombie has ended, a running process not."""
+"""The run folder of a pool of workers: the janitor waits for the workers it killed (a
+zombie has ended, a running process not), and a TERM while the pool starts or replaces a
+worker leaves nothing behind."""
 
+import os
 import subprocess
 import sys
 import time
@@ -80,7 +83,7 @@ def test_a_term_while_a_pool_starts_leaves_no_worker_and_no_folder(tmp_path, whe
     """A TERM that lands as the run folder is made or a process is forked is raised once
     the pool has recorded what it made, so the cleanup it triggers removes all of it (an
     unrecorded worker ran on, extracting its FMU into a folder the pool had removed)."""
-    env = {**__import__("os").environ, "TMPDIR": str(tmp_path)}
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
     res = subprocess.run([sys.executable, "-c", TERM_DURING.format(where=where)], env=env,
                          capture_output=True, text=True, timeout=60)
     assert res.returncode == 0, res.stderr[-500:]
