@@ -25,7 +25,7 @@ from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record, machine_report
 from pydiag.gear.paper_cases import case
-from pydiag.gear.speed import SpeedSettings
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings
 from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
@@ -250,33 +250,26 @@ def cmd_indicators(args) -> int:
     speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
     machine = args.machine_description
     if machine is not None:
-        return _machine_indicators(args, machine, m, speed)
+        report = machine_report(m, machine, speed, args.rpm / 60.0,
+                                _baseline_records(args, machine, speed))
+        return _said_indicators(args, format_machine_report(report), report.record.speed,
+                                report.to_dict())
     if args.baseline and len(args.baseline) > 1:
         raise UsageError("NA4 and NB4 of one pair take one --baseline (with --machine, "
                          "several judge every stage)")
     baseline = read_input(args, args.baseline[0]) if args.baseline else None
     report = condition_indicators(m, record_kinematics(args, m), speed, args.shaft, baseline)
-    print(format_indicators(report))
-    warning = report.speed.warning()
+    return _said_indicators(args, format_indicators(report), report.speed, report.to_dict())
+
+
+def _said_indicators(args, text: str, speed: SpeedEstimate, data: dict) -> int:
+    """An indicators report printed (``text``), the speed's warning, the JSON (``data``)."""
+    print(text)
+    warning = speed.warning()
     if warning:
         print(f"pydiag indicators: warning: {warning}", file=sys.stderr)
     if args.json:
-        out = {**report.to_dict(), "measurement": str(args.measurement)}
-        write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
-    return 0
-
-
-def _machine_indicators(args, machine: Machine, m: Measurement, speed: SpeedSettings) -> int:
-    """indicators --machine: every shaft's TSA, and every stage judged against the
-    baselines when there are some."""
-    report = machine_report(m, machine, speed, args.rpm / 60.0,
-                            _baseline_records(args, machine, speed))
-    print(format_machine_report(report))
-    warning = report.record.speed.warning()
-    if warning:
-        print(f"pydiag indicators: warning: {warning}", file=sys.stderr)
-    if args.json:
-        out = {**report.to_dict(), "measurement": str(args.measurement)}
+        out = {**data, "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0
 
