@@ -1,11 +1,11 @@
 """SIGTERM as an exception that unwinds the process, once.
 
 A handler that raises on SIGTERM lets every ``finally`` run (workers stopped, temporary
-files removed). Three things can go wrong with a plain ``raise``: a second TERM (a
+files removed). Four things can go wrong with a plain ``raise``: a second TERM (a
 supervisor's, an executor's, the parent's death signal) raises again inside that cleanup
 and cuts it short; a TERM that arrives while the process forks is handled in the fork's
 hooks (``os.register_at_fork``: logging has one), where Python prints the exception and
-drops it, so the process runs on; and the same in a finaliser. A TERM can also land
+drops it, so the process runs on; the same in a finaliser; and a TERM can land
 between making a thing and recording it (a folder made, its name not yet kept; a worker
 forked, not yet in the pool's list), and the cleanup then misses it. The handler here
 (:func:`raise_once`) raises unless the exception of an earlier TERM is being handled, so a

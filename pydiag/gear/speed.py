@@ -90,9 +90,7 @@ TACHO_TOLERANCE_PCT = 0.1
 #: A speed that swings by more than this share of the mesh demodulation's half-band
 #: (half the speed's range over the record, against the half-band) may have left it: the
 #: phase followed is then partly another line's, and the speed from it may be off, so it
-#: is said. On the synthetic records of tests/unit/gear/test_speed.py (32/80 teeth, a
-#: half-band of +-0.625 %) swings up to +-0.45 % were followed exactly and +-0.5 % came
-#: out 0.16 % off.
+#: is said (what was measured of it: docs/gearbox.md, "The speed from every mesh").
 SWING_SHARE = 0.6
 
 

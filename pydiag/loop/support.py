@@ -2,10 +2,10 @@
 parameters the record pins down.
 
 A fitted fault parameter can sit far from its healthy value while the record barely
-cares: on a real record the pair model explains only a part of, fits far apart in such a
-parameter may differ in error by less than the last bits of the objective, and which one
-the swarm returns then hangs on rounding, and so does a verdict read from it (the case
-measured: docs/method.md, section 6; bench/RESULTS.md, section 12).
+cares: on a real record, of which the pair model explains only a part, fits far apart in
+such a parameter may differ in error by less than the last bits of the objective, and
+which one the swarm returns then hangs on rounding, and so does a verdict read from it
+(the case measured: docs/method.md, section 6; bench/RESULTS.md, section 12).
 
 So each group the classification finds above "none" (:data:`pydiag.gear.classify.GROUPS`)
 is tested against the same fit with that group healthy
