@@ -174,22 +174,44 @@ class FmuPlant:
         returns its signals again (a fit that varies only what lies outside the model, a
         transfer path to the sensor, simulates once).
         """
+        return self._cached(parameters, int(round(start_s * self.sample_rate_hz)),
+                            int(round(duration_s * self.sample_rate_hz)))
+
+    def simulate_periods(self, parameters: dict[str, float], period_samples: int,
+                         start_s: float, state_tolerance: float) -> np.ndarray:
+        """Sensor signals from ``start_s`` over two periods of the model's forcing
+        (``period_samples`` each), shape (n_sensors, 2 * period_samples); or over one,
+        shape (n_sensors, period_samples), when the native engine finds every state back
+        at its start after one period, to within ``state_tolerance`` of its range
+        (:meth:`pydiag.fmu.native_engine.NativeMeRunner.run`): the forcing being periodic,
+        the response repeats from there, and half the simulation is saved. fmpy gives no
+        states: always two periods."""
+        if period_samples < 1:
+            raise PlantError(f"a period needs at least one sample, got {period_samples}")
+        y = self._cached(parameters, int(round(start_s * self.sample_rate_hz)),
+                         2 * period_samples, (period_samples, state_tolerance))
+        return y[:, :period_samples] if y.shape[1] == period_samples + 1 else y
+
+    def _cached(self, parameters: dict[str, float], first: int, n: int,
+                check: tuple[int, float] = (0, 0.0)) -> np.ndarray:
+        """:meth:`_simulate`, or the last run's signals again when it had these values."""
         values = {**self.fixed_values, **parameters}
         self._check_settable(values)
-        n = int(round(duration_s * self.sample_rate_hz))
-        first = int(round(start_s * self.sample_rate_hz))
-        key = (tuple(sorted(values.items())), first, n)
+        key = (tuple(sorted(values.items())), first, n, check)
         if self._last is not None and self._last[0] == key:
             return self._last[1].copy()
-        y = self._simulate(values, first, n)
+        y = self._simulate(values, first, n, check)
         self._last = (key, y.copy())
         return y
 
-    def _simulate(self, values: dict[str, float], first: int, n: int) -> np.ndarray:
+    def _simulate(self, values: dict[str, float], first: int, n: int,
+                  check: tuple[int, float] = (0, 0.0)) -> np.ndarray:
+        """Signals at samples first..first+n-1; with a ``check`` (period in samples,
+        state tolerance), the native engine may stop after check[0] + 1 samples."""
         stop = (first + n) / self.sample_rate_hz
         if self._native is not None:
             try:
-                return self._simulate_native(values, first, n)
+                return self._simulate_native(values, first, n, check)
             except native_engine.NeedsEvents as err:
                 if self._engine_requested == "native":
                     raise PlantError(f"{self.fmu_path.name}: {err}; the native engine does not "
@@ -232,12 +254,14 @@ class FmuPlant:
             raise PlantError(f"simulation of {self.fmu_path.name} output grows without bound "
                              f"with {values}: diverged{cs}")
 
-    def _simulate_native(self, values: dict[str, float], first: int, n: int) -> np.ndarray:
+    def _simulate_native(self, values: dict[str, float], first: int, n: int,
+                         check: tuple[int, float]) -> np.ndarray:
         if not self._fresh:
             self._instance.reset()
         self._fresh = False
         try:
-            y = self._native.run(values, first / self.sample_rate_hz, 1.0 / self.sample_rate_hz, n)
+            y = self._native.run(values, first / self.sample_rate_hz, 1.0 / self.sample_rate_hz, n,
+                                 *check)
         except native_engine.NeedsEvents:
             raise
         except Exception as err:

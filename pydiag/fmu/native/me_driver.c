@@ -18,6 +18,13 @@
  * Error scale per state: atol + rtol * max(|x_i|, |x_new_i|, peak_i), where peak_i is
  * the largest |x_i| seen so far (a tolerance relative to the state's own scale, so
  * states in metres or micrometres are treated alike).
+ *
+ * A periodic response can stop the run early. Given a check at output n_check (one period
+ * of the forcing), the run stops after that output when the response repeats from there:
+ * every state is back at its value at output 0, and at every accepted step between them
+ * the derivatives and the outputs are the same at the same state one period later (the
+ * model depends on time only through its period: no strike or ripple of another period),
+ * each to within tol of its range over the period plus ten times the integrator's error.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -131,11 +138,76 @@ static double scale_of(double atol, double rtol, double a, double b, double peak
     return atol + rtol * fmax(fmax(fabs(a), fabs(b)), peak);
 }
 
+/* The periodicity check (see the top). */
+typedef struct {
+    int n_check;        /* output index compared with output 0; < 1: no check */
+    double tol;         /* share of each quantity's range */
+    double t_first, period;  /* the window checked: [t_first, t_first + period] */
+    size_t nx, ny;
+    const uint32_t *vr;
+    double *x0, *lo, *hi;              /* states: at output 0, their range (nx each) */
+    double *f2, *dlo, *dhi, *dmiss;    /* derivatives (nx each) */
+    double *y1, *y2, *ylo, *yhi, *ymiss; /* outputs (ny each) */
+    double mismatch;    /* out: the largest miss over its allowance */
+    bool returned;      /* out: the response repeats: the run stopped after n_check */
+} Check;
+
+static void widen(double *lo, double *hi, const double *v, size_t n, bool first) {
+    for (size_t i = 0; i < n; i++) {
+        lo[i] = first ? v[i] : fmin(lo[i], v[i]);
+        hi[i] = first ? v[i] : fmax(hi[i], v[i]);
+    }
+}
+
+/* The forcing's part of the check at an accepted step (t, x) with f = f(x, t) inside the
+ * window: the derivatives and the outputs at the same state one period later must be the
+ * same, or the model depends on time otherwise than through its period (a strike, a
+ * ripple at a frequency of its own). */
+static int check_step(Check *c, const Model *m, double t, const double *x, const double *f) {
+    if (!c || t < c->t_first || t > c->t_first + c->period) return PD_OK;
+    bool first = c->dlo[0] > c->dhi[0];  /* still empty (set so in pd_integrate) */
+    int rc;
+    if (!FMI_OK(m->set_time(m->inst, t)) || !FMI_OK(m->set_states(m->inst, x, c->nx)))
+        return PD_FMI_ERROR;
+    if ((rc = get_outputs(m, c->vr, c->ny, c->y1))) return rc;
+    if ((rc = rhs(m, t + c->period, x, c->f2))) return rc;   /* sets the time and the state */
+    if ((rc = get_outputs(m, c->vr, c->ny, c->y2))) return rc;
+    widen(c->dlo, c->dhi, f, c->nx, first);
+    widen(c->ylo, c->yhi, c->y1, c->ny, first);
+    for (size_t i = 0; i < c->nx; i++) c->dmiss[i] = fmax(c->dmiss[i], fabs(c->f2[i] - f[i]));
+    for (size_t j = 0; j < c->ny; j++) c->ymiss[j] = fmax(c->ymiss[j], fabs(c->y2[j] - c->y1[j]));
+    return PD_OK;
+}
+
+/* miss over its allowance: tol of the range, and ten times the integrator's error. */
+static double ratio(double miss, double lo, double hi, double tol, double rtol, double atol) {
+    double allowed = tol * (hi - lo) + 10.0 * (atol + rtol * fmax(fabs(lo), fabs(hi)));
+    return miss == 0.0 ? 0.0 : miss / allowed;
+}
+
+/* The states' part, at output k (state s); true when the run may stop there. */
+static bool check_state(Check *c, int k, const double *s, double rtol, double atol) {
+    if (!c || k > c->n_check) return false;
+    widen(c->lo, c->hi, s, c->nx, k == 0);
+    if (k == 0) memcpy(c->x0, s, c->nx * sizeof(double));
+    if (k < c->n_check) return false;
+    double worst = 0.0;
+    for (size_t i = 0; i < c->nx; i++) {
+        worst = fmax(worst, ratio(fabs(s[i] - c->x0[i]), c->lo[i], c->hi[i], c->tol, rtol, atol));
+        worst = fmax(worst, ratio(c->dmiss[i], c->dlo[i], c->dhi[i], c->tol, rtol, atol));
+    }
+    for (size_t j = 0; j < c->ny; j++)
+        worst = fmax(worst, ratio(c->ymiss[j], c->ylo[j], c->yhi[j], c->tol, rtol, atol));
+    c->mismatch = worst;
+    c->returned = worst <= 1.0;
+    return c->returned;
+}
+
 /* DOP853 with dense output. */
 static int integrate_dense(Model *m, double *x,
                            double t0, double t_first_out, double h_out, int n_out, size_t ny,
                            const uint32_t *vr, double *out, double rtol, double atol,
-                           double h_max, long max_steps, long *n_steps) {
+                           double h_max, long max_steps, long *n_steps, Check *check) {
     const int S = DOP853_STAGES, SE = DOP853_STAGES_EXTENDED, P = DOP853_INTERPOLATOR_POWER;
     size_t nx = m->nx, n = nx ? nx : 1;
     double *w = calloc((size_t)(SE + P + 4) * n, sizeof(double));
@@ -155,6 +227,7 @@ static int integrate_dense(Model *m, double *x,
             rc = PD_FMI_ERROR;
         else
             rc = get_outputs(m, vr, ny, out + (size_t)k * ny);
+        if (rc == PD_OK && check_state(check, k, x, rtol, atol)) n_out = k + 1;
         k++;
     }
     while (rc == PD_OK && k < n_out && nx) {
@@ -222,6 +295,7 @@ static int integrate_dense(Model *m, double *x,
                     break;
                 }
                 if ((rc = get_outputs(m, vr, ny, out + (size_t)k * ny))) break;
+                if (check_state(check, k, xs, rtol, atol)) n_out = k + 1;
                 k++;
             }
             if (rc) break;
@@ -232,6 +306,7 @@ static int integrate_dense(Model *m, double *x,
         for (size_t i = 0; i < nx; i++) peak[i] = fmax(peak[i], fabs(x[i]));
         ++*n_steps;
         if ((rc = completed_step(m))) break;
+        if ((rc = check_step(check, m, t, x, K))) break;
         h = hh * factor;
     }
     free(w);
@@ -242,7 +317,7 @@ static int integrate_dense(Model *m, double *x,
 static int integrate_grid(Model *m, double *x,
                           double t0, double t_first_out, double h_out, int n_out, size_t ny,
                           const uint32_t *vr, double *out, double rtol, double atol,
-                          double h_max, long max_steps, long *n_steps) {
+                          double h_max, long max_steps, long *n_steps, Check *check) {
     const int S = DP5_STAGES;
     size_t nx = m->nx, n = nx ? nx : 1;
     /* K: S + 1 rows (the last is f at the new point, FSAL); xs, xn, peak */
@@ -285,6 +360,7 @@ static int integrate_grid(Model *m, double *x,
                 for (size_t i = 0; i < nx; i++) peak[i] = fmax(peak[i], fabs(x[i]));
                 ++*n_steps;
                 if ((rc = completed_step(m))) break;
+                if ((rc = check_step(check, m, t, x, K))) break;
                 if (!land || factor < 1.0) h = hh * factor; /* keep h when only the grid cut it */
             } else {
                 h = hh * fmax(0.2, factor);
@@ -296,6 +372,7 @@ static int integrate_grid(Model *m, double *x,
         if (!FMI_OK(m->set_time(m->inst, target))) { rc = PD_FMI_ERROR; break; }
         if (nx && !FMI_OK(m->set_states(m->inst, x, nx))) { rc = PD_FMI_ERROR; break; }
         if ((rc = get_outputs(m, vr, ny, out + (size_t)k * ny))) break;
+        if (check_state(check, k, x, rtol, atol)) break;
     }
     free(w);
     return rc;
@@ -305,17 +382,35 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
                  void *p_get_derivs, void *p_get_outputs, void *p_completed, int nx_, double *x,
                  double t0, double t_first_out, double h_out, int n_out, int ny_,
                  const uint32_t *vr, double *out, double rtol, double atol, double h_max,
-                 long max_steps, int method, long *n_rhs, long *n_steps) {
+                 long max_steps, int method, long *n_rhs, long *n_steps,
+                 int n_check, double check_tol, double *check_work, double *mismatch,
+                 int *returned) {
     Model m = {inst, fmi_version, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
                (fn_get_derivs)p_get_derivs, p_get_outputs, p_completed, (size_t)nx_, n_rhs};
+    size_t nx = (size_t)nx_, ny = (size_t)ny_;
+    double *v = check_work;  /* 7 nx + 5 ny values (native_engine.py sizes it) */
+    Check check = {n_check, check_tol, t_first_out, n_check * h_out, nx, ny, vr,
+                   v, v + nx, v + 2 * nx, v + 3 * nx, v + 4 * nx, v + 5 * nx, v + 6 * nx,
+                   v + 7 * nx, v + 7 * nx + ny, v + 7 * nx + 2 * ny, v + 7 * nx + 3 * ny,
+                   v + 7 * nx + 4 * ny, INFINITY, false};
+    Check *c = n_check > 0 && n_check < n_out && nx ? &check : NULL;
+    if (c) {  /* ranges empty (lo > hi) until the first step inside the window */
+        for (size_t i = 0; i < nx; i++) { c->dlo[i] = 1.0; c->dhi[i] = 0.0; c->dmiss[i] = 0.0; }
+        for (size_t j = 0; j < ny; j++) { c->ylo[j] = 1.0; c->yhi[j] = 0.0; c->ymiss[j] = 0.0; }
+    }
+    int rc;
     *n_rhs = 0;
     *n_steps = 0;
     if (fmi_version != 2 && fmi_version != 3) return PD_BAD_VERSION;
     if (method == 8)
-        return integrate_dense(&m, x, t0, t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol,
-                               atol, h_max, max_steps, n_steps);
-    if (method == 5)
-        return integrate_grid(&m, x, t0, t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol,
-                              atol, h_max, max_steps, n_steps);
-    return PD_BAD_METHOD;
+        rc = integrate_dense(&m, x, t0, t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol,
+                             atol, h_max, max_steps, n_steps, c);
+    else if (method == 5)
+        rc = integrate_grid(&m, x, t0, t_first_out, h_out, n_out, (size_t)ny_, vr, out, rtol,
+                            atol, h_max, max_steps, n_steps, c);
+    else
+        return PD_BAD_METHOD;
+    *mismatch = check.mismatch;
+    *returned = check.returned;
+    return rc;
 }

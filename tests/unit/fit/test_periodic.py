@@ -9,13 +9,20 @@ RATE_HZ, PERIOD_S = 1000.0, 0.1
 
 
 class Plant:
-    """A plant whose output is ``signal(t)``; it records the durations it was asked for."""
+    """A plant whose output is ``signal(t)``; it records the durations it was asked for.
+    Like fmpy's, it has no states to check: two periods when asked for periods, unless
+    ``states_return`` (the native engine's check passed: one)."""
 
     sample_rate_hz = RATE_HZ
 
-    def __init__(self, signal):
+    def __init__(self, signal, states_return: bool = False):
         self.signal = signal
         self.durations = []
+        self.states_return = states_return
+
+    def simulate_periods(self, values, period_samples, start_s, state_tolerance):
+        periods = 1 if self.states_return else 2
+        return self.simulate(values, periods * period_samples / RATE_HZ, start_s)
 
     def simulate(self, values, duration_s, start_s=0.0):
         self.durations.append(duration_s)
@@ -30,6 +37,15 @@ def test_a_periodic_model_is_simulated_over_two_periods_and_repeated():
     y = simulate_periodic(plant, {}, 3.3, 0.05, PERIOD_S)
     assert plant.durations == [pytest.approx(2 * PERIOD_S)]
     assert y.shape == whole.shape
+    np.testing.assert_allclose(y, whole, atol=1e-9)
+
+
+def test_a_model_whose_states_return_after_one_period_is_simulated_over_one():
+    plant = Plant(lambda t: np.sin(2 * np.pi * 30 * t) + 0.3 * np.cos(2 * np.pi * 10 * t),
+                  states_return=True)
+    whole = Plant(plant.signal).simulate({}, 3.3, 0.05)
+    y = simulate_periodic(plant, {}, 3.3, 0.05, PERIOD_S)
+    assert plant.durations == [pytest.approx(PERIOD_S)]
     np.testing.assert_allclose(y, whole, atol=1e-9)
 
 

@@ -160,7 +160,8 @@ def test_driver_integrates_and_stops_when_the_fmu_asks_for_an_event(fmi_version,
     dptr = C.POINTER(C.c_double)
     rc = native_me.load_driver().pd_integrate(
         1, fmi_version, *pointers, 1, x.ctypes.data_as(dptr), 0.0, 0.0, 0.1, 11, 1, refs,
-        out.ctypes.data_as(dptr), 1e-8, 1e-12, 1.0, 100_000, 8, C.byref(n_rhs), C.byref(n_steps))
+        out.ctypes.data_as(dptr), 1e-8, 1e-12, 1.0, 100_000, 8, C.byref(n_rhs), C.byref(n_steps),
+        0, 0.0, np.zeros(12).ctypes.data_as(dptr), C.byref(C.c_double()), C.byref(C.c_int()))
     if event_after_steps is None:
         assert rc == 0
         np.testing.assert_allclose(out, np.exp(-0.1 * np.arange(11)), rtol=1e-7)
