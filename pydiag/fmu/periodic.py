@@ -1,5 +1,6 @@
-"""A periodic model simulated over two periods and repeated: a gear model driven only by
-inputs synchronous with its fundamental period settles to a response of that period."""
+"""A periodic model simulated over one period (or two) and repeated: a gear model driven
+only by inputs synchronous with its fundamental period settles to a response of that
+period."""
 
 from __future__ import annotations
 
@@ -25,11 +26,12 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     periodic.
 
     A gear model whose inputs are all synchronous with the fundamental period settles to a
-    response of that period: then, from the warm-up on, one period is simulated when the
-    native engine finds every state back at its start after it (:data:`STATE_TOLERANCE`),
-    two otherwise, and when the two agree (:data:`PERIODIC_TOLERANCE`) the last is
-    repeated over the duration. A record of 33 periods then costs 1 or 2 simulated periods
-    instead of 33 (measured on GearPair, 2 cores x86_64: 10 ms instead of 134 ms for two).
+    response of that period: then, from the warm-up on, one period is simulated and
+    repeated when the native engine finds that the response repeats from there
+    (:meth:`~pydiag.fmu.plant.FmuPlant.simulate_periods`, :data:`STATE_TOLERANCE`); else
+    two, and when they agree (:data:`PERIODIC_TOLERANCE`) the second is repeated. A record
+    of 33 periods then costs 1 or 2 simulated periods instead of 33 (GearPair, 2 cores
+    x86_64: 5 ms for one, 9 ms for two, 134 ms for 33).
     Anything that is not periodic in ``period_s`` (a bearing's strikes, a ripple at a free
     frequency, a subharmonic, a transient still decaying) makes the periods differ, and
     the whole duration is simulated as before.
