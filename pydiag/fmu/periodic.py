@@ -41,7 +41,7 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     if period_s is not None:
         per = period_s * fs
         n = int(round(per))
-        if n > 0 and abs(per - n) <= 1e-6 * per and total > 3 * n:
+        if n > 1 and abs(per - n) <= 1e-6 * per and total > 3 * n:
             y = plant.simulate_periods(values, n, warmup_s, STATE_TOLERANCE)
             if y.shape[1] == n:
                 return np.tile(y, (1, -(-total // n)))[:, :total]

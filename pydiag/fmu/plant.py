@@ -186,8 +186,8 @@ class FmuPlant:
         (:meth:`pydiag.fmu.native_engine.NativeMeRunner.run`): the forcing being periodic,
         the response repeats from there, and half the simulation is saved. fmpy gives no
         states: always two periods."""
-        if period_samples < 1:
-            raise PlantError(f"a period needs at least one sample, got {period_samples}")
+        if period_samples < 2:
+            raise PlantError(f"a period needs at least two samples, got {period_samples}")
         y = self._cached(parameters, int(round(start_s * self.sample_rate_hz)),
                          2 * period_samples, (period_samples, state_tolerance))
         return y[:, :period_samples] if y.shape[1] == period_samples + 1 else y
