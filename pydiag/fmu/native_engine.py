@@ -140,17 +140,19 @@ class NativeMeRunner:
             raise NativeUnavailable(f"the FMU's binary lacks a function: {err}") from err
         self.n_rhs = 0
         self.n_steps = 0
-        #: The last run's periodicity check: the largest state mismatch over its allowance.
+        #: The last run's periodicity check: its largest miss over the allowance (<= 1:
+        #: the response repeats), inf without a check.
         self.last_mismatch = float("inf")
 
     def run(self, start_values: dict, first_output_s: float, interval_s: float,
             n_out: int, check_at: int = 0, check_tolerance: float = 0.0) -> np.ndarray:
         """Outputs at ``first_output_s + k*interval_s``, k < n_out, shape (n_out, n_outputs).
 
-        ``check_at`` (0 < check_at < n_out): the forcing is periodic in ``check_at``
-        outputs; when every state at output ``check_at`` is back at its value at output 0
-        within ``check_tolerance`` of its range over them (the driver's header), the run
-        stops there and ``check_at + 1`` rows are returned."""
+        ``check_at`` (0 < check_at < n_out): the outputs a period of the forcing apart;
+        when the response repeats from output 0 (every state back at output
+        ``check_at``, the derivatives and outputs the same one period later, each within
+        ``check_tolerance`` of its range: the driver's header), the run stops there and
+        ``check_at + 1`` rows are returned; :attr:`last_mismatch` says by how much."""
         inst = self.instance
         if self.fmi_version == 3:
             inst.enterInitializationMode(tolerance=self.rtol, startTime=0.0)

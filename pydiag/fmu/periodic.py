@@ -14,9 +14,12 @@ from pydiag.fmu.plant import FmuPlant
 #: component that is not periodic and stays below this lies 60 dB under the peak.
 PERIODIC_TOLERANCE = 1e-3
 
-#: Every state back at its start after one period to within this share of its range
-#: over the period (and ten times the integrator's error) makes the model periodic
-#: without simulating a second period (:func:`simulate_periodic`).
+#: Every state back at its start after one period, and the derivatives and outputs the
+#: same at the same state a period later, each to within this share of its range over the
+#: period (and ten times the integrator's error), make the model periodic without a
+#: second period (:func:`simulate_periodic`). Measured on GearPair at rest and with
+#: faults: misses of 4e-10 to 3e-6 of the ranges; the second period differs from the first
+#: by the integrator's error, 3e-5 to 4e-4 of the peak.
 STATE_TOLERANCE = 1e-4
 
 

@@ -181,11 +181,12 @@ class FmuPlant:
                          start_s: float, state_tolerance: float) -> np.ndarray:
         """Sensor signals from ``start_s`` over two periods of the model's forcing
         (``period_samples`` each), shape (n_sensors, 2 * period_samples); or over one,
-        shape (n_sensors, period_samples), when the native engine finds every state back
-        at its start after one period, to within ``state_tolerance`` of its range
-        (:meth:`pydiag.fmu.native_engine.NativeMeRunner.run`): the forcing being periodic,
-        the response repeats from there, and half the simulation is saved. fmpy gives no
-        states: always two periods."""
+        shape (n_sensors, period_samples), when the native engine finds that the response
+        repeats from ``start_s``: every state back at its start after the period, the
+        derivatives and outputs the same at the same state a period later, to within
+        ``state_tolerance`` of their ranges (:meth:`pydiag.fmu.native_engine.
+        NativeMeRunner.run`); half the simulation is saved. fmpy gives no states: always
+        two periods."""
         if period_samples < 2:
             raise PlantError(f"a period needs at least two samples, got {period_samples}")
         y = self._cached(parameters, int(round(start_s * self.sample_rate_hz)),

@@ -24,7 +24,9 @@
  * every state is back at its value at output 0, and at every accepted step between them
  * the derivatives and the outputs are the same at the same state one period later (the
  * model depends on time only through its period: no strike or ripple of another period),
- * each to within tol of its range over the period plus ten times the integrator's error.
+ * each to within tol of its range over the period plus ten times the integrator's error,
+ * and the period crossed in CHECK_MIN_STEPS steps at least (fewer sample the forcing too
+ * sparsely).
  */
 #include <math.h>
 #include <stdbool.h>
@@ -148,9 +150,14 @@ typedef struct {
     double *x0, *lo, *hi;              /* states: at output 0, their range (nx each) */
     double *f2, *dlo, *dhi, *dmiss;    /* derivatives (nx each) */
     double *y1, *y2, *ylo, *yhi, *ymiss; /* outputs (ny each) */
+    long n_steps;       /* accepted steps checked inside the window */
     double mismatch;    /* out: the largest miss over its allowance */
     bool returned;      /* out: the response repeats: the run stopped after n_check */
 } Check;
+
+/* Fewer accepted steps than this inside the period sample its forcing too sparsely to
+ * tell: such a run goes on to two periods (the caller compares them). */
+#define CHECK_MIN_STEPS 64
 
 static void widen(double *lo, double *hi, const double *v, size_t n, bool first) {
     for (size_t i = 0; i < n; i++) {
@@ -176,6 +183,7 @@ static int check_step(Check *c, const Model *m, double t, const double *x, const
     widen(c->ylo, c->yhi, c->y1, c->ny, first);
     for (size_t i = 0; i < c->nx; i++) c->dmiss[i] = fmax(c->dmiss[i], fabs(c->f2[i] - f[i]));
     for (size_t j = 0; j < c->ny; j++) c->ymiss[j] = fmax(c->ymiss[j], fabs(c->y2[j] - c->y1[j]));
+    c->n_steps++;
     return PD_OK;
 }
 
@@ -199,7 +207,7 @@ static bool check_state(Check *c, int k, const double *s, double rtol, double at
     for (size_t j = 0; j < c->ny; j++)
         worst = fmax(worst, ratio(c->ymiss[j], c->ylo[j], c->yhi[j], c->tol, rtol, atol));
     c->mismatch = worst;
-    c->returned = worst <= 1.0;
+    c->returned = worst <= 1.0 && c->n_steps >= CHECK_MIN_STEPS;
     return c->returned;
 }
 
@@ -392,7 +400,7 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
     Check check = {n_check, check_tol, t_first_out, n_check * h_out, nx, ny, vr,
                    v, v + nx, v + 2 * nx, v + 3 * nx, v + 4 * nx, v + 5 * nx, v + 6 * nx,
                    v + 7 * nx, v + 7 * nx + ny, v + 7 * nx + 2 * ny, v + 7 * nx + 3 * ny,
-                   v + 7 * nx + 4 * ny, INFINITY, false};
+                   v + 7 * nx + 4 * ny, 0, INFINITY, false};
     Check *c = n_check > 0 && n_check < n_out && nx ? &check : NULL;
     if (c) {  /* ranges empty (lo > hi) until the first step inside the window */
         for (size_t i = 0; i < nx; i++) { c->dlo[i] = 1.0; c->dhi[i] = 0.0; c->dmiss[i] = 0.0; }

@@ -189,3 +189,25 @@ def test_an_fmu_with_events_falls_back_to_fmpy(gear_fmu, monkeypatch):
     with FmuPlant(gear_fmu, SENSORS, engine="native") as plant:
         with pytest.raises(PlantError, match="schedules time events.*does not handle events"):
             plant.simulate(params, 0.02, 0.01)
+
+
+@pytest.mark.parametrize("h_max, returned", [(0.01, True), (1.0, False)])
+def test_the_periodicity_check_stops_only_a_run_whose_period_it_sampled_densely(h_max,
+                                                                                returned):
+    """dx/dt = -x from x = 1, outputs from t = 40 s (the state at rest: e^-40): a period of
+    ten outputs (1 s) crossed in 100 steps repeats, and the run stops after it; crossed in
+    one or two steps, its forcing is not sampled enough to tell, and the run goes on."""
+    import ctypes as C
+
+    from pydiag.fmu import native_engine as native_me
+    pointers = [C.cast(f, C.c_void_p).value for f in _toy_model(3, None)]
+    x, out = np.array([1.0]), np.zeros(21)
+    dptr = C.POINTER(C.c_double)
+    mismatch, stopped = C.c_double(), C.c_int()
+    rc = native_me.load_driver().pd_integrate(
+        1, 3, *pointers, 1, x.ctypes.data_as(dptr), 0.0, 40.0, 0.1, 21, 1, (C.c_uint32 * 1)(0),
+        out.ctypes.data_as(dptr), 1e-8, 1e-12, h_max, 100_000, 8, C.byref(C.c_long()),
+        C.byref(C.c_long()), 10, 1e-4, np.zeros(12).ctypes.data_as(dptr), C.byref(mismatch),
+        C.byref(stopped))
+    assert rc == 0 and mismatch.value <= 1.0
+    assert bool(stopped.value) is returned
