@@ -151,6 +151,7 @@ typedef struct {
     double *f2, *dlo, *dhi, *dmiss;    /* derivatives (nx each) */
     double *y1, *y2, *ylo, *yhi, *ymiss; /* outputs (ny each) */
     long n_steps;       /* accepted steps checked inside the window */
+    bool spoiled;       /* a value one period later was not finite: no verdict */
     double mismatch;    /* out: the largest miss over its allowance */
     bool returned;      /* out: the response repeats: the run stopped after n_check */
 } Check;
@@ -171,14 +172,19 @@ static void widen(double *lo, double *hi, const double *v, size_t n, bool first)
  * same, or the model depends on time otherwise than through its period (a strike, a
  * ripple at a frequency of its own). */
 static int check_step(Check *c, const Model *m, double t, const double *x, const double *f) {
-    if (!c || t < c->t_first || t > c->t_first + c->period) return PD_OK;
+    if (!c || c->spoiled || t < c->t_first || t > c->t_first + c->period) return PD_OK;
     bool first = c->dlo[0] > c->dhi[0];  /* still empty (set so in pd_integrate) */
     int rc;
     if (!FMI_OK(m->set_time(m->inst, t)) || !FMI_OK(m->set_states(m->inst, x, c->nx)))
         return PD_FMI_ERROR;
-    if ((rc = get_outputs(m, c->vr, c->ny, c->y1))) return rc;
-    if ((rc = rhs(m, t + c->period, x, c->f2))) return rc;   /* sets the time and the state */
-    if ((rc = get_outputs(m, c->vr, c->ny, c->y2))) return rc;
+    rc = get_outputs(m, c->vr, c->ny, c->y1);
+    if (rc == PD_OK) rc = rhs(m, t + c->period, x, c->f2);   /* sets the time and the state */
+    if (rc == PD_OK) rc = get_outputs(m, c->vr, c->ny, c->y2);
+    if (rc == PD_NOT_FINITE) {  /* the run itself may be fine: it goes on, unchecked */
+        c->spoiled = true;
+        return PD_OK;
+    }
+    if (rc) return rc;
     widen(c->dlo, c->dhi, f, c->nx, first);
     widen(c->ylo, c->yhi, c->y1, c->ny, first);
     for (size_t i = 0; i < c->nx; i++) c->dmiss[i] = fmax(c->dmiss[i], fabs(c->f2[i] - f[i]));
@@ -207,7 +213,7 @@ static bool check_state(Check *c, int k, const double *s, double rtol, double at
     for (size_t j = 0; j < c->ny; j++)
         worst = fmax(worst, ratio(c->ymiss[j], c->ylo[j], c->yhi[j], c->tol, rtol, atol));
     c->mismatch = worst;
-    c->returned = worst <= 1.0 && c->n_steps >= CHECK_MIN_STEPS;
+    c->returned = worst <= 1.0 && c->n_steps >= CHECK_MIN_STEPS && !c->spoiled;
     return c->returned;
 }
 
@@ -400,7 +406,7 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
     Check check = {n_check, check_tol, t_first_out, n_check * h_out, nx, ny, vr,
                    v, v + nx, v + 2 * nx, v + 3 * nx, v + 4 * nx, v + 5 * nx, v + 6 * nx,
                    v + 7 * nx, v + 7 * nx + ny, v + 7 * nx + 2 * ny, v + 7 * nx + 3 * ny,
-                   v + 7 * nx + 4 * ny, 0, INFINITY, false};
+                   v + 7 * nx + 4 * ny, 0, false, INFINITY, false};
     Check *c = n_check > 0 && n_check < n_out && nx ? &check : NULL;
     if (c) {  /* ranges empty (lo > hi) until the first step inside the window */
         for (size_t i = 0; i < nx; i++) { c->dlo[i] = 1.0; c->dhi[i] = 0.0; c->dmiss[i] = 0.0; }
