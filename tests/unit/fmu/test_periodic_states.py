@@ -1,6 +1,7 @@
-"""The native engine's periodicity check: a model whose every state is back at its start
-after one period of its forcing is simulated over that period alone; one that is not
-(a transient left, a period that is not the forcing's) over two."""
+"""The native engine's periodicity check: a model whose response repeats after one period
+of its forcing (every state back at its start, the derivatives and outputs the same a
+period later) is simulated over that period alone; one that does not (a transient left,
+a period that is not the forcing's, a strike of another period) over two."""
 
 import numpy as np
 import pytest
@@ -36,8 +37,8 @@ def test_a_response_that_does_not_repeat_is_simulated_over_two_periods(gear_fmu,
         n = int(round(period_s * plant.sample_rate_hz))
         y = plant.simulate_periods(TABLE1[7].parameters, n, warmup_s, STATE_TOLERANCE)
         assert y.shape == (len(SENSORS), 2 * n)
-        np.testing.assert_array_equal(y, plant.simulate(TABLE1[7].parameters, 2 * n / 1e4,
-                                                        warmup_s))
+        np.testing.assert_array_equal(y, plant.simulate(TABLE1[7].parameters,
+                                                        2 * n / plant.sample_rate_hz, warmup_s))
 
 
 def test_fmpy_gives_no_states_and_always_two_periods(gear_fmu):
