@@ -140,9 +140,6 @@ class NativeMeRunner:
             raise NativeUnavailable(f"the FMU's binary lacks a function: {err}") from err
         self.n_rhs = 0
         self.n_steps = 0
-        #: The last run's periodicity check: its largest miss over the allowance (<= 1:
-        #: the response repeats), inf without a check.
-        self.last_mismatch = float("inf")
 
     def run(self, start_values: dict, first_output_s: float, interval_s: float,
             n_out: int, check_at: int = 0, check_tolerance: float = 0.0) -> np.ndarray:
@@ -152,7 +149,7 @@ class NativeMeRunner:
         when the response repeats from output 0 (every state back at output
         ``check_at``, the derivatives and outputs the same one period later, each within
         ``check_tolerance`` of its range: the driver's header), the run stops there and
-        ``check_at + 1`` rows are returned; :attr:`last_mismatch` says by how much."""
+        the period's ``check_at`` rows are returned."""
         inst = self.instance
         if self.fmi_version == 3:
             inst.enterInitializationMode(tolerance=self.rtol, startTime=0.0)
@@ -197,13 +194,12 @@ class NativeMeRunner:
             work.ctypes.data_as(dptr), ctypes.byref(mismatch), ctypes.byref(returned))
         self.n_rhs += n_rhs.value
         self.n_steps += n_steps.value
-        self.last_mismatch = mismatch.value
         self._stop()
         if rc == PD_EVENT:
             raise NeedsEvents("the FMU asked for an event at a completed step")
         if rc != 0:
             raise RuntimeError(f"native integration failed: {ERRORS.get(rc, rc)}")
-        return out[:check_at + 1] if returned.value else out
+        return out[:check_at] if returned.value else out
 
     def _apply(self, start_values: dict) -> None:
         from fmpy.simulation import apply_start_values

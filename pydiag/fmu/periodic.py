@@ -33,8 +33,7 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     repeated when the native engine finds that the response repeats from there
     (:meth:`~pydiag.fmu.plant.FmuPlant.simulate_periods`, :data:`STATE_TOLERANCE`); else
     two, and when they agree (:data:`PERIODIC_TOLERANCE`) the second is repeated. A record
-    of 33 periods then costs 1 or 2 simulated periods instead of 33 (GearPair, 2 cores
-    x86_64: 5 ms for one, 9 ms for two, 134 ms for 33).
+    of 33 periods then costs 1 or 2 simulated periods instead of 33.
     Anything that is not periodic in ``period_s`` (a bearing's strikes, a ripple at a free
     frequency, a subharmonic, a transient still decaying) makes the periods differ, and
     the whole duration is simulated as before.

@@ -189,9 +189,8 @@ class FmuPlant:
         two periods."""
         if period_samples < 2:
             raise PlantError(f"a period needs at least two samples, got {period_samples}")
-        y = self._cached(parameters, int(round(start_s * self.sample_rate_hz)),
-                         2 * period_samples, (period_samples, state_tolerance))
-        return y[:, :period_samples] if y.shape[1] == period_samples + 1 else y
+        return self._cached(parameters, int(round(start_s * self.sample_rate_hz)),
+                            2 * period_samples, (period_samples, state_tolerance))
 
     def _cached(self, parameters: dict[str, float], first: int, n: int,
                 check: tuple[int, float] = (0, 0.0)) -> np.ndarray:
@@ -208,7 +207,7 @@ class FmuPlant:
     def _simulate(self, values: dict[str, float], first: int, n: int,
                   check: tuple[int, float] = (0, 0.0)) -> np.ndarray:
         """Signals at samples first..first+n-1; with a ``check`` (period in samples,
-        state tolerance), the native engine may stop after check[0] + 1 samples."""
+        state tolerance), the native engine may return the first period alone."""
         stop = (first + n) / self.sample_rate_hz
         if self._native is not None:
             try:
