@@ -81,9 +81,11 @@ class Diagnosis:
                 "warnings": self.warnings}
 
 
-def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -> Diagnosis:
+def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None,
+               speed_warning: bool = True) -> Diagnosis:
     """The diagnosis of ``fit``, a fit of ``problem``; ``facts`` as :func:`diagnose` finds
-    them (default: the record's alone, no gains)."""
+    them (default: the record's alone, no gains); ``speed_warning``: :func:`fit_warnings`'s
+    ``speed``."""
     values = {**problem.fixed_values, **fit.parameters}
     facts = problem.record_facts() if facts is None else facts
     support: list[GroupSupport] = []
@@ -103,19 +105,22 @@ def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None) -
     else:
         labels, contrast = ("not_classified",) + ("unknown",) * 3, None
     return Diagnosis(fit, *labels, contrast, facts,
-                     fit_warnings(problem, fit.error, facts.get("gains"), fit.parameters),
+                     fit_warnings(problem, fit.error, facts.get("gains"), fit.parameters,
+                                  speed=speed_warning),
                      support)
 
 
-def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None) -> Diagnosis:
-    """Fit ``problem`` and classify the estimate; the facts include the channel gains.
+def diagnose(problem: FitProblem, estimator: FaultEstimator | None = None,
+             speed_warning: bool = True) -> Diagnosis:
+    """Fit ``problem`` and classify the estimate; the facts include the channel gains;
+    ``speed_warning``: :func:`fit_warnings`'s ``speed``.
 
     A record whose level the model is held to (no gain fitted) that the fit cannot explain
     is fitted again with its level free: a gain that is a unit factor names the likely
     unit mistake (:data:`UNIT_FACTORS`)."""
     estimator = estimator or FaultEstimator()
     fit = estimator.fit(problem)
-    result = classified(problem, fit, problem.facts(fit.parameters))
+    result = classified(problem, fit, problem.facts(fit.parameters), speed_warning)
     if not problem.fit_gain and not result.explained:
         free = dataclasses.replace(problem, fit_gain=True)
         refit = estimator.fit(free)
@@ -142,9 +147,11 @@ def unexplained(problem: FitProblem, error: float) -> bool:
 
 
 def fit_warnings(problem: FitProblem, error: float, gains: dict[str, float] | None = None,
-                 parameters: dict[str, float] | None = None) -> list[str]:
+                 parameters: dict[str, float] | None = None, speed: bool = True) -> list[str]:
     """Why a fit of ``problem`` with this ``error`` (and these fitted ``gains`` and
     ``parameters``, by name) is not to be trusted: an empty list when nothing looks wrong.
+    ``speed``: with the warning of the problem's speed estimate (a machine's stage leaves it
+    to the machine's, whose speed its own is derived from).
 
     A parameter at the top of its range is named: the record asks for more of it than the
     model allows, so the model's form or range is wrong there (at the bottom, a fault
@@ -163,9 +170,9 @@ def fit_warnings(problem: FitProblem, error: float, gains: dict[str, float] | No
                      "measured lines): the model explains none of the record; "
                      f"{check}, the speed and the teeth (--rpm, --teeth), or give the fit "
                      "a larger budget")
-    speed = problem.speed.warning() if problem.speed is not None else None
-    if speed:
-        found.append(speed)
+    said = problem.speed.warning() if speed and problem.speed is not None else None
+    if said:
+        found.append(said)
     low, high = PLAUSIBLE_GAINS
     volts = problem.measurement.metadata.get("unknown_level", [])
     for channel, gain in (gains or {}).items():

@@ -98,14 +98,11 @@ class MachineDiagnosis:
 
     @property
     def warnings(self) -> list[str]:
-        """The speed's warning once, at the input shaft (each stage's fit has it at its own
-        shaft), then each stage's others."""
+        """The speed's warning, at the input shaft, then each stage's fit's (which leave the
+        speed to the machine)."""
         speed = self.speed.warning()
-        out = [speed] if speed else []
-        for k, stage in enumerate(self.stages):
-            own = stage_speed(self.speed, self.machine, k).warning()
-            out += [f"{stage.name}: {w}" for w in stage.fit.warnings if w != own]
-        return out
+        return ([speed] if speed else []) + [f"{stage.name}: {w}" for stage in self.stages
+                                             for w in stage.fit.warnings]
 
 
 def machine_speed(measurement: Measurement, machine: Machine, input_hz: float,
@@ -210,7 +207,7 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
                                 feature_mode, fit_gain, drop, gain_curve=gain_curve)
-        fit = diagnose(problem, estimator)
+        fit = diagnose(problem, estimator, speed_warning=False)
         verdict = verdicts[k]
         fault_mode, severity, suspect = fit.fault_mode, fit.severity, None
         if verdict is not None:

@@ -1,5 +1,7 @@
 """A machine's speed is said once, at the input shaft: each stage's fit has the same speed
-at its own shaft, and a tacho on the input is not the stage's."""
+at its own shaft (a tacho on the input is not the stage's), and leaves it to the machine."""
+
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -7,19 +9,27 @@ import pytest
 from pydiag.fit.estimator import FitResult
 from pydiag.gear.machine import load_machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSource
-from pydiag.loop.diagnosis import Diagnosis
+from pydiag.loop.diagnosis import Diagnosis, fit_warnings
 from pydiag.loop.stages import MachineDiagnosis, StageDiagnosis, stage_speed
 from conftest import ROOT
 
 MACHINE = load_machine(ROOT / "examples" / "phm09_spur.toml")  # 32/96 then 48/80
 
 
+def stage_fit_warnings(estimate: SpeedEstimate, k: int, **kwargs) -> list[str]:
+    """fit_warnings of stage ``k``'s fit, its problem's speed the stage's own."""
+    problem = SimpleNamespace(parameters=(), channels=("ch1",), measurement=SimpleNamespace(
+        metadata={}), speed=stage_speed(estimate, MACHINE, k))
+    return fit_warnings(problem, 0.5, **kwargs)
+
+
 def machine_diagnosis(speed: SpeedEstimate) -> MachineDiagnosis:
     stages = []
     for k, stage in enumerate(MACHINE.stages):
         own = stage_speed(speed, MACHINE, k)
+        said = stage_fit_warnings(speed, k, speed=False) + ["a fit's own warning"]
         fit = Diagnosis(FitResult({}, 0.5, 1, 0.0, [0.5]), "healthy", "none", "none", "none",
-                        warnings=[own.warning(), "a fit's own warning"])
+                        warnings=said)
         stages.append(StageDiagnosis(stage.name, stage.pinion_teeth, stage.gear_teeth,
                                      own.speed_hz, own.speed_hz, own.speed_hz, fit, None,
                                      "healthy", "none", None))
@@ -33,6 +43,8 @@ def machine_diagnosis(speed: SpeedEstimate) -> MachineDiagnosis:
      "swings by +-0.4 %"),
 ])
 def test_the_speed_is_said_once_at_the_input_shaft(speed, said):
+    # a stage's own fit would say it at its shaft's speed (the output stage's: 10 Hz)
+    assert any("%" in w for w in stage_fit_warnings(speed, 1))
     warnings = machine_diagnosis(speed).warnings
     assert said in warnings[0]
     assert warnings[1:] == ["input stage: a fit's own warning", "output stage: a fit's own warning"]
