@@ -1,5 +1,5 @@
 """Command line: pydiag simulate | diagnose | indicators | compare | discover | loop | history |
-batch | regress | inspect | demo.
+accept | baseline | batch | regress | inspect | demo.
 
 This module parses arguments (every number is checked here, before any work), calls the
 command, and maps errors to exit codes: a :class:`~pydiag.core.errors.PydiagError` is the
@@ -18,6 +18,7 @@ import threading
 
 from pydiag.app.arguments import (bearing, effect_list, number, parameter_value, positive,
                                   rate, sensitivity, speed_ratio, teeth)
+from pydiag.app.baselines import cmd_baseline
 from pydiag.app.commands import (cmd_batch, cmd_demo, cmd_diagnose, cmd_indicators,
                                  cmd_inspect, cmd_regress, cmd_simulate, warn_validation)
 from pydiag.app.loop_commands import (cmd_accept, cmd_compare, cmd_discover, cmd_history,
@@ -28,6 +29,7 @@ from pydiag.core.termination import raise_once
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.indicators import SHAFTS
+from pydiag.gear.machine_indicators import BASELINE_SPEED_SHARE
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
 from pydiag.loop.regress import DEFAULT_RTOL
@@ -130,6 +132,16 @@ def _measurement_args(p: argparse.ArgumentParser) -> None:
     _record_args(p)
 
 
+#: --baseline's word for the kept baselines, in its help.
+KEPT_HELP = ("; the word kept: those kept for the machine (pydiag baseline) within "
+             f"{100 * BASELINE_SPEED_SHARE:g} %% of its nominal speed")
+
+
+def _history_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--history", help="SQLite history of runs and kept baselines (default: the "
+                   "per-user ~/.local/share/pydiag/history.sqlite, or under $XDG_DATA_HOME)")
+
+
 def _force(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="replace existing output files")
 
@@ -158,9 +170,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("diagnose", help="estimate fault parameters from a measurement")
     p.add_argument("--fmu", required=True)
     _measurement_args(p)
-    p.add_argument("--baseline", metavar="FILE", action="append",
+    p.add_argument("--baseline", metavar="FILE|kept", action="append",
                    help="with --machine: a record of the machine in a known healthy state, "
-                   "every stage judged against it (repeat for more)")
+                   "every stage judged against it (repeat for more)" + KEPT_HELP)
+    _history_arg(p)
     p.add_argument("--json", help="write the result as JSON here")
     _force(p)
     _optimiser_args(p)
@@ -174,10 +187,11 @@ def build_parser() -> argparse.ArgumentParser:
     _operating_args(p)
     p.add_argument("--shaft", choices=SHAFTS, default="pinion",
                    help="the shaft the synchronous average follows (default pinion)")
-    p.add_argument("--baseline", metavar="FILE", action="append",
+    p.add_argument("--baseline", metavar="FILE|kept", action="append",
                    help="reference record of the machine in a known healthy state (or the "
                    "first of a trend): NA4 and NB4 against it; with --machine every stage is "
-                   "judged against it (repeat for more baselines)")
+                   "judged against it (repeat for more baselines)" + KEPT_HELP)
+    _history_arg(p)
     p.add_argument("--json", help="write the indicators as JSON here")
     _force(p)
     p.set_defaults(func=cmd_indicators)
@@ -190,12 +204,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
     p.add_argument("--indicators", nargs="?", const="pinion", choices=SHAFTS,
                    help="add the condition indicators of this shaft as columns (default pinion)")
-    p.add_argument("--baseline", metavar="FILE", action="append", help="with --machine: a "
-                   "healthy record of the machine, every stage judged against it (repeat)")
+    p.add_argument("--baseline", metavar="FILE|kept", action="append", help="with --machine: "
+                   "a healthy record of the machine, every stage judged against it (repeat)"
+                   + KEPT_HELP)
+    _history_arg(p)
     _record_args(p)
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_batch)
+
+    p = sub.add_parser("baseline", help="keep a record of a machine in a known healthy "
+                       "state as its baseline (--baseline kept judges against it); --list, "
+                       "--forget")
+    p.add_argument("--measurement", help="the record to keep: CSV/TSV (.gz), Parquet, MAT, "
+                   "WAV, TDMS, or a zip of one")
+    p.add_argument("--list", action="store_true", help="list the machine's kept baselines")
+    p.add_argument("--forget", type=number(int, 1), metavar="ID",
+                   help="remove the machine's baseline of this id (--list shows them)")
+    _reading_args(p)
+    _operating_args(p)
+    _history_arg(p)
+    p.set_defaults(func=cmd_baseline)
 
     p = sub.add_parser("regress", help="check an FMU against golden spectra")
     p.add_argument("--fmu", required=True)

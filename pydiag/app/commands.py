@@ -10,6 +10,8 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
+from pydiag.app.baselines import baseline_records
+from pydiag.app.reading import channels_to_read, read_input
 from pydiag.app.formatting import (format_facts, format_indicators,
                                    format_machine_diagnosis, format_machine_report,
                                    format_regression, format_result)
@@ -23,7 +25,7 @@ from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_indicators import MachineRecord, machine_record, machine_report
+from pydiag.gear.machine_indicators import machine_report
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings
 from pydiag.io.measurements import write_measurement
@@ -97,20 +99,6 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
         bar.refresh()
 
     return update, bar.close
-
-
-def channels_to_read(args) -> list[str] | None:
-    """The --channel specs, with the tacho channel added when channels are chosen."""
-    chosen = list(args.channel or [])
-    if chosen and args.tacho and args.tacho not in [c.partition("=")[0] for c in chosen]:
-        chosen.append(args.tacho)
-    return chosen or None
-
-
-def read_input(args, path: str | None = None) -> Measurement:
-    """The record ``path`` (default ``--measurement``) as the options say to read it."""
-    return read_measurement(path or args.measurement, args.sample_rate, channels_to_read(args),
-                            args.unit, dict(getattr(args, "sensitivity", None) or []))
 
 
 def problem_settings(args) -> dict:
@@ -202,18 +190,11 @@ def _staged(args) -> bool:
     return staged
 
 
-def _baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
-    """The --baseline records as the machine sees them (their speed and every shaft's TSA),
-    read and made once."""
-    return [machine_record(read_input(args, path), machine, speed, args.rpm / 60.0)
-            for path in args.baseline or []]
-
-
 def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     """diagnose --machine with several stages: every stage fitted, judged against the
     baselines when there are some."""
     settings = problem_settings(args)
-    baselines = _baseline_records(args, machine, settings["speed"])
+    baselines = baseline_records(args, machine, settings["speed"])
     update, close = progress_bar(args.quiet)
     try:
         result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
@@ -251,7 +232,7 @@ def cmd_indicators(args) -> int:
     machine = args.machine_description
     if machine is not None:
         report = machine_report(m, machine, speed, args.rpm / 60.0,
-                                _baseline_records(args, machine, speed))
+                                baseline_records(args, machine, speed))
         return _said_indicators(args, format_machine_report(report), report.record.speed,
                                 report.to_dict())
     if args.baseline and len(args.baseline) > 1:
@@ -285,7 +266,7 @@ def cmd_batch(args) -> int:
     machine = args.machine_description
     staged = _staged(args)
     problem = problem_settings(args)
-    baselines = tuple(_baseline_records(args, machine, problem["speed"]))
+    baselines = tuple(baseline_records(args, machine, problem["speed"]))
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,

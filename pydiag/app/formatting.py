@@ -6,6 +6,7 @@ from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.machine_indicators import MachineReport
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.diagnosis import Diagnosis
+from pydiag.loop.history import KeptBaseline
 from pydiag.loop.stages import MachineDiagnosis
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.results import Comparison, Discovery, Status
@@ -225,4 +226,15 @@ def format_machine_diagnosis(result: MachineDiagnosis) -> str:
     if result.baselines:
         lines.append(f"baselines  : {', '.join(result.baselines)} (healthy spread "
                      f"{result.spread_db:.2f} dB)")
+    return "\n".join(lines)
+
+
+def format_kept_baselines(name: str, kept: list[KeptBaseline], db: str) -> str:
+    """The baselines kept for machine ``name`` in the history ``db``, a row each."""
+    if not kept:
+        return f"baselines  : none kept for {name} in {db}"
+    lines = [f"baselines  : {len(kept)} kept for {name} in {db}", "",
+             f"{'id':>4}  {'kept (UTC)':<21}{'input Hz':>10}  record"]
+    lines += [f"{b.id:>4}  {b.time_utc:<21}{b.record.speed.speed_hz:>10.4f}  {b.measurement}"
+              for b in kept]
     return "\n".join(lines)

@@ -26,11 +26,11 @@ def apply_machine(args) -> Machine | None:
     fits = args.command in PAIR_COMMANDS
     staged = len(machine.stages) > 1
     args.stage_index = _stage_of(args, machine) if fits else None
-    if args.rpm is None:
-        if machine.input_hz is None:
-            raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
-                             "input_rpm")
+    if args.rpm is None and machine.input_hz is not None:
         args.rpm = 60 * machine.input_hz
+    elif args.rpm is None and getattr(args, "measurement", "") is not None:  # not baseline --list
+        raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
+                         "input_rpm")
     tacho = machine.tacho
     if tacho is not None and args.tacho is None:  # never a sensor, even with --speed mesh
         if tacho.shaft != 0:

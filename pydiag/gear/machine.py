@@ -46,6 +46,8 @@ follow from its teeth); what is fitted to it lives in :mod:`pydiag.loop`.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
 import tomllib
 from dataclasses import dataclass
@@ -142,6 +144,16 @@ class Machine:
         if len(self.shafts) != len(self.stages) + 1:
             raise MachineError(f"{self.source}: shafts: {len(self.stages)} stage(s) make "
                                f"{len(self.stages) + 1} shafts, {len(self.shafts)} named")
+
+    @property
+    def identity(self) -> str:
+        """What a record of this machine is seen through (its name, shafts and stages'
+        teeth) as a key: a baseline kept for it is found again by it, whatever else of
+        the file (sensors, effects, comments) changes. Two boxes of one design are two
+        machines: their names tell them apart."""
+        facts = {"name": self.name, "shafts": list(self.shafts),
+                 "stages": [[s.pinion_teeth, s.gear_teeth] for s in self.stages]}
+        return hashlib.sha256(json.dumps(facts, sort_keys=True).encode()).hexdigest()
 
     def shaft_ratio(self, shaft: int) -> Fraction:
         """Speed of shaft ``shaft`` over the input shaft's (exact)."""

@@ -38,7 +38,7 @@ import numpy as np
 from pydiag.core.errors import MeasurementError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.machine import Machine
-from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
+from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import track_revolutions
 from pydiag.signal.condition import (TrendReference, synchronous_average,
                                      tsa_indicators, tsa_signals)
@@ -50,6 +50,11 @@ K_SPREAD = 4.0
 #: The spread is never taken below this (dB): two halves of one record agree better than
 #: two records taken on different days can.
 MIN_SPREAD_DB = 0.1
+#: A baseline is at a record's operating point when its input speed lies within this share
+#: of the record's nominal input speed (:func:`at_speed`): a motor slips a few percent
+#: under load, and a machine's operating speeds lie further apart. The load is not told
+#: by a record: which baselines share it is the user's to say.
+BASELINE_SPEED_SHARE = 0.05
 #: Indicators of a shaft's TSA in the report, after the residual energy.
 SHAFT_INDICATORS = ("fm0", "fm4", "na4", "nb4", "er", "ser")
 
@@ -156,6 +161,44 @@ class MachineRecord:
     shafts: tuple[ShaftRecord, ...]
     file: str
 
+    def to_dict(self) -> dict:
+        """Plain data that :meth:`from_dict` reads back (a baseline kept in the history):
+        the speed without its angle at every sample, every shaft's TSA facts."""
+        speed = self.speed
+        return {"file": self.file,
+                "speed": {"speed_hz": speed.speed_hz, "variation_pct": speed.variation_pct,
+                          "method": speed.method, "nominal_hz": speed.nominal_hz,
+                          "source": speed.source.value, "confidence_db": _finite(
+                              speed.confidence_db), "mesh_speed_hz": speed.mesh_speed_hz,
+                          "band_pct": speed.band_pct},
+                "shafts": [{"shaft": s.shaft, "index": s.index, "speed_hz": s.speed_hz,
+                            "revolutions": s.revolutions, "samples_per_rev": s.samples_per_rev,
+                            "teeth": list(s.teeth), "residual_energy": s.residual_energy,
+                            "halves": {c: list(h) for c, h in s.halves.items()},
+                            "indicators": {c: {k: _finite(v) for k, v in t.items()}
+                                           for c, t in s.indicators.items()}}
+                           for s in self.shafts]}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "MachineRecord":
+        """The record :meth:`to_dict` wrote (its speed has no angle at every sample: it
+        judges, it is not tracked again)."""
+        speed = dict(data["speed"])
+        source = SpeedSource(speed.pop("source"))
+        shafts = tuple(ShaftRecord(
+            s["shaft"], s["index"], s["speed_hz"], s["revolutions"], s["samples_per_rev"],
+            tuple(s["teeth"]), dict(s["residual_energy"]),
+            {c: (h[0], h[1]) for c, h in s["halves"].items()},
+            {c: {k: (math.nan if v is None else v) for k, v in t.items()}
+             for c, t in s["indicators"].items()}) for s in data["shafts"])
+        return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
+                   data["file"])
+
+
+def _finite(value: float | None) -> float | None:
+    """``value``, None where JSON has no number for it (inf, nan)."""
+    return value if value is not None and math.isfinite(value) else None
+
 
 def machine_record(measurement: Measurement, machine: Machine, speed: SpeedSettings,
                    input_hz: float) -> MachineRecord:
@@ -214,6 +257,13 @@ class StageVerdict:
 
 def _db(a: float, b: float) -> float:
     return 10 * math.log10(max(a, 1e-300) / max(b, 1e-300))
+
+
+def at_speed(baselines: Sequence[MachineRecord], nominal_hz: float) -> list[MachineRecord]:
+    """The ``baselines`` whose input speed is within :data:`BASELINE_SPEED_SHARE` of the
+    nominal input speed ``nominal_hz``."""
+    return [b for b in baselines
+            if abs(b.speed.speed_hz / nominal_hz - 1) <= BASELINE_SPEED_SHARE]
 
 
 def healthy_spread_db(baselines: list[MachineRecord]) -> float:

@@ -1,7 +1,12 @@
-"""A local record of every compare run: which model, which FMU, what error, which peaks.
+"""A local record of every compare run (which model, which FMU, what error, which peaks),
+and of the baselines kept for each machine (records of it in a known healthy state).
 
-SQLite, one table. ``pydiag history`` lists the runs and can plot the error across
+SQLite, two tables. ``pydiag history`` lists the runs and can plot the error across
 model revisions, so the effect of adding physics to the Modelica model stays visible.
+``pydiag baseline`` keeps a record as seen through its machine (the speed found, every
+shaft's TSA facts: :class:`~pydiag.gear.machine_indicators.MachineRecord`), found again
+by the machine's identity (:attr:`~pydiag.gear.machine.Machine.identity`); ``--baseline
+kept`` judges a record against those of its operating point.
 
 The history is an input as much as an output: :func:`check` refuses, before any work, a
 file that is not SQLite, an SQLite file of another application (a table that is not
@@ -20,9 +25,12 @@ import sqlite3
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
-from pydiag.core.errors import OutputError
+from pydiag.core.errors import OutputError, UsageError
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.io.outputs import atomic_output, check_output
 
 #: The formats ``history --plot`` writes, by the file's suffix.
@@ -44,7 +52,8 @@ def resolve(path: str | Path | None) -> Path:
     default.parent.mkdir(parents=True, exist_ok=True)
     return default
 
-SCHEMA = """
+#: Each table's definition: made when first written to.
+SCHEMA = {"runs": """
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY AUTOINCREMENT,
     time_utc TEXT NOT NULL,
@@ -58,8 +67,16 @@ CREATE TABLE IF NOT EXISTS runs (
     n_peaks INTEGER NOT NULL,
     peaks TEXT NOT NULL,
     suggested TEXT NOT NULL
-)
-"""
+)""", "baselines": """
+CREATE TABLE IF NOT EXISTS baselines (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    time_utc TEXT NOT NULL,
+    machine TEXT NOT NULL,
+    machine_identity TEXT NOT NULL,
+    measurement TEXT NOT NULL,
+    speed_hz REAL NOT NULL,
+    record TEXT NOT NULL
+)"""}
 
 
 def sha256_of(path: str | Path) -> str:
@@ -73,31 +90,39 @@ def sha256_of(path: str | Path) -> str:
 #: The columns of our ``runs`` table.
 COLUMNS = ("id", "time_utc", "measurement", "fmu", "fmu_sha256", "model_name",
            "source_sha256", "parameters", "error", "n_peaks", "peaks", "suggested")
+#: Our tables and their columns.
+TABLES = {"runs": COLUMNS,
+          "baselines": ("id", "time_utc", "machine", "machine_identity", "measurement",
+                        "speed_hz", "record")}
 
 
 def _check_schema(con: sqlite3.Connection, db: str | Path) -> None:
-    """OutputError unless the database holds nothing, or our ``runs`` table alone."""
+    """OutputError unless the database holds nothing but our tables (:data:`TABLES`),
+    each with our columns."""
     tables = sorted(r[0] for r in con.execute(
         "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"))
-    foreign = [t for t in tables if t != "runs"]
+    foreign = [t for t in tables if t not in TABLES]
     if foreign:
         raise OutputError(f"{db} is not a pydiag run history (it holds table(s) "
                           f"{', '.join(foreign)}); give --history another file")
-    if "runs" in tables:
-        columns = {r[1] for r in con.execute("PRAGMA table_info(runs)")}
-        missing = [c for c in COLUMNS if c not in columns]
+    for table in tables:
+        columns = {r[1] for r in con.execute(f"PRAGMA table_info({table})")}
+        missing = [c for c in TABLES[table] if c not in columns]
         if missing:
-            raise OutputError(f"{db} is a run history of another pydiag version (its runs have "
-                              f"no column {missing[0]}); give --history another file")
+            raise OutputError(f"{db} is a run history of another pydiag version (its {table} "
+                              f"have no column {missing[0]}); give --history another file")
 
 
-def _connect(db: str | Path) -> sqlite3.Connection:
+def _connect(db: str | Path, table: str | None = None) -> sqlite3.Connection:
+    """A connection to the history ``db`` (checked: :func:`_check_schema`), with ``table``
+    made if it is not there yet."""
     if Path(db).is_dir():
         raise OutputError(f"history {db} is a folder, not an SQLite file")
     try:
         con = sqlite3.connect(str(db))
         _check_schema(con, db)
-        con.execute(SCHEMA)
+        if table is not None:
+            con.execute(SCHEMA[table])
     except sqlite3.Error as err:
         raise OutputError(f"cannot use {db} as the run history: {err}") from err
     return con
@@ -129,7 +154,7 @@ def recording(db: str | Path, comparison, measurement_path: str, model_name: str
               "energy_fraction": p.energy_fraction} for p in comparison.peaks]
     suggested = [{"effect": s.effect, "score": s.score, "confident": s.confident}
                  for s in comparison.suggested_effects if s.shown]
-    con = _connect(db)
+    con = _connect(db, "runs")
     try:
         try:
             cur = con.execute(
@@ -158,17 +183,93 @@ def recording(db: str | Path, comparison, measurement_path: str, model_name: str
         con.close()
 
 
+def _tables(con: sqlite3.Connection) -> set[str]:
+    return {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+
+
 def runs(db: str | Path) -> list[dict]:
+    """Every compare run of the history ``db``, oldest first (none when it has none)."""
     if not Path(db).exists():
         return []
     con = _connect(db)
     try:
+        if "runs" not in _tables(con):
+            return []
         con.row_factory = sqlite3.Row
         return [dict(r) for r in con.execute("SELECT * FROM runs ORDER BY id")]
     except sqlite3.Error as err:
         raise OutputError(f"cannot read the run history {db}: {err}") from err
     finally:
         con.close()
+
+
+@dataclass(frozen=True)
+class KeptBaseline:
+    """A baseline kept in the history: its id there, when it was kept (UTC), its machine's
+    name, the file it was read from, and the record as the machine sees it."""
+
+    id: int
+    time_utc: str
+    machine: str
+    measurement: str
+    record: MachineRecord
+
+
+def keep_baseline(db: str | Path, machine: Machine, record: MachineRecord,
+                  measurement_path: str) -> KeptBaseline:
+    """Keep ``record`` (of ``machine``, read from ``measurement_path``) as one of the
+    machine's baselines in the history ``db``."""
+    when = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    con = _connect(db, "baselines")
+    try:
+        with con:
+            cur = con.execute(
+                "INSERT INTO baselines (time_utc, machine, machine_identity, measurement, "
+                "speed_hz, record) VALUES (?,?,?,?,?,?)",
+                (when, machine.name, machine.identity, str(measurement_path),
+                 record.speed.speed_hz, json.dumps(record.to_dict())))
+    except sqlite3.Error as err:
+        raise OutputError(f"cannot keep the baseline in {db}: {err}") from err
+    finally:
+        con.close()
+    return KeptBaseline(int(cur.lastrowid), when, machine.name, str(measurement_path), record)
+
+
+def kept_baselines(db: str | Path, machine: Machine) -> list[KeptBaseline]:
+    """The baselines of ``machine`` kept in the history ``db``, oldest first."""
+    if not Path(db).exists():
+        return []
+    con = _connect(db)
+    try:
+        if "baselines" not in _tables(con):
+            return []
+        rows = con.execute("SELECT id, time_utc, machine, measurement, record FROM baselines "
+                           "WHERE machine_identity = ? ORDER BY id", (machine.identity,))
+        return [KeptBaseline(i, when, name, path, MachineRecord.from_dict(json.loads(record)))
+                for i, when, name, path, record in rows]
+    except (sqlite3.Error, ValueError, KeyError, TypeError) as err:
+        raise OutputError(f"cannot read the baselines kept in {db}: {err}") from err
+    finally:
+        con.close()
+
+
+def forget_baseline(db: str | Path, machine: Machine, baseline_id: int) -> KeptBaseline:
+    """Remove baseline ``baseline_id`` of ``machine`` from the history ``db``; returns it.
+    UsageError when the machine has no baseline of that id there."""
+    kept = {b.id: b for b in kept_baselines(db, machine)}
+    if baseline_id not in kept:
+        ids = ", ".join(str(i) for i in kept) or "none"
+        raise UsageError(f"no baseline {baseline_id} of machine '{machine.name}' is kept in "
+                         f"{db} (its baselines: {ids})")
+    con = _connect(db)
+    try:
+        with con:
+            con.execute("DELETE FROM baselines WHERE id = ?", (baseline_id,))
+    except sqlite3.Error as err:
+        raise OutputError(f"cannot remove the baseline from {db}: {err}") from err
+    finally:
+        con.close()
+    return kept[baseline_id]
 
 
 def check_plot(out: str | Path) -> None:

@@ -75,7 +75,7 @@ def test_a_history_that_cannot_take_the_run_is_the_users_problem(tmp_path, monke
             else:
                 setattr(self.con, name, value)
 
-    monkeypatch.setattr(history, "_connect", lambda path: FullDisk(real(path)))
+    monkeypatch.setattr(history, "_connect", lambda path, table=None: FullDisk(real(path, table)))
     with pytest.raises(OutputError, match="outputs are written, but the run could not be"):
         with history.recording(db, _Run(fmu), "rec.csv", "GearPair"):
             pass

@@ -1,0 +1,76 @@
+"""A machine's healthy state on the command line: the --baseline records, read or found
+among those kept in the history (``kept``), and ``pydiag baseline``, which keeps, lists
+and forgets them (:mod:`pydiag.loop.history`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+
+from pydiag.app.formatting import format_kept_baselines
+from pydiag.app.reading import read_input
+from pydiag.core.errors import UsageError
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_indicators import (BASELINE_SPEED_SHARE, MachineRecord, at_speed,
+                                            machine_record)
+from pydiag.gear.speed import SpeedSettings
+from pydiag.loop import history
+
+#: The --baseline value that stands for the baselines kept in the history.
+KEPT = "kept"
+
+
+def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
+    """The --baseline records as the machine sees them (their speed and every shaft's TSA),
+    read and made once; ``kept``: those kept for the machine in the history at the
+    record's operating point (:func:`~pydiag.gear.machine_indicators.at_speed`)."""
+    nominal_hz = args.rpm / 60.0
+    out = []
+    for path in args.baseline or []:
+        if path != KEPT:
+            out.append(machine_record(read_input(args, path), machine, speed, nominal_hz))
+            continue
+        db = str(args.history or history.default_path())
+        kept = [dataclasses.replace(b.record, file=f"kept {b.id}: {b.record.file}")
+                for b in history.kept_baselines(db, machine)]
+        near = at_speed(kept, nominal_hz)
+        if not near:
+            speeds = ", ".join(f"{b.speed.speed_hz:.4g} Hz ({b.file.partition(':')[0]})"
+                               for b in kept)
+            raise UsageError(f"--baseline kept: no baseline of machine '{machine.name}' kept in "
+                             f"{db} within {100 * BASELINE_SPEED_SHARE:g} % of "
+                             f"{nominal_hz:.4g} Hz (kept: {speeds or 'none'}); keep one with "
+                             "pydiag baseline")
+        out += near
+    return out
+
+
+def cmd_baseline(args) -> int:
+    """Keep a record as a baseline of its machine (--measurement), list the machine's
+    (--list), or forget one (--forget ID)."""
+    machine = args.machine_description
+    if machine is None:
+        raise UsageError("baseline keeps a record of a machine: give --machine FILE")
+    chosen = [o for o, v in (("--measurement", args.measurement), ("--list", args.list),
+                             ("--forget", args.forget)) if v not in (None, False)]
+    if len(chosen) != 1:
+        raise UsageError("give one of --measurement (keep it), --list or --forget ID")
+    db = str(history.resolve(args.history))
+    if args.list:
+        print(format_kept_baselines(machine.name, history.kept_baselines(db, machine), db))
+        return 0
+    if args.forget is not None:
+        gone = history.forget_baseline(db, machine, args.forget)
+        print(f"forgot baseline {gone.id} of {machine.name} ({gone.measurement}) in {db}")
+        return 0
+    history.check(db)
+    speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
+    record = machine_record(read_input(args), machine, speed, args.rpm / 60.0)
+    kept = history.keep_baseline(db, machine, record, args.measurement)
+    warning = record.speed.warning()
+    if warning:
+        print(f"pydiag baseline: warning: {warning}", file=sys.stderr)
+    print(f"kept       : baseline {kept.id} of {machine.name}, input "
+          f"{record.speed.speed_hz:.5f} Hz ({record.speed.method})")
+    print(format_kept_baselines(machine.name, history.kept_baselines(db, machine), db))
+    return 0
