@@ -6,6 +6,7 @@ record leaving itself out. Prints a table a record and the time each took. Usage
     .venv/bin/python bench/phm09.py [DIR]     # default ../shared/data/phm09
     .venv/bin/python bench/phm09.py --model   # and every stage fitted without a baseline
     .venv/bin/python bench/phm09.py --batch   # pydiag batch --machine: local pool and Dask
+    .venv/bin/python bench/phm09.py --per-record  # one record's diagnose --machine, timed
 
 With ``--model`` each record's stages are also fitted (``diagnose --machine`` without a
 baseline: the pair model's classes on the paper's simulated scale), side by side with the
@@ -15,6 +16,12 @@ With ``--batch`` the folder is diagnosed by ``pydiag batch --machine`` with the 
 healthy record as baseline, once on the local pool and once on a Dask cluster on this
 machine (as many single-threaded worker processes as cores): wall time and records a
 minute of each.
+
+With ``--per-record`` the first faulty record (else the first) is diagnosed by whole
+``pydiag diagnose --machine`` processes (both stages fitted at the default budget, the
+tacho used), three times with a healthy record of its speed and load read as
+``--baseline FILE`` and three times with it kept (``pydiag baseline``) and taken as
+``--baseline kept``: medians of the wall time and of the user CPU of the three.
 
 Labels: ``spur 1`` all good; ``spur 2`` the 32-tooth input pinion chipped and the
 48-tooth idler pinion eccentric (both stages); other cases are shown without a label.
@@ -52,6 +59,8 @@ def main() -> int:
     ap.add_argument("folder", nargs="?", default=str(ROOT.parent / "shared" / "data" / "phm09"))
     ap.add_argument("--model", action="store_true", help="also fit every stage (no baseline)")
     ap.add_argument("--batch", action="store_true", help="time pydiag batch --machine instead")
+    ap.add_argument("--per-record", action="store_true",
+                    help="time one record's diagnose --machine, baseline read and kept")
     args = ap.parse_args()
     machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
     files = sorted(p for p in Path(args.folder).iterdir() if NAME.search(p.name)
@@ -63,6 +72,8 @@ def main() -> int:
           f"{len(files)} records")
     if args.batch:
         return batch_throughput(args.folder, files)
+    if args.per_record:
+        return per_record(files)
     seen = {}
     for path in files:
         case, hz, load, run = NAME.search(path.name).groups()
@@ -120,6 +131,61 @@ def main() -> int:
         print("\n".join(models))
         print(f"healthy or not as labelled: {model_right} of {model_total}")
     return 0
+
+
+def per_record(files: list[Path], repeat: int = 3) -> int:
+    """One record's ``diagnose --machine`` in whole processes, its baseline read or kept."""
+    import resource
+    import statistics
+    parsed = {p: NAME.search(p.name).groups() for p in files}
+    record = next((p for p, (case, *_) in parsed.items() if case != "1"), files[0])
+    _, hz, load, _ = parsed[record]
+    baseline = next((p for p, (case, h, ld, _) in parsed.items()
+                     if case == "1" and h == hz and ld == load and p != record), None)
+    if baseline is None:
+        print(f"no healthy record at {hz} Hz, {load} load besides {record.name}", file=sys.stderr)
+        return 2
+    print(f"record: {record.name}; baseline: {baseline.name}; {_cpu_model()}")
+    common = ["--machine", str(ROOT / "examples" / "phm09_spur.toml"), "--sample-rate",
+              str(RATE_HZ), "--rpm", str(60 * int(hz))]
+    print(f"{'baseline':<12}{'wall s (median)':>16}{'user s':>8}  runs")
+    with tempfile.TemporaryDirectory() as tmp:
+        history = ["--history", str(Path(tmp) / "history.sqlite")]
+        kept = subprocess.run([sys.executable, "-m", "pydiag", "baseline", "--measurement",
+                               str(baseline), *common, *history], capture_output=True,
+                              text=True, cwd=ROOT)
+        if kept.returncode != 0:
+            print(f"pydiag baseline failed: {kept.stderr.strip()}", file=sys.stderr)
+            return 1
+        for how, given in (("read", str(baseline)), ("kept", "kept")):
+            walls, users = [], []
+            for _ in range(repeat):
+                before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime
+                started = time.perf_counter()
+                res = subprocess.run(
+                    [sys.executable, "-m", "pydiag", "diagnose", "--fmu",
+                     str(ROOT / "build" / "GearPair.fmu"), "--measurement", str(record),
+                     *common, *history, "--baseline", given, "--quiet"],
+                    capture_output=True, text=True, cwd=ROOT)
+                walls.append(time.perf_counter() - started)
+                users.append(resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime - before)
+                if res.returncode not in (0, 1):  # 1: a stage the model does not explain
+                    print(f"diagnose failed: {res.stderr.strip()}", file=sys.stderr)
+                    return 1
+            print(f"{how:<12}{statistics.median(walls):>16.2f}"
+                  f"{statistics.median(users):>8.1f}  " + " ".join(f"{w:.2f}" for w in walls))
+    return 0
+
+
+def _cpu_model() -> str:
+    """The CPU's model name and family (Linux), else the platform's processor."""
+    try:
+        info = dict(line.split(":", 1) for line in Path("/proc/cpuinfo").read_text()
+                    .splitlines() if ":" in line)
+        info = {k.strip(): v.strip() for k, v in info.items()}
+        return f"{info['model name']}, CPU family {info['cpu family']}"
+    except (OSError, KeyError):
+        return platform.processor() or "CPU not known"
 
 
 def batch_throughput(folder: str, files: list[Path]) -> int:

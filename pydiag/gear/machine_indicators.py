@@ -39,7 +39,7 @@ from pydiag.core.errors import MeasurementError
 from pydiag.core.measurement import Measurement
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
-from pydiag.gear.tracking import track_revolutions
+from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
 from pydiag.signal.condition import (TrendReference, synchronous_average,
                                      tsa_indicators, tsa_signals)
 
@@ -116,9 +116,12 @@ def _faster_shafts(machine: Machine, shaft: int) -> tuple[int, ...]:
 
 
 def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEstimate,
-                  drop: tuple[str, ...] = ()) -> list[ShaftRecord]:
+                  drop: tuple[str, ...] = (), upsampled: Upsampled | None = None
+                  ) -> list[ShaftRecord]:
     """Every shaft's TSA of every channel but ``drop`` (module docstring), from the input
-    shaft's angle ``estimate``."""
+    shaft's angle ``estimate``; ``upsampled``: the record upsampled for tracking
+    (:func:`~pydiag.gear.tracking.upsampled_record`), made here when not given."""
+    upsampled = upsampled or upsampled_record(measurement, estimate, drop)
     out = []
     for index, name in enumerate(machine.shafts):
         ratio = float(machine.shaft_ratio(index))
@@ -133,7 +136,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
                 f"rate above {3 * max(teeth) * speed_hz:.5g} Hz; the record has "
                 f"{measurement.sample_rate_hz:g}")
         names, tracked, n_revs = track_revolutions(measurement, estimate, samples_per_rev,
-                                                   ratio, drop, name)
+                                                   ratio, drop, name, upsampled)
         if n_revs < 4:
             raise MeasurementError(f"the record holds {n_revs} whole turns of the {name} shaft: "
                                    "too few to average (at least 4)")

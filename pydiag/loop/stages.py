@@ -38,7 +38,7 @@ from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import (MachineRecord, StageVerdict, judge_stages,
                                             shaft_records)
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
-from pydiag.gear.tracking import order_track
+from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.loop.diagnosis import Diagnosis, diagnose
 from pydiag.model.adapter import Adapter
 
@@ -127,17 +127,20 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
                   feature_mode: str = "lines", fit_gain: bool | None = None,
                   drop: tuple[str, ...] = (),
                   fixed_values: dict[str, float] | None = None,
-                  gain_curve: bool = False) -> FitProblem:
+                  gain_curve: bool = False, upsampled: Upsampled | None = None) -> FitProblem:
     """The fit problem of stage ``stage``: the record tracked at its pinion shaft, the
     other stages' lines left out (module docstring); its kinematics name every line of
     the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`); ``gain_curve``:
-    :func:`~pydiag.fit.problem.build_problem`'s."""
+    :func:`~pydiag.fit.problem.build_problem`'s; ``upsampled``: the record upsampled for
+    tracking at ``speed`` (:func:`~pydiag.gear.tracking.upsampled_record`), when made once
+    for every stage."""
     estimate = stage_speed(speed, machine, stage)
     kin = machine.stage_kinematics(stage, speed.speed_hz)
     top = max_band_freq_hz(kin)
     others = tuple(f for j in range(len(machine.stages)) if j != stage
                    for f in machine.stage_lines(j, speed.speed_hz, top))
-    tracked = _stage_channels(order_track(measurement, estimate, drop=drop), machine, stage)
+    tracked = _stage_channels(order_track(measurement, estimate, drop, upsampled), machine,
+                              stage)
     return build_problem(fmu_path, tracked, adapter, kinematics=kin,
                          featurizer=KinematicFeaturizer(kin, feature_mode, others),
                          fit_gain=fit_gain, speed_estimate=estimate, fixed_values=fixed_values,
@@ -197,16 +200,19 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
+    upsampled = upsampled_record(measurement, found, drop)  # once for every shaft and stage
     verdicts, spread, names = [None] * len(machine.stages), None, ()
     if baselines:
-        record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop)),
+        record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop,
+                                                          upsampled)),
                                str(measurement.metadata.get("file", "(in memory)")))
         verdicts, spread = judge_stages(machine, record, list(baselines))
         names = tuple(b.file for b in baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
-                                feature_mode, fit_gain, drop, gain_curve=gain_curve)
+                                feature_mode, fit_gain, drop, gain_curve=gain_curve,
+                                upsampled=upsampled)
         fit = diagnose(problem, estimator, speed_warning=False)
         verdict = verdicts[k]
         fault_mode, severity, suspect = fit.fault_mode, fit.severity, None

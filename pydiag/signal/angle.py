@@ -130,23 +130,34 @@ def _interpolation_filter() -> np.ndarray:
     return firwin(32 * UPSAMPLE + 1, 1.0 / UPSAMPLE, window=("kaiser", 9.0))
 
 
-def resample_at(signal: np.ndarray, position: np.ndarray) -> np.ndarray:
-    """``signal`` at fractional sample ``position``s: upsampled by :data:`UPSAMPLE` with a
-    band-limited filter, then read by a 4-point cubic."""
+def upsample(signal: np.ndarray) -> np.ndarray:
+    """``signal`` upsampled by :data:`UPSAMPLE` with a band-limited filter: what
+    :func:`resample_at` reads (made once for a signal read at several grids)."""
     from scipy.signal import resample_poly
 
-    up = resample_poly(np.asarray(signal, dtype=float), UPSAMPLE, 1, window=_interpolation_filter())
+    return resample_poly(np.asarray(signal, dtype=float), UPSAMPLE, 1,
+                         window=_interpolation_filter())
+
+
+def resample_at(signal: np.ndarray, position: np.ndarray,
+                upsampled: np.ndarray | None = None) -> np.ndarray:
+    """``signal`` at fractional sample ``position``s: upsampled by :data:`UPSAMPLE` with a
+    band-limited filter (or ``upsampled``, :func:`upsample` of it), then read by a 4-point
+    cubic."""
+    up = upsample(signal) if upsampled is None else upsampled
     return _cubic_at(up, np.asarray(position, dtype=float) * UPSAMPLE)
 
 
 def angular_resample(signals: list[np.ndarray], revs: np.ndarray, samples_per_rev: int,
-                     first_rev: float, n_revs: int) -> list[np.ndarray]:
+                     first_rev: float, n_revs: int,
+                     upsampled: list[np.ndarray] | None = None) -> list[np.ndarray]:
     """Computed order tracking: every signal at ``samples_per_rev`` equal angle steps per
     revolution, for ``n_revs`` revolutions from ``first_rev``.
 
     ``revs`` (revolutions at each sample) must increase strictly. Each signal is upsampled
-    by :data:`UPSAMPLE` with a band-limited filter, then read at the sample positions of
-    the angle grid by a 4-point cubic.
+    by :data:`UPSAMPLE` with a band-limited filter (``upsampled``: :func:`upsample` of
+    each, made once for several shafts' grids), then read at the sample positions of the
+    angle grid by a 4-point cubic.
     """
     if np.any(np.diff(revs) <= 0):
         raise MeasurementError("the shaft angle does not increase over the record: the speed "
@@ -155,4 +166,5 @@ def angular_resample(signals: list[np.ndarray], revs: np.ndarray, samples_per_re
     if grid[0] < revs[0] or grid[-1] > revs[-1]:
         raise MeasurementError("the angle grid leaves the record")
     position = np.interp(grid, revs, np.arange(revs.size, dtype=float))
-    return [resample_at(s, position) for s in signals]
+    ups = upsampled if upsampled is not None else [None] * len(signals)
+    return [resample_at(s, position, up) for s, up in zip(signals, ups)]
