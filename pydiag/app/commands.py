@@ -33,7 +33,7 @@ from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
 from pydiag.loop.diagnosis import Diagnosis, diagnose
-from pydiag.loop.stages import diagnose_machine, machine_speed, stage_problem
+from pydiag.loop.stages import diagnose_machine, machine_speed, pair_json, stage_problem
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement
 
@@ -173,21 +173,22 @@ def cmd_diagnose(args) -> int:
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
     if args.json:
-        out = {**result.to_dict(), "channels": list(problem.channels),
-               "measurement": str(args.measurement)}
+        name = machine.stages[0].name if machine is not None else "stage 1"
+        out = {**result.to_dict(), **pair_json(name, problem, result),
+               "channels": list(problem.channels), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0 if result.explained else 1
 
 
 def _staged(args) -> bool:
-    """Whether --machine describes several stages (diagnose and batch fit each); --baseline
-    without them is refused."""
+    """Whether the record is diagnosed stage by stage (diagnose and batch): a --machine of
+    several stages, or of one judged against --baseline; --baseline without a machine file
+    is refused."""
     machine = args.machine_description
-    staged = machine is not None and len(machine.stages) > 1
-    if args.baseline and not staged:
-        raise UsageError("--baseline judges the stages of a machine: give --machine FILE "
-                         "with its stages")
-    return staged
+    if args.baseline and machine is None:
+        raise UsageError("--baseline judges the stages of a machine against it: give "
+                         "--machine FILE (a machine of one stage will do)")
+    return machine is not None and (len(machine.stages) > 1 or bool(args.baseline))
 
 
 def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:

@@ -92,9 +92,7 @@ class MachineDiagnosis:
         return {"machine": self.machine.name, **self.speed.to_dict(),
                 "stages": [s.to_dict() for s in self.stages],
                 "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
-                "severity_scale": ("change against the baselines, classified on the paper's "
-                                   "simulated scale" if self.baselines else
-                                   "the paper's simulated scale (no baseline)")}
+                "severity_scale": SCALE_BASELINES if self.baselines else SCALE_PAPER}
 
     @property
     def warnings(self) -> list[str]:
@@ -103,6 +101,20 @@ class MachineDiagnosis:
         speed = self.speed.warning()
         return ([speed] if speed else []) + [f"{stage.name}: {w}" for stage in self.stages
                                              for w in stage.fit.warnings]
+
+
+#: What a severity is judged on, in the JSON's ``severity_scale``.
+SCALE_BASELINES = "change against the baselines, classified on the paper's simulated scale"
+SCALE_PAPER = "the paper's simulated scale (no baseline)"
+
+
+def pair_json(name: str, problem: FitProblem, fit: Diagnosis) -> dict:
+    """The machine-level JSON fields of a gear pair diagnosed alone (``diagnose
+    --teeth``, or a machine of one stage without a baseline), a machine of one stage
+    called ``name``: ``stages`` (that one, :func:`stage_diagnosis`), no baselines, and
+    the paper's scale; the pair's own fields stay at the top beside them."""
+    return {"stages": [stage_diagnosis(name, problem, fit).to_dict()], "baselines": [],
+            "healthy_spread_db": None, "severity_scale": SCALE_PAPER}
 
 
 def machine_speed(measurement: Measurement, machine: Machine, input_hz: float,
@@ -214,18 +226,26 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
                                 feature_mode, fit_gain, drop, gain_curve=gain_curve,
                                 upsampled=upsampled)
         fit = diagnose(problem, estimator, speed_warning=False)
-        verdict = verdicts[k]
-        fault_mode, severity, suspect = fit.fault_mode, fit.severity, None
-        if verdict is not None:
-            suspect = verdict.suspect
-            if not verdict.changed:
-                fault_mode, severity = "healthy", "none"
-            elif fault_mode == "healthy":
-                fault_mode, severity = "changed", "unknown"
-        elif fit.explained and fault_mode != "healthy":
-            suspect = _sideband_suspect(problem)
-        kin = problem.kinematics
-        stages.append(StageDiagnosis(stage.name, stage.pinion_teeth, stage.gear_teeth,
-                                     kin.f_pinion_hz, kin.f_gear_hz, kin.f_mesh_hz, fit,
-                                     verdict, fault_mode, severity, suspect))
+        stages.append(stage_diagnosis(stage.name, problem, fit, verdicts[k]))
     return MachineDiagnosis(machine, found, stages, names, spread)
+
+
+def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,
+                    verdict: StageVerdict | None = None) -> StageDiagnosis:
+    """A stage called ``name``: ``fit``, the diagnosis of its pair's ``problem``, and what
+    the baselines say of it (``verdict``; module docstring). A gear pair diagnosed alone
+    (``diagnose --teeth``) is a machine of this one stage."""
+    fault_mode, severity, suspect = fit.fault_mode, fit.severity, None
+    if verdict is not None:
+        suspect = verdict.suspect
+        if not verdict.changed:
+            fault_mode, severity = "healthy", "none"
+        elif fault_mode == "healthy":
+            fault_mode, severity = "changed", "unknown"
+    elif fit.explained and fault_mode != "healthy":
+        suspect = _sideband_suspect(problem)
+    kin = problem.kinematics  # at the model's speed if it cannot be set: the record's here
+    pinion_hz = problem.speed.speed_hz if problem.speed is not None else kin.f_pinion_hz
+    return StageDiagnosis(name, kin.n_pinion, kin.n_gear, pinion_hz,
+                          pinion_hz * kin.n_pinion / kin.n_gear, pinion_hz * kin.n_pinion, fit,
+                          verdict, fault_mode, severity, suspect)

@@ -29,6 +29,7 @@ def test_simulate_writes_channels_and_operating_point(short_measurement):
 @pytest.mark.parametrize("extra,message", [
     (["--column", "nope"], "not in the file"),
     (["--column", "acc", "--particles", "1"], "--particles: 1 must be >= 2"),
+    (["--baseline", "b.csv"], "give --machine FILE (a machine of one stage will do)"),
 ])
 def test_diagnose_rejects_bad_requests(gear_fmu, short_measurement, extra, message):
     res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--measurement",

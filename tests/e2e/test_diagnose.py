@@ -38,6 +38,13 @@ def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
     assert {"parameters", "fault_mode", "severity", "error", "evaluations", "elapsed_s"} <= set(data)
     assert set(data["parameters"]) == set(NAMES)
     assert data["evaluations"] == 8 and data["error"] > 0
+    # a pair is a machine of one stage: the JSON of a machine's diagnosis, one stage
+    (stage,) = data["stages"]
+    assert (stage["pinion_teeth"], stage["gear_teeth"]) == (14, 21)  # GearPair's defaults
+    assert stage["mesh_hz"] == pytest.approx(14 * data["speed_hz"])
+    assert (stage["fault_mode"], stage["severity"]) == (data["fault_mode"], data["severity"])
+    assert stage["model"]["parameters"] == data["parameters"] and stage["baseline"] is None
+    assert data["baselines"] == [] and "no baseline" in data["severity_scale"]
     assert "fault mode" in res.stdout
     # eight evaluations are too few to trust: whatever is warned is in the JSON as well
     warned = res.stderr.splitlines()

@@ -37,6 +37,23 @@ def test_the_broken_tooth_has_the_larger_tooth_contrast(gear_fmu, tmp_path, load
     assert broken["tooth_severity"] != "none"
 
 
+def test_a_machine_of_one_stage_is_judged_against_its_baseline(gear_fmu, tmp_path):
+    # the verdicts are the baseline's: a small fit will do
+    judged = {}
+    for name in ("h30hz90", "b30hz90"):
+        out = tmp_path / f"{name}.json"
+        res = run_cli("-m", "pydiag", "diagnose", "--fmu", str(gear_fmu), "--machine",
+                      str(ROOT / "examples" / "gfd_spectraquest.toml"), "--measurement",
+                      str(DATA / f"{name}.csv.gz"), "--sample-rate", "12900", "--baseline",
+                      str(DATA / "h30hz90.csv.gz"), "--json", str(out), "--quiet",
+                      "--particles", "4", "--iterations", "2", "--polish", "0")
+        assert res.returncode in (0, 1), res.stderr
+        judged[name] = json.loads(out.read_text())["stages"]
+    (itself,), (broken,) = judged.values()
+    assert itself["fault_mode"] == "healthy" and itself["baseline"]["verdict"] == "healthy"
+    assert broken["baseline"]["verdict"] == "changed" and broken["fault_mode"] != "healthy"
+
+
 def test_indicators_of_a_shared_record(tmp_path):
     out = tmp_path / "ind.json"
     res = run_cli("-m", "pydiag", "indicators", "--measurement", str(DATA / "b30hz90.csv.gz"),
