@@ -11,10 +11,10 @@ from pathlib import Path
 
 from pydiag.app import batch
 from pydiag.app.baselines import baseline_records
-from pydiag.app.reading import channels_to_read, read_input
 from pydiag.app.formatting import (format_facts, format_indicators,
                                    format_machine_diagnosis, format_machine_report,
                                    format_regression, format_result)
+from pydiag.app.reading import channels_to_read, read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
@@ -192,8 +192,8 @@ def _staged(args) -> bool:
 
 
 def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
-    """diagnose --machine with several stages: every stage fitted, judged against the
-    baselines when there are some."""
+    """diagnose --machine stage by stage (:func:`_staged`): every stage fitted, judged
+    against the baselines when there are some."""
     settings = problem_settings(args)
     baselines = baseline_records(args, machine, settings["speed"])
     update, close = progress_bar(args.quiet)

@@ -9,9 +9,9 @@ from typing import Callable
 
 from pydiag.app.commands import (check_outputs, estimator_settings, problem_of,
                                  problem_settings, progress_bar)
-from pydiag.app.reading import read_input
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
                                    format_history, format_loop_step)
+from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
