@@ -11,17 +11,36 @@ parameter, bounded least squares (trust-region reflective) for several.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pydiag.fit.problem import FitProblem
 
 #: The search stops within this share of a parameter's range.
 XTOL = 1e-4
+#: A parameter whose whole range moves the residuals by no more than this (relative to
+#: their size) is not seen by the problem's features (its lines lie outside every feature
+#: bin: what is left is leakage, 1e-13 of a line): it stays off, not wherever the search
+#: happened to leave it.
+UNSEEN = 1e-9
 
 
-def fit_affine(problem: FitProblem) -> tuple[dict[str, float], float]:
-    """(value of each of ``problem``'s parameters, the root-sum-square Eq. (12) error
-    there), for a model whose outputs are affine in them (the caller knows they are)."""
+@dataclass(frozen=True)
+class AffineFit:
+    """What :func:`fit_affine` found: each parameter's value (by name), the root-sum-square
+    Eq. (12) error there, and the parameters the problem's features do not see (left off:
+    a fit after this one must not move them either)."""
+
+    values: dict[str, float]
+    error: float
+    unseen: tuple[str, ...]
+
+
+def fit_affine(problem: FitProblem) -> AffineFit:
+    """The fit of ``problem``'s parameters, for a model whose outputs are affine in them
+    (the caller knows they are). A parameter the problem's features do not see
+    (:data:`UNSEEN`: a shaft order outside every feature band) stays at its off value."""
     params = problem.parameters
     low = np.array([p.low for p in params])
     with problem.spec.open() as plant:
@@ -31,30 +50,54 @@ def fit_affine(problem: FitProblem) -> tuple[dict[str, float], float]:
             x = low.copy()
             x[j] = p.high
             slopes.append(problem.simulate(plant, x) - y_low)
-    residuals = _residuals(problem, y_low, np.array(slopes))
+    every = _residuals(problem, y_low, np.array(slopes))
+    off_all = np.array([(p.off - p.low) / (p.high - p.low) for p in params])
+    r0 = every(off_all)
+
+    def moved(j: int, end: float) -> float:  # parameter j from off to an end, the rest off
+        u = off_all.copy()
+        u[j] = end
+        return float(np.linalg.norm(every(u) - r0))
+    seen = np.array([max(moved(j, 0.0), moved(j, 1.0)) > UNSEEN * (1.0 + np.linalg.norm(r0))
+                     for j in range(len(params))])
+
+    def full(u: np.ndarray) -> np.ndarray:  # the seen parameters' places, the others off
+        out = off_all.copy()
+        out[seen] = u
+        return out
+
+    def residuals(u: np.ndarray) -> np.ndarray:
+        return every(full(u))
 
     def error(u: np.ndarray) -> float:
         return float(np.linalg.norm(residuals(u)))
 
+    candidates = _search(residuals, error, off_all[seen]) if seen.any() else [np.empty(0)]
+    u = full(min(candidates, key=error))
+    return AffineFit({p.name: p.low + uj * (p.high - p.low) for p, uj in zip(params, u)},
+                     float(np.linalg.norm(every(u))),
+                     tuple(p.name for p, s in zip(params, seen) if not s))
+
+
+def _search(residuals, error, off: np.ndarray) -> list[np.ndarray]:
+    """Candidate places (0..1) of the parameters that ``residuals`` depend on, ``off``
+    their off places: the bounded minimum for one, least squares from several starts for
+    several (:func:`fit_affine`)."""
     import scipy.optimize  # here: importing it takes 0.3 s of every command's start
 
-    if len(params) == 1:
+    if off.size == 1:
         found = scipy.optimize.minimize_scalar(lambda u: error(np.array([u])), bounds=(0.0, 1.0),
                                                method="bounded", options={"xatol": XTOL})
-        candidates = [np.array([float(found.x)]), np.zeros(1), np.ones(1)]
-    else:  # from the middle of the box, from where every parameter is off, and from each
-        # parameter's own best with the others off (a line added to a weak one of another
-        # phase first lowers its amplitude: from off, the descent can stop short of it)
-        off = np.clip([(p.off - p.low) / (p.high - p.low) for p in params], XTOL, 1 - XTOL)
-        starts = [np.full(len(params), 0.5)]
-        starts += [off] if np.any(np.abs(off - 0.5) > XTOL) else []
-        alone = np.array([_alone(error, off, j) for j in range(len(params))])
-        starts.append(alone)
-        candidates = [scipy.optimize.least_squares(
-            residuals, u0, bounds=(0.0, 1.0), xtol=XTOL).x
+        return [np.array([float(found.x)]), np.zeros(1), np.ones(1)]
+    # from the middle of the box, from where every parameter is off, and from each
+    # parameter's own best with the others off (a line added to a weak one of another
+    # phase first lowers its amplitude: from off, the descent can stop short of it)
+    off = np.clip(off, XTOL, 1 - XTOL)
+    starts = [np.full(off.size, 0.5)]
+    starts += [off] if np.any(np.abs(off - 0.5) > XTOL) else []
+    starts.append(np.array([_alone(error, off, j) for j in range(off.size)]))
+    return [scipy.optimize.least_squares(residuals, u0, bounds=(0.0, 1.0), xtol=XTOL).x
             for u0 in starts]
-    u = min(candidates, key=error)
-    return {p.name: p.low + uj * (p.high - p.low) for p, uj in zip(params, u)}, error(u)
 
 
 #: Steps from a parameter's off value towards each end of its range, as shares of the way,

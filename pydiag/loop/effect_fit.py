@@ -116,7 +116,7 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
                           fixed_values={**problem.fmu_values(base.parameters), **machine},
                           transfer=transfer)
     if not effect.reshapes_base:
-        return held, (fit_affine(held)[0] if effect.affine else estimator.fit(held).parameters)
+        return held, (fit_affine(held).values if effect.affine else estimator.fit(held).parameters)
     fitted = estimator.replace(polish_starts=RESHAPE_STARTS, polish_evaluations=max(
         1, estimator.polish_evaluations // (2 * RESHAPE_STARTS))).fit(held).parameters
     names = {p.name for p in own}

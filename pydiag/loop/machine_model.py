@@ -351,11 +351,14 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
     effect and the effect's held-out fit; every parameter is polished from there as well
     (one missing starts off), and the better fit is kept: the error is then not above that
-    fit's either."""
+    fit's either. An affine parameter the problem's features do not see (a shaft's order
+    outside every feature band: :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off
+    through the polishes, which would otherwise leave it wherever their steps wander."""
     names = {p.name for p in model.effect_parameters}
     own = tuple(p for p in problem.parameters if p.name not in names)
     added = tuple(p for p in problem.parameters if p.name in names)
     later = effect_estimator or estimator
+    pinned: dict[str, float] = {}  # lines outside every feature band: nothing moves them
     if not added:
         best = estimator.fit(problem)
     else:
@@ -370,16 +373,28 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
                 **fmu_values(own, base.parameters), **fmu_values(affine, off)}))
             values, error = dict(effects.parameters), effects.error
         if affine:  # n + 1 simulations, however many parameters
-            fitted, error = fit_affine(problem.derive(parameters=affine, fixed_values={
+            fitted = fit_affine(problem.derive(parameters=affine, fixed_values={
                 **fmu_values(own, base.parameters), **fmu_values(other, {**off, **values})}))
-            values.update(fitted)
-        best = later.refine(problem, {**base.parameters,
-                                     **(values if error < base.error else off)})
+            values.update(fitted.values)
+            error = fitted.error
+            pinned = {name: off[name] for name in fitted.unseen}
+        best = later.refine(_held(problem, pinned), {**base.parameters,
+                                                     **(values if error < base.error else off)})
     if start is not None:
-        again = later.refine(problem, {p.name: start.get(p.name, p.off)
-                                       for p in problem.parameters})
+        again = later.refine(_held(problem, pinned), {p.name: start.get(p.name, p.off)
+                                                      for p in problem.parameters})
         best = again if again.error < best.error else best
-    return best
+    return dataclasses.replace(best, parameters={**best.parameters, **pinned})
+
+
+def _held(problem: FitProblem, values: dict[str, float]) -> FitProblem:
+    """``problem`` with the parameters named in ``values`` held there."""
+    if not values:
+        return problem
+    held = [p for p in problem.parameters if p.name in values]
+    return problem.derive(parameters=tuple(p for p in problem.parameters
+                                           if p.name not in values),
+                          fixed_values=fmu_values(held, values))
 
 
 def compare_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,

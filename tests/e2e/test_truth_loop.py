@@ -358,7 +358,8 @@ def test_an_affine_strike_amplitude_is_fitted_from_two_simulations(gear_fmu, tru
                           fixed_values=problem.fmu_values(base.parameters),
                           featurizer=measured_spectra(problem, 0.01, featurizer=envelope).featurizer,
                           fixed_gains=base.gains)
-    fitted, error = fit_affine(held)
+    fit = fit_affine(held)
+    fitted, error = fit.values, fit.error
     swarm = FaultEstimator(**EFFECT_REFIT).fit(held)
     assert fitted["A_b"] == pytest.approx(swarm.parameters["A_b"], rel=0.01), (fitted, swarm)
     assert error <= swarm.error * (1 + 1e-6)

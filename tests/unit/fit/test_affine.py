@@ -32,14 +32,15 @@ def problem(truth: float, low: float = 0.0, high: float = 10.0):
 
 def test_the_value_is_found_from_two_simulations():
     p, calls = problem(3.7)
-    fitted, error = fit_affine(p)
+    fit = fit_affine(p)
+    fitted, error = fit.values, fit.error
     assert fitted["a"] == pytest.approx(3.7, abs=1e-2)
     assert error < 1e-2 and sorted(calls) == [0.0, 10.0]
 
 
 def test_a_value_beyond_the_range_stops_at_its_end():
     p, _ = problem(14.0)
-    fitted, _ = fit_affine(p)
+    fitted = fit_affine(p).values
     assert fitted["a"] == 10.0
 
 
@@ -77,7 +78,8 @@ def lines(truth: list[float], high: float = 10.0, linear: bool = False, low: flo
 
 def test_several_values_are_found_from_one_simulation_more_than_parameters():
     p, calls = lines([2.5, 0.0, 7.25])
-    fitted, error = fit_affine(p)
+    fit = fit_affine(p)
+    fitted, error = fit.values, fit.error
     assert [fitted[f"a{j}"] for j in range(3)] == pytest.approx([2.5, 0.0, 7.25], abs=1e-2)
     assert error < 1e-2
     assert sorted(calls) == [(0.0, 0.0, 0.0), (0.0, 0.0, 10.0), (0.0, 10.0, 0.0),
@@ -86,7 +88,7 @@ def test_several_values_are_found_from_one_simulation_more_than_parameters():
 
 def test_several_values_beyond_the_range_stop_at_its_end():
     p, _ = lines([12.0, 3.0, 0.5])
-    fitted, _ = fit_affine(p)
+    fitted = fit_affine(p).values
     assert [fitted[f"a{j}"] for j in range(3)] == pytest.approx([10.0, 3.0, 0.5], abs=1e-2)
 
 
@@ -97,7 +99,8 @@ def test_features_linear_in_the_signal_are_taken_once_a_simulation():
     found = {}
     for linear in (False, True):
         p, _ = lines([2.5, -1.0, 7.25], linear=linear, low=-10.0)
-        fitted, error = fit_affine(p)
+        fit = fit_affine(p)
+        fitted, error = fit.values, fit.error
         found[linear] = [fitted[f"a{j}"] for j in range(3)]
         assert np.abs(found[linear]) == pytest.approx([2.5, 1.0, 7.25], abs=1e-2)
         assert error < 1e-2
@@ -106,3 +109,22 @@ def test_features_linear_in_the_signal_are_taken_once_a_simulation():
         else:
             assert len(p.spectra) > 10  # one an evaluation
     assert found[True] == pytest.approx(found[False], abs=1e-6)
+
+
+@pytest.mark.parametrize("linear", [False, True])
+def test_a_parameter_whose_lines_no_feature_sees_stays_off(linear):
+    """A shaft's order outside every feature band: the search could leave it anywhere (it
+    moves no residual), and the comparison, whose bins do see it, would find a line the
+    record has not. Here the features stop below the third line (13 cycles)."""
+    p, _ = lines([2.5, 1.0, 7.25], linear=linear)
+    cut = 12
+    whole, features = p.residuals_of, p.linear_features
+    measured = -whole(np.zeros((1, 400)))[:cut]
+    p.residuals_of = lambda y: whole(y)[:cut]
+    p.residuals_of_amplitudes = lambda amps: amps[0] - measured
+    p.linear_features = lambda y: (None if not linear else [f[:cut] for f in features(y)])
+    fit = fit_affine(p)
+    fitted, error = fit.values, fit.error
+    assert fitted["a2"] == 0.0 and fit.unseen == ("a2",)  # off: the low end
+    assert [fitted["a0"], fitted["a1"]] == pytest.approx([2.5, 1.0], abs=1e-2)
+    assert error < 1e-2
