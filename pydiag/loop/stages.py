@@ -112,7 +112,10 @@ def pair_json(name: str, problem: FitProblem, fit: Diagnosis) -> dict:
     """The machine-level JSON fields of a gear pair diagnosed alone (``diagnose
     --teeth``, or a machine of one stage without a baseline), a machine of one stage
     called ``name``: ``stages`` (that one, :func:`stage_diagnosis`), no baselines, and
-    the paper's scale; the pair's own fields stay at the top beside them."""
+    the paper's scale; the pair's own fields stay at the top beside them. None of them for
+    a model that is no gear pair (no kinematics: an adapter's mass and spring)."""
+    if problem.kinematics is None:
+        return {}
     return {"stages": [stage_diagnosis(name, problem, fit).to_dict()], "baselines": [],
             "healthy_spread_db": None, "severity_scale": SCALE_PAPER}
 
