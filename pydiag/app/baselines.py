@@ -24,9 +24,9 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
     """The --baseline records as the machine sees them (their speed and every shaft's TSA),
     read and made once; ``kept``: those kept for the machine in the history at the
     record's operating point (:func:`~pydiag.gear.machine_indicators.at_speed`)."""
-    nominal_hz = args.rpm / 60.0
-    out = []
+    out: list[MachineRecord] = []
     for path in args.baseline or []:
+        nominal_hz = args.rpm / 60.0  # the machine file's when --rpm is not given
         if path != KEPT:
             out.append(machine_record(read_input(args, path), machine, speed, nominal_hz))
             continue
