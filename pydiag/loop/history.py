@@ -96,11 +96,16 @@ TABLES = {"runs": COLUMNS,
                         "speed_hz", "record")}
 
 
+def _tables(con: sqlite3.Connection) -> set[str]:
+    """The database's tables, SQLite's own left out."""
+    return {r[0] for r in con.execute(
+        "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'")}
+
+
 def _check_schema(con: sqlite3.Connection, db: str | Path) -> None:
     """OutputError unless the database holds nothing but our tables (:data:`TABLES`),
     each with our columns."""
-    tables = sorted(r[0] for r in con.execute(
-        "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'"))
+    tables = sorted(_tables(con))
     foreign = [t for t in tables if t not in TABLES]
     if foreign:
         raise OutputError(f"{db} is not a pydiag run history (it holds table(s) "
@@ -181,10 +186,6 @@ def recording(db: str | Path, comparison, measurement_path: str, model_name: str
         raise
     finally:
         con.close()
-
-
-def _tables(con: sqlite3.Connection) -> set[str]:
-    return {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
 
 
 def runs(db: str | Path) -> list[dict]:
