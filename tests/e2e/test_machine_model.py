@@ -104,7 +104,7 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
         capsys, "accept", "gear_tooth_fault", "--machine", str(machine), "--stage", "stage 2")
     # the idler's odd orders on stage 2 (its even ones are the input's): 7 and 9 lie in
     # no feature band, so the fit cannot see them and must leave them off (the compare's
-    # bins do see them: a polish that let them wander gave an error of hundreds)
+    # bins do see them: wherever a polish left them, they would be lines the record lacks)
     r = run_cli("-m", "pydiag", "accept", "pinion_shaft_orders", "--machine", str(machine),
                 "--stage", "2")
     assert r.returncode == 0, r.stderr
