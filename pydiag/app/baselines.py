@@ -11,8 +11,8 @@ from pydiag.app.formatting import format_kept_baselines
 from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_indicators import (BASELINE_SPEED_SHARE, MachineRecord, at_speed,
-                                            machine_record)
+from pydiag.gear.machine_indicators import MachineRecord, machine_record
+from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE, at_speed
 from pydiag.gear.speed import SpeedSettings
 from pydiag.loop import history
 
@@ -23,7 +23,7 @@ KEPT = "kept"
 def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
     """The --baseline records as the machine sees them (their speed and every shaft's TSA),
     read and made once; ``kept``: those kept for the machine in the history at the
-    record's operating point (:func:`~pydiag.gear.machine_indicators.at_speed`)."""
+    record's operating point (:func:`~pydiag.gear.stage_judge.at_speed`)."""
     out: list[MachineRecord] = []
     for path in args.baseline or []:
         nominal_hz = args.rpm / 60.0  # the machine file's when --rpm is not given

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
-from pydiag.gear.machine_indicators import MachineReport
+from pydiag.gear.stage_judge import MachineReport
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
@@ -191,16 +191,20 @@ def format_machine_report(report: MachineReport) -> str:
         lines += ["", "stages     : not judged: give a baseline record of the machine in a "
                   "known healthy state (--baseline)"]
         return "\n".join(lines)
+    first = report.stages[0]
+    fm4 = ("" if first.fm4_threshold is None else
+           f"; FM4 {first.fm4_threshold:.2f} names a suspect")
     lines += ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'pinion dB':>11}{'gear dB':>9}"
-              f"  verdict (threshold {report.stages[0].threshold_db:.2f} dB = "
-              f"{report.stages[0].threshold_db / report.spread_db:g} x the healthy spread "
-              f"{report.spread_db:.2f} dB)"]
+              f"{'FM4 p/g':>14}  verdict (threshold {first.threshold_db:.2f} dB = "
+              f"{first.threshold_db / report.spread_db:g} x the healthy spread "
+              f"{report.spread_db:.2f} dB{fm4})"]
     for v in report.stages:
         verdict = "changed" if v.changed else "healthy"
         if v.suspect:
-            verdict += f", {v.suspect} suspect"
+            verdict += f", {v.suspect} suspect ({v.suspect_by})"
         lines.append(f"{v.stage:<16}{f'{v.pinion_teeth}/{v.gear_teeth}':>7}{v.mesh_hz:>10.2f}"
-                     f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}  {verdict}")
+                     f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}"
+                     f"{f'{v.pinion.fm4_change:+.2f}/{v.gear.fm4_change:+.2f}':>14}  {verdict}")
     lines.append(f"baselines  : {', '.join(report.baselines)}")
     return "\n".join(lines)
 

@@ -10,7 +10,7 @@ stages' mesh harmonics and sidebands that are none of its own lines
 simulated scale (:mod:`pydiag.loop.diagnosis`).
 
 With baselines, each stage is also judged by the change of its shafts' residual energy
-against them (:mod:`pydiag.gear.machine_indicators`): a stage that did not change is
+against them (:mod:`pydiag.gear.stage_judge`): a stage that did not change is
 ``healthy`` whatever the paper's scale says of it; one that changed keeps the model's
 fault mode and severity (``changed`` where the model finds nothing it can classify), and
 its suspect is the shaft that changed clearly more. Without baselines the classes are
@@ -35,9 +35,9 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_indicators import (MachineRecord, StageVerdict, judge_stages,
-                                            shaft_records)
+from pydiag.gear.machine_indicators import MachineRecord, shaft_records
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
+from pydiag.gear.stage_judge import StageVerdict, judge_stages
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.loop.diagnosis import Diagnosis, diagnose
 from pydiag.model.adapter import Adapter

@@ -48,7 +48,8 @@ def test_stages_judged_against_a_repeated_healthy_run(tmp_path):
     first, second = faulty["stages"]
     assert (first["name"], first["pinion_teeth"], first["gear_teeth"]) == ("input stage", 32, 96)
     # the chipped input pinion and the eccentric idler pinion: both of stage 1's shafts
-    # changed, and stage 2's pinion (the idler) more than its gear
+    # changed, and stage 2's pinion (the idler) more than its gear (stage 1's suspect is
+    # named with the tacho's angle: test_diagnose_fits_every_stage...)
     assert first["verdict"] == "changed", first
     assert second["verdict"] == "changed" and second["suspect"] == "pinion", second
     assert [s["name"] for s in faulty["shafts"]] == ["input", "idler", "output"]
@@ -100,6 +101,11 @@ def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, 
     # its class would hang on the swarm's rounding
     assert stages[1]["fault_mode"] not in ("healthy", "no_diagnosis")
     assert stages[0]["baseline"]["verdict"] == "changed"
+    # the chipped input pinion: the input's TSA grew impulsive with the tacho's angle (the
+    # machine file's); the mesh's angle misses the idler's once-a-turn wobble of the input's
+    # angle and smears the chip over the turn (docs/gearbox.md)
+    assert stages[0]["suspect"] == "pinion", stages[0]["baseline"]
+    assert stages[0]["baseline"]["suspect_by"] == "impulsiveness"
     assert stages[1]["suspect"] == "pinion" and stages[1]["baseline"]["verdict"] == "changed"
     assert {"tooth_contrast", "transmission_error", "severity", "model"} <= set(stages[0])
 

@@ -1,7 +1,8 @@
 """A two-stage gearbox's vibration, written from the shafts' angles (not by any model the
 tests fit): each stage's mesh harmonics amplitude-modulated by its two shafts, a local
 tooth defect as a short dip of its mesh's amplitude once per turn of the shaft carrying
-it, white noise, and an input speed that wanders by 0.05 %."""
+it, a runout as a once-a-turn swing of its mesh's amplitude and timing, white noise, and
+an input speed that wanders by 0.05 %."""
 
 import numpy as np
 
@@ -26,10 +27,13 @@ SHORT_MACHINE = machine_from_dict({"name": "short-period test box",
 
 def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
                    depth: float = 0.8, noise: float = 0.3, machine=MACHINE,
-                   also: tuple[tuple[int, int], ...] = ()) -> Measurement:
+                   also: tuple[tuple[int, int], ...] = (),
+                   runout: tuple[tuple[int, int, float], ...] = ()) -> Measurement:
     """A record of ``machine`` at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2
     output) carries a broken tooth of ``depth`` on stage ``stage``'s mesh, and so does each
-    (shaft, stage) of ``also``."""
+    (shaft, stage) of ``also``; each (shaft, stage, size) of ``runout``: the gear of that
+    shaft on that stage runs out, its mesh's amplitude swinging by ``size`` and its timing
+    by ``size`` radians of the mesh once a turn."""
     MACHINE = machine  # noqa: N806 (the box the record is of)
     rng = np.random.default_rng(seed)
     n = int(FS * DURATION)
@@ -47,5 +51,12 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
             if on_stage == k:
                 angle = np.mod(float(MACHINE.shaft_ratio(shaft)) * revs, 1.0)
                 gain -= depth * np.exp(-0.5 * ((angle - 0.3) / 0.01) ** 2)
-        x += gain * sum(np.cos(2 * np.pi * h * order * revs + h) / h for h in (1, 2, 3))
+        timing = np.zeros(n)
+        for shaft, on_stage, size in runout:
+            if on_stage == k:
+                turn = 2 * np.pi * float(MACHINE.shaft_ratio(shaft)) * revs
+                gain += size * np.cos(turn)
+                timing += size * np.sin(turn)
+        x += gain * sum(np.cos(2 * np.pi * h * order * revs + h * timing + h) / h
+                        for h in (1, 2, 3))
     return Measurement({"acc": x + noise * rng.standard_normal(n)}, FS)

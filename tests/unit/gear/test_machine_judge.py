@@ -6,7 +6,8 @@ import pytest
 from truth.gearbox import INPUT_HZ, MACHINE, SHORT_MACHINE, gearbox_record as record
 
 from pydiag.core.errors import MeasurementError
-from pydiag.gear.machine_indicators import judge_stages, machine_record, machine_report
+from pydiag.gear.machine_indicators import machine_record
+from pydiag.gear.stage_judge import judge_stages, machine_report
 from pydiag.gear.speed import SpeedSettings
 
 
@@ -75,3 +76,23 @@ def test_a_slower_shafts_fault_is_not_called_the_faster_ones(short_baseline):
 def test_a_fault_on_each_of_two_stages_names_each_stages_own_shaft(short_baseline):
     first, second = judged_short(short_baseline, faulty_shaft=0, stage=0, also=((1, 1),))
     assert (first.suspect, second.suspect) == ("pinion", "pinion"), (first, second)
+
+
+def test_a_chipped_pinion_is_named_though_the_idlers_other_gear_runs_out(short_baseline):
+    # the PHM09 spur 2 case's shape: the input pinion's tooth broken, the idler's pinion of
+    # stage 2 running out. The runout moves the idler's residual energy more than the
+    # broken tooth moves the input's (the energies alone named the idler, the wrong
+    # shaft); the broken tooth makes the input's TSA impulsive, the runout does not
+    first, second = judged_short(short_baseline, faulty_shaft=0, stage=0, runout=((1, 1, 0.2),))
+    assert first.gear.change_db > first.pinion.change_db + first.threshold_db, first
+    assert first.pinion.fm4_change > first.fm4_threshold > first.gear.fm4_change, first
+    assert (first.suspect, first.suspect_by) == ("pinion", "impulsiveness"), first
+    assert (second.suspect, second.suspect_by) == ("pinion", "residual energy"), second
+
+
+def test_a_runout_alone_is_named_by_its_energy_not_its_impulsiveness(short_baseline):
+    # the output gear running out: its shaft carries one gear, and no kurtosis rises
+    first, second = judged_short(short_baseline, runout=((2, 1, 0.2),))
+    assert abs(second.gear.fm4_change) < second.fm4_threshold, second
+    assert (second.suspect, second.suspect_by) == ("gear", "residual energy"), second
+    assert not first.changed, first

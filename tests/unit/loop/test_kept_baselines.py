@@ -9,7 +9,8 @@ import pytest
 from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record as record
 
 from pydiag.core.errors import OutputError, UsageError
-from pydiag.gear.machine_indicators import MachineRecord, at_speed, judge_stages, machine_record
+from pydiag.gear.machine_indicators import MachineRecord, machine_record
+from pydiag.gear.stage_judge import at_speed, judge_stages
 from pydiag.gear.speed import SpeedSettings
 from pydiag.loop import history
 
@@ -28,6 +29,18 @@ def test_a_kept_baseline_judges_as_the_record_it_was_kept_from(tmp_path, healthy
     assert again.record.speed.speed_hz == healthy.speed.speed_hz
     faulty = machine_record(record(3, 0, 0), MACHINE, SpeedSettings("mesh"), INPUT_HZ)
     assert judge_stages(MACHINE, faulty, [again.record]) == judge_stages(MACHINE, faulty, [healthy])
+
+
+def test_a_baseline_kept_before_fm4s_halves_were_judges_by_energy_alone(healthy):
+    data = healthy.to_dict()
+    for shaft in data["shafts"]:
+        del shaft["fm4_halves"]
+    old = MachineRecord.from_dict(data)
+    faulty = machine_record(record(3, 0, 0), MACHINE, SpeedSettings("mesh"), INPUT_HZ)
+    verdicts, _ = judge_stages(MACHINE, faulty, [old])
+    assert [v.fm4_threshold for v in verdicts] == [None, None]
+    assert verdicts[0].suspect == "pinion" and verdicts[0].suspect_by == "residual energy"
+    assert judge_stages(MACHINE, faulty, [healthy])[0][0].fm4_threshold > 0
 
 
 def test_baselines_are_the_machines_own_and_can_be_forgotten(tmp_path, healthy):

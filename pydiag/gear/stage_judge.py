@@ -1,0 +1,257 @@
+"""Each stage of a machine judged against the machine's own healthy state: the shafts' TSA
+facts of a record (:mod:`pydiag.gear.machine_indicators`) against those of its baselines.
+
+How much two healthy records of the machine differ is estimated from the baselines
+themselves: the residual energy of each half of a baseline against the other half, and,
+with two or more baselines, of each baseline against the others, pooled over every shaft
+and channel as a root mean square (``spread_db``). A stage is **changed** when one of its
+two shafts' change (up or down) exceeds ``K_SPREAD`` times that spread.
+
+Its ``suspect`` is named first by **impulsiveness**: a local tooth fault (a chip, a crack)
+strikes once a turn of its shaft, so that shaft's TSA grows impulsive, and its kurtosis
+(FM4 of the difference signal, the classical detector of a local fault) rises; a runout,
+wear or another stage's change spreads over the turn and does not raise it. A shaft whose
+FM4 rose by more than ``K_SPREAD`` times FM4's healthy spread (estimated as the energy's
+is), and by as much more than the other shaft's, is the suspect, if its gear on this stage
+is its only one (a shaft carrying two gears says which shaft, not which of its gears). A
+slower shaft's local fault reaches a faster shaft's TSA once in every n of its turns, at
+1/n of its weight, so it raises the faster shaft's FM4 less than its own. Otherwise the
+suspect is the shaft whose residual energy changed more than the other's by more than the
+stage's threshold (null: neither clearly did). Where a faster shaft turns a whole number
+of times per turn of the slower one, the slower shaft's fault reaches the faster shaft's
+TSA on their common lines (a local fault's lines cover every order), so a change of both
+is no evidence against the slower one: the suspect stays null unless one stands clearly
+higher. A shaft carrying two gears changes with either stage's change (a runout of its
+second stage's pinion moves its residual energy), which is why impulsiveness, the
+specific evidence, is asked first. Without a baseline nothing is judged: there is no
+absolute scale of a real machine's residual energy.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pydiag.core.errors import MeasurementError
+from pydiag.core.measurement import Measurement
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_indicators import (MachineRecord, ShaftRecord, finite_or_none,
+                                           machine_record)
+from pydiag.gear.speed import SpeedSettings
+
+#: A stage is changed when a shaft's residual energy moved by more than this many times
+#: the spread of healthy records (module docstring): ~4 standard deviations, so that the
+#: eight or so comparisons of a record stay clear of chance.
+K_SPREAD = 4.0
+#: The spread is never taken below this (dB): two halves of one record agree better than
+#: two records taken on different days can.
+MIN_SPREAD_DB = 0.1
+#: Nor FM4's below this (a kurtosis, 3 for Gaussian noise), for the same reason.
+MIN_FM4_SPREAD = 0.1
+#: A baseline is at a record's operating point when its input speed lies within this share
+#: of the record's nominal input speed (:func:`at_speed`): a motor slips a few percent
+#: under load, and a machine's operating speeds lie further apart. The load is not told
+#: by a record: which baselines share it is the user's to say.
+BASELINE_SPEED_SHARE = 0.05
+
+
+@dataclass(frozen=True)
+class ShaftChange:
+    """A shaft's residual energy against the baseline's, dB (mean over channels), with
+    each channel's; and its FM4 against the baseline's (mean over channels; nan: not
+    known)."""
+
+    shaft: str
+    change_db: float
+    channels_db: dict[str, float]
+    fm4_change: float = math.nan
+
+
+@dataclass(frozen=True)
+class StageVerdict:
+    """One stage judged against the baseline (module docstring).
+
+    Attributes:
+        stage: its name; pinion_teeth, gear_teeth; mesh_hz: its mesh frequency
+        pinion, gear: the change of its two shafts
+        changed: a shaft changed beyond ``threshold_db``; suspect: "pinion", "gear" or None
+        fm4_threshold: the FM4 rise that names a suspect (None: FM4's spread not known)
+        suspect_by: "impulsiveness" or "residual energy" (module docstring), None with no
+            suspect
+    """
+
+    stage: str
+    pinion_teeth: int
+    gear_teeth: int
+    mesh_hz: float
+    pinion: ShaftChange
+    gear: ShaftChange
+    threshold_db: float
+    changed: bool
+    suspect: str | None
+    fm4_threshold: float | None = None
+    suspect_by: str | None = None
+
+    def to_dict(self) -> dict:
+        def shaft(change: ShaftChange) -> dict:
+            return {"name": change.shaft, "change_db": change.change_db,
+                    "channels_db": change.channels_db,
+                    "fm4_change": finite_or_none(change.fm4_change)}
+        return {"name": self.stage, "pinion_teeth": self.pinion_teeth,
+                "gear_teeth": self.gear_teeth, "mesh_hz": self.mesh_hz,
+                "pinion_shaft": shaft(self.pinion), "gear_shaft": shaft(self.gear),
+                "threshold_db": self.threshold_db, "fm4_threshold": self.fm4_threshold,
+                "verdict": "changed" if self.changed else "healthy",
+                "suspect": self.suspect, "suspect_by": self.suspect_by}
+
+
+def _db(a: float, b: float) -> float:
+    return 10 * math.log10(max(a, 1e-300) / max(b, 1e-300))
+
+
+def at_speed(baselines: Sequence[MachineRecord], nominal_hz: float) -> list[MachineRecord]:
+    """The ``baselines`` whose input speed is within :data:`BASELINE_SPEED_SHARE` of the
+    nominal input speed ``nominal_hz``."""
+    return [b for b in baselines
+            if abs(b.speed.speed_hz / nominal_hz - 1) <= BASELINE_SPEED_SHARE]
+
+
+def _rms(diffs: list[float], floor: float) -> float:
+    return max(float(np.sqrt(np.mean(np.square(diffs)))), floor)
+
+
+def healthy_spread_db(baselines: list[MachineRecord]) -> float:
+    """The RMS difference in residual energy (dB) between two healthy records of the
+    machine, estimated from the baselines' halves and, with several, from each pair of
+    baselines (module docstring)."""
+    diffs = [_db(a, b) for rec in baselines for shaft in rec.shafts
+             for a, b in shaft.halves.values()]
+    for i, first in enumerate(baselines):
+        for second in baselines[i + 1:]:
+            for s1, s2 in zip(first.shafts, second.shafts):
+                diffs += [_db(s1.residual_energy[c], s2.residual_energy[c])
+                          for c in s1.residual_energy if c in s2.residual_energy]
+    return _rms(diffs, MIN_SPREAD_DB)
+
+
+def healthy_fm4_spread(baselines: list[MachineRecord]) -> float | None:
+    """The RMS difference in FM4 between two healthy records of the machine, estimated as
+    :func:`healthy_spread_db` estimates the energy's; None where a baseline does not know
+    its halves' FM4 or any is not a number."""
+    diffs = []
+    for rec in baselines:
+        for shaft in rec.shafts:
+            if set(shaft.fm4_halves) != set(shaft.residual_energy):
+                return None
+            diffs += [a - b for a, b in shaft.fm4_halves.values()]
+    for i, first in enumerate(baselines):
+        for second in baselines[i + 1:]:
+            for s1, s2 in zip(first.shafts, second.shafts):
+                diffs += [s1.indicators[c]["fm4"] - s2.indicators[c]["fm4"]
+                          for c in s1.indicators if c in s2.indicators]
+    if not diffs or not np.all(np.isfinite(diffs)):
+        return None
+    return _rms(diffs, MIN_FM4_SPREAD)
+
+
+def _fm4_change(shaft: ShaftRecord, baselines: list[MachineRecord]) -> float:
+    """``shaft``'s FM4 less the baselines' mean, averaged over its channels."""
+    rises = [values["fm4"] - float(np.mean([b.shafts[shaft.index].indicators[channel]["fm4"]
+                                            for b in baselines]))
+             for channel, values in shaft.indicators.items()]
+    return float(np.mean(rises))
+
+
+def _suspect(pinion: ShaftChange, gear: ShaftChange, threshold_db: float,
+             fm4_threshold: float | None, alone: tuple[bool, bool]
+             ) -> tuple[str | None, str | None]:
+    """A changed stage's suspect and what named it (module docstring); ``alone``: whether
+    the pinion's and the gear's shaft carry no other stage's gear."""
+    if fm4_threshold is not None:
+        for name, this, other, only in (("pinion", pinion, gear, alone[0]),
+                                        ("gear", gear, pinion, alone[1])):
+            rise, rest = this.fm4_change, other.fm4_change
+            if (only and rise > fm4_threshold and math.isfinite(rest)
+                    and rise - max(rest, 0.0) > fm4_threshold):
+                return name, "impulsiveness"
+    p, g = abs(pinion.change_db), abs(gear.change_db)
+    if abs(p - g) > threshold_db:
+        return ("pinion" if p > g else "gear"), "residual energy"
+    return None, None
+
+
+def judge_stages(machine: Machine, record: MachineRecord,
+                 baselines: list[MachineRecord]) -> tuple[list[StageVerdict], float]:
+    """Each stage of ``record`` against the ``baselines`` (same channels, a similar
+    operating point), and the healthy spread (dB) it was judged by."""
+    if not baselines:
+        raise MeasurementError("judging a stage needs a baseline record of the machine")
+    spread = healthy_spread_db(baselines)
+    threshold = K_SPREAD * spread
+    fm4_spread = healthy_fm4_spread(baselines)
+    fm4_threshold = None if fm4_spread is None else K_SPREAD * fm4_spread
+    changes = []
+    for shaft in record.shafts:
+        per_channel = {}
+        for channel, energy in shaft.residual_energy.items():
+            reference = [b.shafts[shaft.index].residual_energy.get(channel) for b in baselines]
+            if any(r is None for r in reference):
+                raise MeasurementError(f"the baseline has no channel {channel}")
+            per_channel[channel] = _db(energy, float(np.mean(reference)))
+        fm4 = _fm4_change(shaft, baselines) if fm4_threshold is not None else math.nan
+        changes.append(ShaftChange(shaft.shaft, float(np.mean(list(per_channel.values()))),
+                                   per_channel, fm4))
+    verdicts = []
+    for k, stage in enumerate(machine.stages):
+        pinion, gear = changes[k], changes[k + 1]
+        changed = max(abs(pinion.change_db), abs(gear.change_db)) > threshold
+        alone = (len(record.shafts[k].teeth) == 1, len(record.shafts[k + 1].teeth) == 1)
+        suspect, by = (_suspect(pinion, gear, threshold, fm4_threshold, alone) if changed
+                       else (None, None))
+        verdicts.append(StageVerdict(stage.name, stage.pinion_teeth, stage.gear_teeth,
+                                     float(record.speed.speed_hz * machine.mesh_order(k)),
+                                     pinion, gear, threshold, changed, suspect,
+                                     fm4_threshold, by))
+    return verdicts, spread
+
+
+@dataclass(frozen=True)
+class MachineReport:
+    """What ``indicators --machine`` says of a record: the speed, every shaft's TSA, and
+    (with baselines) every stage's verdict and the healthy spread it was judged by."""
+
+    machine: Machine
+    record: MachineRecord
+    baselines: tuple[str, ...]
+    stages: tuple[StageVerdict, ...]
+    spread_db: float | None
+
+    def to_dict(self) -> dict:
+        """Plain data for JSON: ``speed_hz`` the input shaft's; ``shafts`` and ``stages`` in
+        the machine's order; ``stages`` empty without a baseline."""
+        return {
+            "machine": self.machine.name, **self.record.speed.to_dict(),
+            "shafts": [{"name": s.shaft, "speed_hz": s.speed_hz, "teeth": list(s.teeth),
+                        "revolutions": s.revolutions,
+                        "residual_energy": s.residual_energy,
+                        "indicators": {c: {k: (v if math.isfinite(v) else None)
+                                           for k, v in t.items()}
+                                       for c, t in s.indicators.items()}}
+                       for s in self.record.shafts],
+            "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
+            "stages": [v.to_dict() for v in self.stages],
+            "severity_scale": ("change against the baselines" if self.baselines else
+                               "none: without a baseline no stage is judged")}
+
+
+def machine_report(measurement: Measurement, machine: Machine, speed: SpeedSettings,
+                   input_hz: float, baselines: Sequence[MachineRecord] = ()) -> MachineReport:
+    """Every shaft of ``measurement`` and, with ``baselines`` (healthy records as
+    :func:`machine_record` sees them), every stage judged."""
+    record = machine_record(measurement, machine, speed, input_hz)
+    base = list(baselines)
+    verdicts, spread = judge_stages(machine, record, base) if base else ([], None)
+    return MachineReport(machine, record, tuple(b.file for b in base), tuple(verdicts), spread)
