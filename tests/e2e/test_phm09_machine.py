@@ -101,9 +101,8 @@ def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, 
     # its class would hang on the swarm's rounding
     assert stages[1]["fault_mode"] not in ("healthy", "no_diagnosis")
     assert stages[0]["baseline"]["verdict"] == "changed"
-    # the chipped input pinion: the input's TSA grew impulsive with the tacho's angle (the
-    # machine file's); the mesh's angle misses the idler's once-a-turn wobble of the input's
-    # angle and smears the chip over the turn (docs/gearbox.md)
+    # the chipped input pinion: the input's TSA grew impulsive along the tacho's angle (the
+    # machine file's); along the mesh's it does not (docs/gearbox.md)
     assert stages[0]["suspect"] == "pinion", stages[0]["baseline"]
     assert stages[0]["baseline"]["suspect_by"] == "impulsiveness"
     assert stages[1]["suspect"] == "pinion" and stages[1]["baseline"]["verdict"] == "changed"
