@@ -20,7 +20,11 @@ lines left out, the speed from the meshes). Printed:
   model would predict it at best;
 - how much each group's lines repeat: the complex spectra of the even and of the odd
   periods' averages, ``sum |A - B|^2 / sum (|A|^2 + |B|^2)`` on the group's lines (0: the
-  same line in both halves, a deterministic source; 1: random phases).
+  same line in both halves, a deterministic source; 1: random phases);
+- the share of the error's square on the sidebands within K orders of either shaft round
+  the first five mesh harmonics, and the error a model that made those lines exactly
+  would leave (``sqrt(1 - share)`` times the error): the bound of any modulation of the
+  mesh by the shafts (amplitude, phase, tooth errors that repeat each turn).
 
 Usage:
     .venv/bin/python bench/error_budget.py [--data ../shared/data/gfd] [--records b30hz90,...]
@@ -58,6 +62,8 @@ SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
 PHM09_RATE_HZ = 66_666.67  # the challenge's documentation (../shared/data/phm09/README.md)
 #: The half-width of the window a local floor or a comb's expected power is taken over.
 OCTAVE = 1 / 6
+#: How far from a mesh harmonic (shaft orders) the sidebands a modulation could make reach.
+SIDEBAND_ORDERS = (1, 3, 6, 10, 16)
 #: The groups of bins a comb of random line amplitudes is put on.
 COMBS = (("gear_orders", "assembly_hunting"),
          ("gear_orders", "assembly_hunting", "pinion_orders"))
@@ -145,6 +151,19 @@ def budget(name: str, problem) -> None:
           f"flat one): error {noise_corrected_error(model[bins], meas[bins], floor[bins]):.3f} "
           f"on the same bins, {noise_corrected_error(model[own], meas[own], floor[own]):.3f} "
           f"on its own {own.sum()}")
+    bounds = []
+    for k_max in SIDEBAND_ORDERS:
+        near = np.zeros(meas.size, dtype=bool)
+        kin = problem.kinematics
+        for f_shaft in (kin.f_pinion_hz, kin.f_gear_hz):
+            for h in range(1, 6):
+                for k in range(1, k_max + 1):
+                    for f in (h * kin.f_mesh_hz - k * f_shaft, h * kin.f_mesh_hz + k * f_shaft):
+                        near |= np.abs(freqs - f) < 0.5 * c.bin_hz + 1e-9
+        share = float(term[near & bins].sum() / total)
+        bounds.append(f"K {k_max}: {share:.2f} -> {c.error * np.sqrt(1 - share):.3f}")
+    print("sidebands within K shaft orders of mesh harmonics 1-5, share of the error's square "
+          "-> the error with them exact: " + "; ".join(bounds))
     for comb in COMBS:
         on = np.isin(groups, [RESIDUAL_GROUPS.index(g) for g in comb])
         power = noise + np.where(on, local_power(freqs, meas, on), 0.0)
