@@ -12,8 +12,8 @@ from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
-from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE, at_speed
 from pydiag.gear.speed import SpeedSettings
+from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE, at_speed
 from pydiag.loop import history
 
 #: The --baseline value that stands for the baselines kept in the history.

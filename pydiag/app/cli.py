@@ -29,9 +29,9 @@ from pydiag.core.termination import raise_once
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.indicators import SHAFTS
-from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
+from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE
 from pydiag.loop.regress import DEFAULT_RTOL
 
 

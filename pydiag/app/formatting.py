@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
-from pydiag.gear.stage_judge import MachineReport
 from pydiag.gear.speed import SpeedEstimate
+from pydiag.gear.stage_judge import MachineReport
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
 from pydiag.loop.stages import MachineDiagnosis

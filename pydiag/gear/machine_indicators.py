@@ -185,7 +185,7 @@ def finite_or_none(value: float | None) -> float | None:
 
 
 def _number(value: float | None) -> float:
-    """What :func:`_finite` wrote, read back: None is nan."""
+    """What :func:`finite_or_none` wrote, read back: None is nan."""
     return math.nan if value is None else value
 
 
