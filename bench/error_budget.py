@@ -24,7 +24,9 @@ lines left out, the speed from the meshes). Printed:
 - the share of the error's square on the sidebands within K orders of either shaft round
   the first five mesh harmonics, and the error a model that made those lines exactly
   would leave (``sqrt(1 - share)`` times the error): the bound of any modulation of the
-  mesh by the shafts (amplitude, phase, tooth errors that repeat each turn).
+  mesh by the shafts (amplitude, phase, tooth errors that repeat each turn);
+- the share of the error's square below half the mesh frequency (the shafts' low orders,
+  far from any mesh harmonic), by group.
 
 Usage:
     .venv/bin/python bench/error_budget.py [--data ../shared/data/gfd] [--records b30hz90,...]
@@ -164,6 +166,10 @@ def budget(name: str, problem) -> None:
         bounds.append(f"K {k_max}: {share:.2f} -> {c.error * np.sqrt(1 - share):.3f}")
     print("sidebands within K shaft orders of mesh harmonics 1-5, share of the error's square "
           "-> the error with them exact: " + "; ".join(bounds))
+    low = bins & (freqs < problem.kinematics.f_mesh_hz / 2)
+    print(f"below half the mesh: {term[low].sum() / total:.2f} of the error's square (" + ", ".join(
+        f"{group} {term[low & (groups == i)].sum() / total:.2f}"
+        for i, group in enumerate(RESIDUAL_GROUPS) if term[low & (groups == i)].any()) + ")")
     for comb in COMBS:
         on = np.isin(groups, [RESIDUAL_GROUPS.index(g) for g in comb])
         power = noise + np.where(on, local_power(freqs, meas, on), 0.0)

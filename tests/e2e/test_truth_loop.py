@@ -206,6 +206,27 @@ def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, ef
     assert_one_confident_suggestion(validate(problem, c, effect_fmu_of, tried=tried), effect)
 
 
+def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_fmu,
+                                                                           effect_fmu_of):
+    """14/42 teeth: every pinion order is a gear order (the PHM09 box's 32/96 stage is
+    such a pair), so which shaft makes a line there the record does not say. The
+    simulator's misaligned coupling (1x-3x of the pinion's angle) is the one confident
+    suggestion all the same: pinion_shaft_orders claims those orders at half weight (when
+    it claimed none, the coupling was missed, and a housing mode saturated in its place);
+    without the coupling nothing is confident."""
+    op = {**OPERATING_POINT, "n_pinion": 14, "n_gear": 42}
+    for coupling in (3.0, 0.0):
+        g = TruthGear(n_gear=42).with_effects(coupling_acc=coupling)
+        m = record(g, PERIODS, 5, RATE_HZ, clean=simulate_many([g], PERIODS * g.period_s,
+                                                                RATE_HZ)[0])
+        problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
+                                operating_point=op)
+        c = validate(problem, compare(problem, FaultEstimator(**FAST)), effect_fmu_of)
+        confident = [s.effect for s in c.suggested_effects if s.confident]
+        assert confident == (["pinion_shaft_orders"] if coupling else []), \
+            [(s.effect, round(s.score, 2), s.message) for s in c.suggested_effects]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [6, 7])
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
