@@ -187,23 +187,18 @@ MAX_SHAFT_ORDER_M_S2 = 5000.0
 
 
 def _pinion_shaft(line, freq, f_mesh):
-    # the pinion shaft's own lines: its first orders, far below the mesh's sidebands. An
-    # order the gear's shaft turns at too (2x pinion is 3x gear on 14/21 teeth; every
-    # order of the PHM09 box's 32-tooth input pinion is an order of its 96-tooth gear's
-    # idler) is a line it also makes (0.5): which of the two shafts makes it the record
-    # does not say, but one of them does, and the catalogue has no gear shaft's orders (at
-    # 0 the input's 1x, a tenth of that stage's error, was never claimed). One a bearing's
-    # line falls on (in a spectrum of joined halves, within half a bin: 2x BPFO on 7x
-    # pinion on the catalogue's 6205) is no evidence for it
-    if (line is None or line.family != "pinion" or line.order > SHAFT_ORDERS
-            or set(line.also) & set(BEARING_FAMILIES)):
-        return 0.0
-    return 0.5 if "gear" in line.also else 1.0
+    # the pinion shaft's own lines: its first orders, far below the mesh's sidebands, but
+    # for those the gear's shaft turns at too (2x pinion is 3x gear on 14/21 teeth) or a
+    # bearing's line falls on (in a spectrum of joined halves, within half a bin: 2x BPFO
+    # on 7x pinion on the catalogue's 6205): their lines there are no evidence for it
+    ok = (line is not None and line.family == "pinion" and line.order <= SHAFT_ORDERS
+          and not set(line.also) & {"gear", *BEARING_FAMILIES})
+    return 1.0 if ok else 0.0
 
 
 def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """The orders whose line it does not claim (:func:`_pinion_shaft`: one a bearing's
-    line falls on, or a mesh sideband on a pinion of few teeth) are not fitted."""
+    """The orders whose line it does not claim (:func:`_pinion_shaft`: one the gear's shaft
+    has a line at too, or a mesh sideband on a pinion of few teeth) are not fitted."""
     if kin is None:
         return {}
     fp = kin.f_pinion_hz

@@ -206,14 +206,18 @@ def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, ef
     assert_one_confident_suggestion(validate(problem, c, effect_fmu_of, tried=tried), effect)
 
 
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="a known gap: no effect claims a pinion order that "
+                   "is a gear order too (bench/RESULTS.md section 13)")
 def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_fmu,
                                                                            effect_fmu_of):
     """14/42 teeth: every pinion order is a gear order (the PHM09 box's 32/96 stage is
     such a pair), so which shaft makes a line there the record does not say. The
-    simulator's misaligned coupling (1x-3x of the pinion's angle) is the one confident
-    suggestion all the same: pinion_shaft_orders claims those orders at half weight (when
-    it claimed none, the coupling was missed, and a housing mode saturated in its place);
-    without the coupling nothing is confident."""
+    simulator's misaligned coupling (1x-3x of the pinion's angle) should be the one
+    confident suggestion, and nothing without it. It is missed (a housing mode saturates
+    in its place): pinion_shaft_orders claims no order the gear's shaft shares. Claimed
+    at half weight they found it here, but made it confident on a gear tooth's lines
+    (14/21, seed 7) and on the output gear's dip of the two-stage box: not kept."""
     op = {**OPERATING_POINT, "n_pinion": 14, "n_gear": 42}
     for coupling in (3.0, 0.0):
         g = TruthGear(n_gear=42).with_effects(coupling_acc=coupling)
