@@ -7,8 +7,8 @@ from truth.gearbox import INPUT_HZ, MACHINE, SHORT_MACHINE, gearbox_record as re
 
 from pydiag.core.errors import MeasurementError
 from pydiag.gear.machine_indicators import machine_record
-from pydiag.gear.stage_judge import judge_stages, machine_report
 from pydiag.gear.speed import SpeedSettings
+from pydiag.gear.stage_judge import judge_stages, machine_report
 
 
 @pytest.fixture(scope="module")

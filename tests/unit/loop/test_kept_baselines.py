@@ -10,8 +10,8 @@ from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record as record
 
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
-from pydiag.gear.stage_judge import at_speed, judge_stages
 from pydiag.gear.speed import SpeedSettings
+from pydiag.gear.stage_judge import at_speed, judge_stages
 from pydiag.loop import history
 
 
