@@ -153,10 +153,9 @@ def budget(name: str, problem) -> None:
           f"flat one): error {noise_corrected_error(model[bins], meas[bins], floor[bins]):.3f} "
           f"on the same bins, {noise_corrected_error(model[own], meas[own], floor[own]):.3f} "
           f"on its own {own.sum()}")
-    bounds = []
+    bounds, kin = [], problem.kinematics
     for k_max in SIDEBAND_ORDERS:
         near = np.zeros(meas.size, dtype=bool)
-        kin = problem.kinematics
         for f_shaft in (kin.f_pinion_hz, kin.f_gear_hz):
             for h in range(1, 6):
                 for k in range(1, k_max + 1):
@@ -166,7 +165,7 @@ def budget(name: str, problem) -> None:
         bounds.append(f"K {k_max}: {share:.2f} -> {c.error * np.sqrt(1 - share):.3f}")
     print("sidebands within K shaft orders of mesh harmonics 1-5, share of the error's square "
           "-> the error with them exact: " + "; ".join(bounds))
-    low = bins & (freqs < problem.kinematics.f_mesh_hz / 2)
+    low = bins & (freqs < kin.f_mesh_hz / 2)
     print(f"below half the mesh: {term[low].sum() / total:.2f} of the error's square (" + ", ".join(
         f"{group} {term[low & (groups == i)].sum() / total:.2f}"
         for i, group in enumerate(RESIDUAL_GROUPS) if term[low & (groups == i)].any()) + ")")

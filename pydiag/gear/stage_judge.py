@@ -30,7 +30,7 @@ absolute scale of a real machine's residual energy.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -119,6 +119,23 @@ def at_speed(baselines: Sequence[MachineRecord], nominal_hz: float) -> list[Mach
             if abs(b.speed.speed_hz / nominal_hz - 1) <= BASELINE_SPEED_SHARE]
 
 
+def _differences(baselines: list[MachineRecord],
+                 halves: Callable[[ShaftRecord], dict[str, tuple[float, float]]],
+                 whole: Callable[[ShaftRecord], dict[str, float]],
+                 difference: Callable[[float, float], float]) -> list[float]:
+    """How one healthy record differs from another, by a shaft's measure: each baseline's
+    halves (``halves``) against each other, and with several baselines each pair's
+    whole records (``whole``), every shaft and channel."""
+    diffs = [difference(a, b) for rec in baselines for shaft in rec.shafts
+             for a, b in halves(shaft).values()]
+    for i, first in enumerate(baselines):
+        for second in baselines[i + 1:]:
+            for s1, s2 in zip(first.shafts, second.shafts):
+                one, other = whole(s1), whole(s2)
+                diffs += [difference(one[c], other[c]) for c in one if c in other]
+    return diffs
+
+
 def _rms(diffs: list[float], floor: float) -> float:
     return max(float(np.sqrt(np.mean(np.square(diffs)))), floor)
 
@@ -127,31 +144,19 @@ def healthy_spread_db(baselines: list[MachineRecord]) -> float:
     """The RMS difference in residual energy (dB) between two healthy records of the
     machine, estimated from the baselines' halves and, with several, from each pair of
     baselines (module docstring)."""
-    diffs = [_db(a, b) for rec in baselines for shaft in rec.shafts
-             for a, b in shaft.halves.values()]
-    for i, first in enumerate(baselines):
-        for second in baselines[i + 1:]:
-            for s1, s2 in zip(first.shafts, second.shafts):
-                diffs += [_db(s1.residual_energy[c], s2.residual_energy[c])
-                          for c in s1.residual_energy if c in s2.residual_energy]
-    return _rms(diffs, MIN_SPREAD_DB)
+    return _rms(_differences(baselines, lambda s: s.halves, lambda s: s.residual_energy,
+                             _db), MIN_SPREAD_DB)
 
 
 def healthy_fm4_spread(baselines: list[MachineRecord]) -> float | None:
     """The RMS difference in FM4 between two healthy records of the machine, estimated as
     :func:`healthy_spread_db` estimates the energy's; None where a baseline does not know
     its halves' FM4 or any is not a number."""
-    diffs = []
-    for rec in baselines:
-        for shaft in rec.shafts:
-            if set(shaft.fm4_halves) != set(shaft.residual_energy):
-                return None
-            diffs += [a - b for a, b in shaft.fm4_halves.values()]
-    for i, first in enumerate(baselines):
-        for second in baselines[i + 1:]:
-            for s1, s2 in zip(first.shafts, second.shafts):
-                diffs += [s1.indicators[c]["fm4"] - s2.indicators[c]["fm4"]
-                          for c in s1.indicators if c in s2.indicators]
+    if any(set(s.fm4_halves) != set(s.residual_energy) for b in baselines for s in b.shafts):
+        return None
+    diffs = _differences(baselines, lambda s: s.fm4_halves,
+                         lambda s: {c: t["fm4"] for c, t in s.indicators.items()},
+                         lambda a, b: a - b)
     if not diffs or not np.all(np.isfinite(diffs)):
         return None
     return _rms(diffs, MIN_FM4_SPREAD)
@@ -174,8 +179,7 @@ def _suspect(pinion: ShaftChange, gear: ShaftChange, threshold_db: float,
         for name, this, other, only in (("pinion", pinion, gear, alone[0]),
                                         ("gear", gear, pinion, alone[1])):
             rise, rest = this.fm4_change, other.fm4_change
-            if (only and rise > fm4_threshold and math.isfinite(rest)
-                    and rise - max(rest, 0.0) > fm4_threshold):
+            if only and math.isfinite(rest) and rise - max(rest, 0.0) > fm4_threshold:
                 return name, "impulsiveness"
     p, g = abs(pinion.change_db), abs(gear.change_db)
     if abs(p - g) > threshold_db:
@@ -237,8 +241,7 @@ class MachineReport:
             "shafts": [{"name": s.shaft, "speed_hz": s.speed_hz, "teeth": list(s.teeth),
                         "revolutions": s.revolutions,
                         "residual_energy": s.residual_energy,
-                        "indicators": {c: {k: (v if math.isfinite(v) else None)
-                                           for k, v in t.items()}
+                        "indicators": {c: {k: finite_or_none(v) for k, v in t.items()}
                                        for c, t in s.indicators.items()}}
                        for s in self.record.shafts],
             "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,

@@ -215,9 +215,9 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
     such a pair), so which shaft makes a line there the record does not say. The
     simulator's misaligned coupling (1x-3x of the pinion's angle) should be the one
     confident suggestion, and nothing without it. It is missed (a housing mode saturates
-    in its place): pinion_shaft_orders claims no order the gear's shaft shares. Claimed
-    at half weight they found it here, but made it confident on a gear tooth's lines
-    (14/21, seed 7) and on the output gear's dip of the two-stage box: not kept."""
+    in its place): pinion_shaft_orders claims no order the gear's shaft shares. A claim
+    at half weight found it, but was confident on other shafts' lines too
+    (bench/RESULTS.md section 13): not kept."""
     op = {**OPERATING_POINT, "n_pinion": 14, "n_gear": 42}
     for coupling in (3.0, 0.0):
         g = TruthGear(n_gear=42).with_effects(coupling_acc=coupling)
