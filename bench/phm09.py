@@ -26,6 +26,14 @@ tacho used), three times with a healthy record of its speed and load read as
 With ``--tacho-angle`` the stages are judged on every shaft's TSA along the tacho's angle
 (the speed column stays the mesh's, found without the tacho).
 
+With ``--angle-swing`` each record's input-shaft angle is compared along the tacho and
+along the mesh: the tacho's angle less the mesh's at each slower shaft's speed (in
+first-stage mesh cycles), and the input shaft's FM4 (mean of the channels) along four
+angles: the tacho's; the tacho's without what swings above half the slowest shaft's speed
+(low-passed); the mesh's; the mesh's with the tacho's swing between half the slowest
+shaft's speed and half the input's added back. Which of them show a local fault of the
+input pinion says whether the mesh's angle loses it by not following that swing.
+
 Labels: ``spur 1`` all good; ``spur 2`` the 32-tooth input pinion chipped and the
 48-tooth idler pinion eccentric (both stages); other cases are shown without a label.
 Cite the PHM Society 2009 Data Challenge where you report results.
@@ -67,6 +75,8 @@ def main() -> int:
     ap.add_argument("--tacho-angle", action="store_true",
                     help="judge the stages on TSAs along the tacho's angle (the speed column "
                          "is still the mesh's)")
+    ap.add_argument("--angle-swing", action="store_true",
+                    help="the input's angle along the tacho and the mesh, and its FM4 along each")
     ap.add_argument("--per-record", action="store_true",
                     help="time one record's diagnose --machine, baseline read and kept")
     args = ap.parse_args()
@@ -82,6 +92,8 @@ def main() -> int:
         return batch_throughput(args.folder, files)
     if args.per_record:
         return per_record(files)
+    if args.angle_swing:
+        return angle_swing(machine, files)
     seen = {}
     for path in files:
         case, hz, load, run = NAME.search(path.name).groups()
@@ -186,6 +198,65 @@ def per_record(files: list[Path], repeat: int = 3) -> int:
                     return 1
             print(f"{how:<12}{statistics.median(walls):>16.2f}"
                   f"{statistics.median(users):>8.1f}  " + " ".join(f"{w:.2f}" for w in walls))
+    return 0
+
+
+def angle_swing(machine, files: list[Path]) -> int:
+    """The input shaft's angle along the tacho and along the mesh (module docstring)."""
+    import numpy as np
+    from scipy.signal import butter, sosfiltfilt
+    from pydiag.gear.machine_indicators import shaft_records
+
+    ratios = [float(machine.shaft_ratio(k)) for k in range(len(machine.shafts))]
+    teeth = machine.stages[0].pinion_teeth
+
+    def filtered(revs, valid, band_hz, btype):
+        """``revs`` within ``valid`` with its deviation from a straight line filtered."""
+        a, b = valid[0], valid[1] + 1
+        n = np.arange(a, b)
+        line = np.polyval(np.polyfit(n, revs[a:b], 1), n)
+        sos = butter(4 if btype == "low" else 2, np.asarray(band_hz) / (RATE_HZ / 2),
+                     btype=btype, output="sos")
+        out = np.zeros_like(revs)
+        out[a:b] = sosfiltfilt(sos, revs[a:b] - line) + (line if btype == "low" else 0)
+        return out
+
+    slower = [(name, r) for name, r in zip(machine.shafts, ratios) if r < 1]
+    print(f"{'record':<24}" + "".join(f"{'swing at ' + n:>16}" for n, _ in slower)
+          + f"{'tacho':>8}{'tacho lp':>10}{'mesh':>8}{'mesh+swing':>12}  (input FM4)")
+    for path in files:
+        m = read_measurement(path, RATE_HZ)
+        hz = float(NAME.search(path.name).group(2))
+        tacho = estimate_speed(m, machine.stage_kinematics(0, hz),
+                               SpeedSettings("tacho", tacho="ch3", pulses_per_rev=10))
+        mesh = estimate_speed(m, machine.stage_kinematics(0, hz),
+                              SpeedSettings("mesh", tacho="ch3"), machine=machine)
+        valid = (mesh.valid[0], mesh.valid[1] - 1)
+        f_in, low = tacho.speed_hz, 0.5 * min(ratios) * tacho.speed_hz
+        a, b = valid[0], valid[1] + 1
+        diff = (tacho.revolutions - mesh.revolutions)[a:b] * teeth
+        diff = diff - np.polyval(np.polyfit(np.arange(diff.size), diff, 1), np.arange(diff.size))
+        window = np.hanning(diff.size)
+        freqs = np.fft.rfftfreq(diff.size, 1 / RATE_HZ)
+        amp = 2 * np.abs(np.fft.rfft(diff * window)) / window.sum()
+        swings = [float(np.max(amp[np.abs(freqs - r * f_in) <= 1.5 * freqs[1]]))
+                  for _, r in slower]  # the line's Hann lobe
+        angles = [tacho,
+                  dataclasses.replace(tacho, valid=valid, revolutions=filtered(
+                      tacho.revolutions, valid, low, "low")),
+                  mesh,
+                  dataclasses.replace(mesh, valid=valid, revolutions=mesh.revolutions
+                                      + filtered(tacho.revolutions - mesh.revolutions, valid,
+                                                 [low, 0.5 * f_in], "band"))]
+        fm4 = []
+        for est in angles:
+            shaft = shaft_records(m, machine, est, ("ch3",))[0]
+            fm4.append(float(np.mean([v["fm4"] for v in shaft.indicators.values()])))
+        print(f"{path.stem[:23]:<24}" + "".join(f"{s:>16.4f}" for s in swings)
+              + "".join(f"{v:>{w}.2f}" for v, w in zip(fm4, (8, 10, 8, 12))))
+    print(f"swing: the tacho's angle less the mesh's, amplitude in cycles of the first "
+          f"stage's mesh ({teeth} per input turn); lp: below {0.5 * min(ratios):.2f}x the "
+          "input's speed")
     return 0
 
 
