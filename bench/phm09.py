@@ -27,9 +27,9 @@ With ``--tacho-angle`` the stages are judged on every shaft's TSA along the tach
 (the speed column stays the mesh's, found without the tacho).
 
 With ``--angle-swing`` each record's input-shaft angle is compared along the tacho and
-along the mesh: the tacho's angle less the mesh's at each slower shaft's speed (in
-first-stage mesh cycles), and the input shaft's FM4 (mean of the channels) along four
-angles: the tacho's; the tacho's without what swings above half the slowest shaft's speed
+along the mesh: the tacho's angle's swing once a turn of each slower shaft (degrees of the
+input's turn, as ``indicators --machine`` reports it), and the input shaft's FM4 (mean of
+the channels) along four angles: the tacho's; the tacho's without what swings above half the slowest shaft's speed
 (low-passed); the mesh's; the mesh's with the tacho's swing between half the slowest
 shaft's speed and half the input's added back. Which of them show a local fault of the
 input pinion says whether the mesh's angle loses it by not following that swing.
@@ -221,8 +221,8 @@ def angle_swing(machine, files: list[Path]) -> int:
         out[a:b] = sosfiltfilt(sos, revs[a:b] - line) + (line if btype == "low" else 0)
         return out
 
-    slower = [(name, r) for name, r in zip(machine.shafts, ratios) if r < 1]
-    print(f"{'record':<24}" + "".join(f"{'swing at ' + n:>16}" for n, _ in slower)
+    slower = [k for k, r in enumerate(ratios) if r < 1]
+    print(f"{'record':<24}" + "".join(f"{machine.shafts[k] + ' deg':>12}" for k in slower)
           + f"{'tacho':>8}{'tacho lp':>10}{'mesh':>8}{'mesh+swing':>12}  (input FM4)")
     for path in files:
         m = read_measurement(path, RATE_HZ)
@@ -232,31 +232,24 @@ def angle_swing(machine, files: list[Path]) -> int:
         mesh = estimate_speed(m, machine.stage_kinematics(0, hz),
                               SpeedSettings("mesh", tacho="ch3"), machine=machine)
         valid = (mesh.valid[0], mesh.valid[1] - 1)
-        f_in, low = tacho.speed_hz, 0.5 * min(ratios) * tacho.speed_hz
-        a, b = valid[0], valid[1] + 1
-        diff = (tacho.revolutions - mesh.revolutions)[a:b] * teeth
-        diff = diff - np.polyval(np.polyfit(np.arange(diff.size), diff, 1), np.arange(diff.size))
-        window = np.hanning(diff.size)
-        freqs = np.fft.rfftfreq(diff.size, 1 / RATE_HZ)
-        amp = 2 * np.abs(np.fft.rfft(diff * window)) / window.sum()
-        swings = [float(np.max(amp[np.abs(freqs - r * f_in) <= 1.5 * freqs[1]]))
-                  for _, r in slower]  # the line's Hann lobe
+        low = 0.5 * min(ratios) * tacho.speed_hz
         angles = [tacho,
                   dataclasses.replace(tacho, valid=valid, revolutions=filtered(
                       tacho.revolutions, valid, low, "low")),
                   mesh,
                   dataclasses.replace(mesh, valid=valid, revolutions=mesh.revolutions
                                       + filtered(tacho.revolutions - mesh.revolutions, valid,
-                                                 [low, 0.5 * f_in], "band"))]
-        fm4 = []
+                                                 [low, 0.5 * tacho.speed_hz], "band"))]
+        fm4, swings = [], []
         for est in angles:
-            shaft = shaft_records(m, machine, est, ("ch3",))[0]
-            fm4.append(float(np.mean([v["fm4"] for v in shaft.indicators.values()])))
-        print(f"{path.stem[:23]:<24}" + "".join(f"{s:>16.4f}" for s in swings)
+            shafts = shaft_records(m, machine, est, ("ch3",))
+            swings = swings or [shafts[k].swing_deg for k in slower]  # the tacho's, as is
+            fm4.append(float(np.mean([v["fm4"] for v in shafts[0].indicators.values()])))
+        print(f"{path.stem[:23]:<24}" + "".join(f"{s:>12.4f}" for s in swings)
               + "".join(f"{v:>{w}.2f}" for v, w in zip(fm4, (8, 10, 8, 12))))
-    print(f"swing: the tacho's angle less the mesh's, amplitude in cycles of the first "
-          f"stage's mesh ({teeth} per input turn); lp: below {0.5 * min(ratios):.2f}x the "
-          "input's speed")
+    print("deg: the swing of the tacho's angle once a turn of the shaft, degrees of the input's "
+          f"turn (as indicators --machine reports it); lp: below {0.5 * min(ratios):.2f}x the input's "
+          "speed; mesh+swing: the tacho's angle less the mesh's between that and 0.5x added")
     return 0
 
 

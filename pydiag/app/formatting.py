@@ -181,12 +181,22 @@ def format_machine_report(report: MachineReport) -> str:
     row per stage when it was judged."""
     lines = _machine_head(report.machine.name, len(report.machine.stages),
                           report.record.speed)
+    swings = any(s.swing_deg is not None for s in report.record.shafts)
     lines += ["", f"{'shaft':<14}{'speed Hz':>10}{'turns':>7}{'teeth':>9}  "
-             + "  ".join(f"{'resid ' + c:>14}" for c in report.record.shafts[0].residual_energy)]
+             + "  ".join(f"{'resid ' + c:>14}" for c in report.record.shafts[0].residual_energy)
+             + (f"  {'swing deg':>10}{'vs base':>9}" if swings else "")]
     for shaft in report.record.shafts:
-        lines.append(f"{shaft.shaft:<14}{shaft.speed_hz:>10.4f}{shaft.revolutions:>7d}"
-                     f"{'/'.join(map(str, shaft.teeth)):>9}  "
-                     + "  ".join(f"{e:>14.4g}" for e in shaft.residual_energy.values()))
+        row = (f"{shaft.shaft:<14}{shaft.speed_hz:>10.4f}{shaft.revolutions:>7d}"
+               f"{'/'.join(map(str, shaft.teeth)):>9}  "
+               + "  ".join(f"{e:>14.4g}" for e in shaft.residual_energy.values()))
+        if swings:
+            change = report.swing_change_db.get(shaft.shaft)
+            row += (f"  {'-' if shaft.swing_deg is None else f'{shaft.swing_deg:.4f}':>10}"
+                    f"{'-' if change is None else f'{change:+.1f} dB':>9}")
+        lines.append(row)
+    if swings:
+        lines.append("swing      : of the input's angle (tacho) once a turn of the shaft, "
+                     "degrees of the input's turn; not judged")
     if not report.stages:
         lines += ["", "stages     : not judged: give a baseline record of the machine in a "
                   "known healthy state (--baseline)"]

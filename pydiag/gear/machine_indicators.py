@@ -12,6 +12,13 @@ of a shaft's TSA (what is left when the shaft's first two orders, its meshes and
 shafts' lines are removed: a local tooth fault, an eccentric gear's sidebands): its level
 in dB against the baseline's, averaged over the channels
 (:mod:`pydiag.gear.stage_judge` judges each stage by it).
+
+With a tacho on the input shaft, each slower shaft also gets the **swing** of the input's
+angle once its turn (:func:`~pydiag.signal.angle.once_a_turn_swing`, in degrees of the
+input's turn): a runout or an eccentric gear on that shaft swings the whole drive once a
+turn, which the tacho sees and a mesh's phase, followed in a band narrower than the
+shaft's speed, does not (docs/gearbox.md). It is reported, not judged: how much it varies
+between healthy runs is not known from a record's halves.
 """
 
 from __future__ import annotations
@@ -26,6 +33,7 @@ from pydiag.core.measurement import Measurement
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
+from pydiag.signal.angle import once_a_turn_swing
 from pydiag.signal.condition import (TrendReference, synchronous_average,
                                      tsa_indicators, tsa_signals)
 
@@ -46,6 +54,9 @@ class ShaftRecord:
         indicators: channel -> indicator -> value (NA4/NB4 against the record itself)
         fm4_halves: channel -> FM4 of the first and the second half (empty: not known, a
             baseline kept before it was)
+        swing_deg: how far the input's angle swings once a turn of this shaft, degrees of
+            the input's turn (module docstring); None without a tacho, for the input and
+            for a shaft not slower than it, or a baseline kept before it was measured
     """
 
     shaft: str
@@ -58,6 +69,7 @@ class ShaftRecord:
     halves: dict[str, tuple[float, float]]
     indicators: dict[str, dict[str, float]]
     fm4_halves: dict[str, tuple[float, float]]
+    swing_deg: float | None = None
 
 
 def _teeth_on(machine: Machine, shaft: int) -> tuple[int, ...]:
@@ -130,8 +142,18 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             table[channel] = {k: float(values[k]) for k in SHAFT_INDICATORS}
             fm4_halves[channel] = tuple(float(tsa_indicators(p)["fm4"]) for p in parts[1:])
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
-                               halves, table, fm4_halves))
+                               halves, table, fm4_halves, _swing_deg(estimate, ratio)))
     return out
+
+
+def _swing_deg(estimate: SpeedEstimate, ratio: float) -> float | None:
+    """The input's angle's swing once a turn of a shaft ``ratio`` times as fast (module
+    docstring), degrees; None where it is not measured."""
+    if estimate.source is not SpeedSource.TACHO or not ratio < 1:
+        return None
+    a, b = estimate.valid
+    return finite_or_none(360 * once_a_turn_swing(estimate.revolutions[a:(b + 1) or None],
+                                                  ratio))
 
 
 @dataclass(frozen=True)
@@ -159,7 +181,8 @@ class MachineRecord:
                             "indicators": {c: {k: finite_or_none(v) for k, v in t.items()}
                                            for c, t in s.indicators.items()},
                             "fm4_halves": {c: [finite_or_none(v) for v in h]
-                                           for c, h in s.fm4_halves.items()}}
+                                           for c, h in s.fm4_halves.items()},
+                            "swing_deg": s.swing_deg}
                            for s in self.shafts]}
 
     @classmethod
@@ -173,7 +196,8 @@ class MachineRecord:
             tuple(s["teeth"]), dict(s["residual_energy"]),
             {c: (h[0], h[1]) for c, h in s["halves"].items()},
             {c: {k: _number(v) for k, v in t.items()} for c, t in s["indicators"].items()},
-            {c: (_number(h[0]), _number(h[1])) for c, h in s.get("fm4_halves", {}).items()})
+            {c: (_number(h[0]), _number(h[1])) for c, h in s.get("fm4_halves", {}).items()},
+            s.get("swing_deg"))
             for s in data["shafts"])
         return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
                    data["file"])

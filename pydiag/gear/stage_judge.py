@@ -25,6 +25,9 @@ higher. A shaft carrying two gears changes with either stage's change (a runout 
 second stage's pinion moves its residual energy), which is why impulsiveness, the
 specific evidence, is asked first. Without a baseline nothing is judged: there is no
 absolute scale of a real machine's residual energy.
+
+A shaft's swing (with a tacho, :mod:`pydiag.gear.machine_indicators`) is reported against
+the baselines' mean in dB, and judges nothing.
 """
 
 from __future__ import annotations
@@ -232,6 +235,7 @@ class MachineReport:
     baselines: tuple[str, ...]
     stages: tuple[StageVerdict, ...]
     spread_db: float | None
+    swing_change_db: dict[str, float | None]
 
     def to_dict(self) -> dict:
         """Plain data for JSON: ``speed_hz`` the input shaft's; ``shafts`` and ``stages`` in
@@ -242,7 +246,9 @@ class MachineReport:
                         "revolutions": s.revolutions,
                         "residual_energy": s.residual_energy,
                         "indicators": {c: {k: finite_or_none(v) for k, v in t.items()}
-                                       for c, t in s.indicators.items()}}
+                                       for c, t in s.indicators.items()},
+                        "swing_deg": s.swing_deg,
+                        "swing_change_db": self.swing_change_db.get(s.shaft)}
                        for s in self.record.shafts],
             "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
             "stages": [v.to_dict() for v in self.stages],
@@ -257,4 +263,19 @@ def machine_report(measurement: Measurement, machine: Machine, speed: SpeedSetti
     record = machine_record(measurement, machine, speed, input_hz)
     base = list(baselines)
     verdicts, spread = judge_stages(machine, record, base) if base else ([], None)
-    return MachineReport(machine, record, tuple(b.file for b in base), tuple(verdicts), spread)
+    return MachineReport(machine, record, tuple(b.file for b in base), tuple(verdicts), spread,
+                         swing_changes(record, base))
+
+
+def swing_changes(record: MachineRecord, baselines: Sequence[MachineRecord]
+                  ) -> dict[str, float | None]:
+    """Each shaft's swing in ``record`` against the mean of the ``baselines``' (dB); None
+    where it or every baseline's is not measured."""
+    out: dict[str, float | None] = {}
+    for shaft in record.shafts:
+        base = [s.swing_deg for b in baselines for s in b.shafts
+                if s.shaft == shaft.shaft and s.swing_deg is not None]
+        out[shaft.shaft] = None
+        if shaft.swing_deg is not None and base and shaft.swing_deg > 0 and np.mean(base) > 0:
+            out[shaft.shaft] = 20 * math.log10(shaft.swing_deg / float(np.mean(base)))
+    return out

@@ -10,6 +10,7 @@ scipy.interpolate and scipy.signal are imported where they are used: together th
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -110,6 +111,33 @@ def extend_linearly(index: np.ndarray, values: np.ndarray, n_samples: int) -> np
     out[before] = values[0] + (n[before] - index[0]) * slope
     out[after] = values[-1] + (n[after] - index[-1]) * slope
     return out
+
+
+def once_a_turn_swing(revs: np.ndarray, ratio: float) -> float:
+    """How far an angle swings once a turn of a slower shaft: the amplitude, in revolutions
+    of the tracked shaft, of the first order of its deviation from uniform rotation,
+    demodulated along the slower shaft's angle (``ratio`` times ``revs``, 0 < ratio < 1)
+    over that shaft's whole turns; nan when ``revs`` holds fewer than two of them.
+
+    A runout or an eccentric gear on the slower shaft is a transmission error once its
+    turn, which swings the whole drive: a tacho on a faster shaft measures it. The
+    tracked shaft's own orders (a tacho wheel's unevenly spaced pulses) are none of the
+    slower shaft's. The deviation is from the straight line fitted over those turns, and
+    weighted by a Hann window across them, so that the speed's drift (a motor's slip) and
+    other shafts' swings leak little into the first order.
+    """
+    if not 0 < ratio < 1:
+        raise ValueError(f"the slower shaft turns 0 to 1 times a turn, got {ratio}")
+    revs = np.asarray(revs, dtype=float)
+    turn = ratio * revs
+    if np.floor(turn[-1]) - np.ceil(turn[0]) < 2:
+        return math.nan
+    span = np.flatnonzero((turn >= np.ceil(turn[0])) & (turn < np.floor(turn[-1])))
+    n = span.astype(float)
+    deviation = revs[span] - np.polyval(np.polyfit(n, revs[span], 1), n)
+    weight = np.hanning(span.size)
+    return float(2 * np.abs(np.sum(weight * deviation * np.exp(-2j * np.pi * turn[span])))
+                 / np.sum(weight))
 
 
 def _cubic_at(y: np.ndarray, position: np.ndarray) -> np.ndarray:

@@ -57,6 +57,15 @@ def test_stages_judged_against_a_repeated_healthy_run(tmp_path):
     assert faulty["healthy_spread_db"] > 0 and faulty["baselines"]
 
 
+def test_the_eccentric_idler_pinion_swings_the_tachos_angle_once_an_idler_turn(tmp_path):
+    faulty, _ = indicators(tmp_path, "spur 2_30hz_High_1", "--baseline",
+                           str(DATA / "spur 1_30hz_High_2.zip"))
+    swing = {s["name"]: s for s in faulty["shafts"]}
+    assert swing["input"]["swing_deg"] is None  # the tacho's own shaft
+    assert swing["idler"]["swing_change_db"] > 12, swing
+    assert swing["idler"]["swing_change_db"] > swing["output"]["swing_change_db"] + 6, swing
+
+
 def test_the_machine_files_tacho_is_used_and_a_wrong_pulse_count_is_named(tmp_path):
     data, stderr = indicators(tmp_path, "spur 1_30hz_High_1")
     assert data["speed_method"] == "tacho" and abs(data["speed_hz"] - 29.905) < 0.01

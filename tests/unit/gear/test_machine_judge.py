@@ -96,3 +96,24 @@ def test_a_runout_alone_is_named_by_its_energy_not_its_impulsiveness(short_basel
     assert abs(second.gear.fm4_change) < second.fm4_threshold, second
     assert (second.suspect, second.suspect_by) == ("gear", "residual energy"), second
     assert not first.changed, first
+
+
+@pytest.mark.parametrize("shaft, other", [(1, 2), (2, 1)])
+def test_a_drive_that_swings_once_a_turn_of_a_shaft_is_seen_by_the_tacho_at_that_shaft(
+        shaft, other):
+    tacho = SpeedSettings("tacho", tacho="tacho", pulses_per_rev=10)
+    steady = machine_record(record(1, tacho_pulses=10), MACHINE, tacho, INPUT_HZ)
+    swinging = record(2, tacho_pulses=10, swing=((shaft, 0.002),))
+    report = machine_report(swinging, MACHINE, tacho, INPUT_HZ, [steady])
+    swing = [s.swing_deg for s in report.record.shafts]
+    assert swing[0] is None  # the tacho's own shaft: its wheel's errors are there
+    assert swing[shaft] == pytest.approx(360 * 0.002, rel=0.05)
+    assert swing[other] < 0.05 * swing[shaft]
+    names = list(MACHINE.shafts)
+    assert report.swing_change_db[names[shaft]] > 20
+    data = report.to_dict()["shafts"]
+    assert data[shaft]["swing_deg"] == swing[shaft] and data[0]["swing_change_db"] is None
+    # along the mesh's angle nothing is measured: the mesh's phase does not hold the swing
+    along_mesh = machine_record(swinging, MACHINE, SpeedSettings("mesh", tacho="tacho"),
+                                INPUT_HZ)
+    assert all(s.swing_deg is None for s in along_mesh.shafts)

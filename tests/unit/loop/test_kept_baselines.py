@@ -92,3 +92,15 @@ def test_a_record_is_plain_data_and_back(healthy):
     back = MachineRecord.from_dict(data)
     assert back.shafts == healthy.shafts and back.file == healthy.file
     assert back.speed.to_dict() == healthy.speed.to_dict()
+
+
+def test_a_tacho_records_swing_is_kept_and_a_baseline_kept_before_it_has_none():
+    tacho = SpeedSettings("tacho", tacho="tacho", pulses_per_rev=10)
+    kept = machine_record(record(1, tacho_pulses=10, swing=((1, 0.002),)), MACHINE, tacho,
+                          INPUT_HZ)
+    data = kept.to_dict()
+    assert MachineRecord.from_dict(data).shafts == kept.shafts
+    assert kept.shafts[1].swing_deg > 0.5
+    for shaft in data["shafts"]:
+        del shaft["swing_deg"]
+    assert [s.swing_deg for s in MachineRecord.from_dict(data).shafts] == [None] * 3
