@@ -208,7 +208,6 @@ def angle_swing(machine, files: list[Path]) -> int:
     from pydiag.gear.machine_indicators import shaft_records
 
     ratios = [float(machine.shaft_ratio(k)) for k in range(len(machine.shafts))]
-    teeth = machine.stages[0].pinion_teeth
 
     def filtered(revs, valid, band_hz, btype):
         """``revs`` within ``valid`` with its deviation from a straight line filtered."""
