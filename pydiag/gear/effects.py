@@ -186,25 +186,74 @@ def _backlash(line, freq, f_mesh):
 MAX_SHAFT_ORDER_M_S2 = 5000.0
 
 
+#: A pinion order another shaft turns at too is fitted only where its unexplained line
+#: stands this many times above that shaft's neighbouring orders' (_pinion_shaft_hint).
+SHARED_ORDER_MARGIN = 2.0
+#: Families of the other shafts' orders (a pair's gear, the other shaft named, a
+#: gearbox's other shafts).
+OTHER_SHAFTS = ("gear", "other_shaft", "machine_shaft")
+
+
 def _pinion_shaft(line, freq, f_mesh):
-    # the pinion shaft's own lines: its first orders, far below the mesh's sidebands, but
-    # for those the gear's shaft turns at too (2x pinion is 3x gear on 14/21 teeth) or a
-    # bearing's line falls on (in a spectrum of joined halves, within half a bin: 2x BPFO
-    # on 7x pinion on the catalogue's 6205): their lines there are no evidence for it
-    ok = (line is not None and line.family == "pinion" and line.order <= SHAFT_ORDERS
-          and not set(line.also) & {"gear", *BEARING_FAMILIES})
-    return 1.0 if ok else 0.0
+    # the pinion shaft's own lines: its first orders, far below the mesh's sidebands. An
+    # order another shaft turns at too (2x pinion is 3x gear on 14/21 teeth; every order
+    # of the PHM09 box's 32-tooth input pinion is an order of its idler's and of its
+    # output's) is a line it may make (0.5), which the hint fits only where the line
+    # stands above the other shaft's orders around it. One a bearing's line falls on (in
+    # a spectrum of joined halves, within half a bin: 2x BPFO on 7x pinion on the
+    # catalogue's 6205) is no evidence for it
+    if (line is None or line.family != "pinion" or line.order > SHAFT_ORDERS
+            or set(line.also) & set(BEARING_FAMILIES)):
+        return 0.0
+    return 0.5 if set(line.also) & set(OTHER_SHAFTS) else 1.0
 
 
 def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """The orders whose line it does not claim (:func:`_pinion_shaft`: one the gear's shaft
-    has a line at too, or a mesh sideband on a pinion of few teeth) are not fitted."""
+    """The orders whose line it does not claim (:func:`_pinion_shaft`: one a bearing's
+    line falls on, or a mesh sideband on a pinion of few teeth) are not fitted, nor one
+    another shaft turns at too unless the residual's line there stands
+    :data:`SHARED_ORDER_MARGIN` times above each such shaft's orders 1 and 2 either side
+    of it that are no pinion order: a line of another shaft's comb (a gear's faulty
+    tooth strikes at every one of its orders) is as high as its neighbours, and the
+    pinion's own vibration stands out of it. Without a spectrum (``bin_hz`` 0: what the
+    pair alone says) a shared order may be fitted."""
     if kin is None:
         return {}
     fp = kin.f_pinion_hz
     lines = kinematic_map(kin, (SHAFT_ORDERS + 0.5) * fp)
-    return {f"A_s{k}": None for k in range(1, SHAFT_ORDERS + 1)
-            if _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin.f_mesh_hz) == 0}
+    out = {}
+    for k in range(1, SHAFT_ORDERS + 1):
+        weight = _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin.f_mesh_hz)
+        if weight == 0 or (weight < 1 and bin_hz > 0
+                           and not _stands_out(k * fp, peaks, bin_hz, kin)):
+            out[f"A_s{k}"] = None
+    return out
+
+
+def _stands_out(freq_hz: float, peaks: list[Peak], bin_hz: float, kin: GearKinematics) -> bool:
+    """Whether the residual's line at the pinion order ``freq_hz`` stands
+    :data:`SHARED_ORDER_MARGIN` times above every other shaft's orders next to it (those
+    that are no pinion order), in the largest excess over the model of any channel."""
+    def excess(f: float) -> float:
+        return max((p.amplitude for p in peaks if abs(p.freq_hz - f) <= 0.5 * bin_hz),
+                   default=0.0)
+
+    fp = kin.f_pinion_hz
+    shafts = [kin.f_gear_hz, kin.f_other_shaft_hz or fp]
+    if kin.machine is not None:
+        shafts += [shaft.ratio * fp for shaft in kin.machine.shafts]
+    neighbours = []
+    for f_shaft in shafts:
+        order = freq_hz / f_shaft
+        if math.isclose(f_shaft, fp, rel_tol=1e-9) or abs(order - round(order)) > 1e-6:
+            continue
+        for step in (-2, -1, 1, 2):
+            f = (round(order) + step) * f_shaft
+            turns = f / fp
+            if f > 0 and abs(turns - round(turns)) > 1e-6:
+                neighbours.append(excess(f))
+    own = excess(freq_hz)
+    return own > 0 and own > SHARED_ORDER_MARGIN * max(neighbours, default=0.0)
 
 
 def _other_shaft(line, freq, f_mesh):

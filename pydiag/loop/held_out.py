@@ -232,8 +232,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     if why_not := effect.unknown_lines(kin):
         return untried(why_not)
     if not effect_parameters(problem, base, effect):
-        return untried("no line of it stands above the noise where it can be told from the "
-                       "pair's")
+        return untried("no line of it stands out (of the noise, or of another shaft's orders "
+                       "around it) where it can be told from the pair's")
     memo = {} if memo is None else memo
     if band not in memo:
         memo[band] = halves(problem, base, band)

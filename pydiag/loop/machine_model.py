@@ -184,8 +184,8 @@ def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
 
 def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
     """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine`` (every line
-    it would fit is another's of the stage: a 32-tooth pinion driving 96 has no pinion
-    order that is not also one of its gear's), or "" when it has."""
+    it would fit is another's of the stage: each of the first ten orders of a 6-tooth
+    pinion is a mesh harmonic or one of its sidebands), or "" when it has."""
     effect = EFFECTS[key]
     kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
     if effect.parameters and not effect.bounds([], 0.0, kin):

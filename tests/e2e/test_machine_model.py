@@ -169,8 +169,8 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     """Two effects with models of their own on one stage make its mesh their composed
     model, declared inside the machine's; one of the pair's own parameters frees them; a tooth's
     index ranges over the stage's own teeth; an effect with nothing to fit on the stage
-    (every order of a 32-tooth pinion driving 96 is also one of its gear's) is refused; the
-    parameters of an affine effect are known as such."""
+    (every one of the first ten orders of a 6-tooth pinion is a mesh harmonic or one of
+    their sidebands) is refused; the parameters of an affine effect are known as such."""
     import dataclasses
 
     from pydiag.core.errors import UsageError
@@ -188,8 +188,16 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     assert ranges["input_stage.tooth_g"] == (0.0, 96.0)
     assert ranges["input_stage.ecc_gear"] == (0.0, 50e-6)
     assert ranges["output_stage.k2"] == (0.0, 0.3) and "input_stage.k2" not in ranges
+    small = dataclasses.replace(phm, stages=(dataclasses.replace(phm.stages[0], pinion_teeth=6,
+                                                                  gear_teeth=18),
+                                             *phm.stages[1:]))
     with pytest.raises(UsageError, match="pinion_shaft_orders has nothing to fit on input"):
-        machine_model(dataclasses.replace(phm, effects=(StageEffect("pinion_shaft_orders", 0),)))
+        machine_model(dataclasses.replace(small,
+                                          effects=(StageEffect("pinion_shaft_orders", 0),)))
+    # a 32-tooth pinion driving 96: each of its orders is one of its gear's too; the model
+    # has them all (a try fits those whose lines stand out of the gear's comb)
+    assert machine_model(dataclasses.replace(
+        phm, effects=(StageEffect("pinion_shaft_orders", 0),)), MODELICA).affine_parameters
     # the parameters fit_machine fits affinely: an affine effect's, not another's or a phase
     both = machine_model(dataclasses.replace(phm, effects=(
         StageEffect("pinion_shaft_orders", 1), StageEffect("mesh_modulation", 1))), MODELICA)
@@ -255,9 +263,10 @@ BOX = ('name = "short box"\ninput_rpm = 1500\n'
 
 def test_discover_tries_an_effect_on_every_stage_of_the_machines_model(tmp_path, capsys):
     """discover --machine without --fmu: the effect asked for, tried held out on each stage
-    of the machine's own model (a row a stage, named for it, in the text and the JSON);
-    where it has nothing to fit (every order of the 18-tooth pinion driving 36 is also one
-    of its gear's) it is not tried, and says why. An effect no stage can have, and --stage
+    of the machine's own model (a row a stage, named for it, in the text and the JSON; every
+    order of the 18-tooth pinion driving 36 is also one of its gear's and an output order,
+    so it is fitted only where its line stands out of those shafts' orders around it: not
+    where the output's broken tooth strikes). An effect no stage can have, and --stage
     without --fmu, are one line each."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
@@ -270,11 +279,13 @@ def test_discover_tries_an_effect_on_every_stage_of_the_machines_model(tmp_path,
                  "2", "--polish", "10", "--json", str(tmp_path / "d.json")]) == 0
     out = capsys.readouterr().out
     rows = json.loads((tmp_path / "d.json").read_text())["ranking"]
-    assert [(d["effect"], d["stage"]) for d in rows] == [
-        ("pinion_shaft_orders", "stage 2"), ("pinion_shaft_orders", "stage 1")]
-    assert rows[0]["z"] is not None and rows[1]["status"] == "not tried"
-    assert "pinion_shaft_orders has nothing to fit on stage 1" in rows[1]["message"]
-    assert "pinion_shaft_orders on stage 2" in out
+    tried = {d["stage"]: d for d in rows if d["effect"] == "pinion_shaft_orders"}
+    assert sorted(tried) == ["stage 1", "stage 2"] and tried["stage 2"]["z"] is not None
+    # the output's broken tooth strikes at every output order, and each input order is
+    # the 5th of those: none stands out of the output's orders around it
+    assert tried["stage 1"]["status"] == "not tried", tried["stage 1"]
+    assert "another shaft's orders" in tried["stage 1"]["message"]
+    assert "pinion_shaft_orders on stage 1" in out and "pinion_shaft_orders on stage 2" in out
     assert "not an effect a stage of a machine's model can have: housing_sensor" in refused(
         capsys, *common, "--effects", "housing_sensor")
     assert "--stage 2: discover fits that stage's pair model: give it with --fmu" in refused(

@@ -207,17 +207,14 @@ def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, ef
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="a known gap: no effect claims a pinion order that "
-                   "is a gear order too (bench/RESULTS.md section 13)")
 def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_fmu,
                                                                            effect_fmu_of):
     """14/42 teeth: every pinion order is a gear order (the PHM09 box's 32/96 stage is
-    such a pair), so which shaft makes a line there the record does not say. The
-    simulator's misaligned coupling (1x-3x of the pinion's angle) should be the one
-    confident suggestion, and nothing without it. It is missed (a housing mode saturates
-    in its place): pinion_shaft_orders claims no order the gear's shaft shares. A claim
-    at half weight found it, but was confident on other shafts' lines too
-    (bench/RESULTS.md section 13): not kept."""
+    such a pair), so which shaft makes a line there the spectrum alone does not say. The
+    simulator's misaligned coupling (1x-3x of the pinion's angle) stands out of the gear's
+    orders around it and is the one confident suggestion; without it nothing is (when
+    pinion_shaft_orders claimed no shared order, the coupling was missed and a housing
+    mode saturated in its place)."""
     op = {**OPERATING_POINT, "n_pinion": 14, "n_gear": 42}
     for coupling in (3.0, 0.0):
         g = TruthGear(n_gear=42).with_effects(coupling_acc=coupling)
