@@ -34,6 +34,8 @@ input shaft's: shaft k turns at ``Machine.shaft_ratio(k)`` times it. Example::
     [[effects]]                       # optional: what the machine's own model adds to a
     key = "gear_tooth_fault"          #   stage, a catalogue effect (pydiag accept writes
     stage = "first"                   #   these; the stage may be left out of one stage's)
+    off = ["A_s5"]                    # optional: its parameters held at their neutral
+                                      #   value (pydiag loop: those its try did not fit)
 
 Planetary stages (``type = "planetary"``) are recognised and refused: their kinematics
 are not built yet. Every mistake is a :class:`~pydiag.core.errors.MachineError` naming the
@@ -71,7 +73,7 @@ _BEARING_KEYS = {"name", "shaft", "n_balls", "ball_diameter_mm", "pitch_diameter
                  "contact_angle_deg"}
 _SENSOR_KEYS = {"channel", "unit", "sensitivity", "near_stage", "output"}
 _TACHO_KEYS = {"channel", "pulses_per_rev", "shaft"}
-_EFFECT_KEYS = {"key", "stage"}
+_EFFECT_KEYS = {"key", "stage", "off"}
 
 
 @dataclass(frozen=True)
@@ -117,10 +119,12 @@ class Tacho:
 @dataclass(frozen=True)
 class StageEffect:
     """A catalogue effect (:mod:`pydiag.gear.effects`, by key) the machine's own model
-    has on the stage with index ``stage``."""
+    has on the stage with index ``stage``; ``off``: its parameters held at their neutral
+    value (a shaft's orders whose lines its try found another shaft's)."""
 
     key: str
     stage: int
+    off: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -417,9 +421,14 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
         if stage not in names:
             raise MachineError(f"{_where(source, where, 'stage')}: no stage called {stage!r}; "
                                f"the stages are {', '.join(names)}")
-        if StageEffect(key, names.index(stage)) in effects:
+        if any((e.key, e.stage) == (key, names.index(stage)) for e in effects):
             raise MachineError(f"{_where(source, where, 'key')}: {key} is on {stage} twice")
-        effects.append(StageEffect(key, names.index(stage)))
+        off = t.get("off", [])
+        known = [p.name for p in EFFECTS[key].parameters]
+        if not isinstance(off, list) or any(name not in known for name in off):
+            raise MachineError(f"{_where(source, where, 'off')}: a list of {key}'s parameters "
+                               f"({', '.join(known)}), got {off!r}")
+        effects.append(StageEffect(key, names.index(stage), tuple(off)))
     return Machine(machine.name, stages, machine.shafts, machine.input_hz, tuple(bearings),
                    tuple(sensors), tacho, source, tuple(effects))
 

@@ -4,7 +4,8 @@ its stage, and again with the model that has it, until nothing is confident.
 
 Each step's fit also starts from the step before's, with the accepted effect at its
 held-out fit (:func:`pydiag.loop.machine_model.fit_machine`), so the error it fits does
-not rise from step to step. Every accepted effect is written into a copy of the machine
+not rise from step to step; the parameters its try did not fit (a shaft's orders whose
+lines are another shaft's) are held off in the accepted model (:func:`held_off`). Every accepted effect is written into a copy of the machine
 file (:func:`pydiag.loop.
 machine_model.accept`), so the loop ends with a machine file the user can read, compare
 with another record, edit, and loop on again; each step's model is built from that file
@@ -19,6 +20,7 @@ from typing import Callable
 
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
+from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine, load_machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.accumulate import LoopStep
@@ -68,5 +70,19 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
             progress(steps[-1])
         if steps[-1].accepted is None:
             return steps
-        accept(path, best.effect, best.stage)
+        accept(path, best.effect, best.stage, held_off(machine, best.effect, best.stage,
+                                                         h.parameters))
         start = {**c.parameters, **h.parameters}
+
+
+def held_off(machine: Machine, key: str, stage: str, fitted: dict[str, float]
+             ) -> tuple[str, ...]:
+    """The parameters of the effect ``key`` that stage ``stage`` of ``machine`` could have
+    and its try did not fit (``fitted``, named ``<instance>.<name>``): a shaft's orders
+    whose lines stood out of no other shaft's. The accepted model holds them off, so that
+    it fits what the try was confirmed with."""
+    index = machine.stage_index(stage)
+    own = {name.split(".", 1)[-1] for name in fitted}
+    possible = EFFECTS[key].bounds([], 0.0, machine.stage_kinematics(index, machine.input_hz
+                                                                     or 1.0))
+    return tuple(p.name for p in possible if p.name not in own)

@@ -60,7 +60,7 @@ from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS, Effect
-from pydiag.gear.machine import Machine, StageEffect, load_machine, machine_from_dict
+from pydiag.gear.machine import Machine, load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
 from pydiag.io.outputs import write_text
@@ -201,11 +201,14 @@ def _effect_parameters(machine: Machine, k: int, instance: str
     and the names of those fitted that an affine effect's outputs are affine in."""
     kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
     fitted, fixed, affine = [], {}, set()
-    for e in (stage_effect(EFFECTS[s.key], instance, ()) for s in machine.effects
-              if s.stage == k):
+    for accepted in machine.effects:
+        if accepted.stage != k:
+            continue
+        e = stage_effect(EFFECTS[accepted.key], instance, ())
         if why := nothing_to_fit(machine, k, e.key):
             raise UsageError(f"{machine.source}: effects: {why}")
-        chosen = e.bounds([], 0.0, kin)
+        held = {f"{instance}.{name}" for name in accepted.off}
+        chosen = [p for p in e.bounds([], 0.0, kin) if p.name not in held]
         names = {p.fmu_variable for p in chosen}
         fixed.update({name: value for name, value in e.neutral_values().items()
                       if name not in names})
@@ -418,10 +421,12 @@ def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
                             Path(build_dir) / "machines")
 
 
-def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
+def accept(path: str | Path, key: str, stage: str | None = None,
+           off: tuple[str, ...] = ()) -> Machine:
     """Give the machine of the file ``path`` the effect ``key`` on ``stage`` (its name or
-    number; may be left out for a machine of one stage): an ``[[effects]]`` table added at
-    the end of the file, the rest of it (comments too) as it was. The file is checked as
+    number; may be left out for a machine of one stage), with its parameters ``off`` held
+    at their neutral value: an ``[[effects]]`` table added at the end of the file, the rest
+    of it (comments too) as it was. The file is checked as
     it would be read first and replaced whole, so a refused or failed edit leaves it as
     it was. Returns the machine it now describes."""
     path = Path(path)
@@ -435,11 +440,13 @@ def accept(path: str | Path, key: str, stage: str | None = None) -> Machine:
                          f"is on ({machine.stage_choices()})")
     index = 0 if stage is None else machine.stage_index(stage)
     name = machine.stages[index].name
-    if StageEffect(key, index) in machine.effects:
+    if any((e.key, e.stage) == (key, index) for e in machine.effects):
         raise UsageError(f"{path}: {key} is on {name} already")
     text = path.read_text(encoding="utf-8")
     text += ("" if text.endswith("\n") or not text else "\n") + \
         f'\n[[effects]]\nkey = "{key}"\nstage = {json.dumps(name)}\n'
+    if off:
+        text += f"off = {json.dumps(list(off))}\n"
     edited = machine_from_dict(tomllib.loads(text), str(path))
     write_text(path, text, force=True)
     return edited

@@ -205,6 +205,28 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     assert {"output_stage.A_s1", "output_stage.m_p", "output_stage_mesh_phase"} <= names
     assert both.affine_parameters == {n for n in names if n.startswith("output_stage.A_s")}
     assert not model.affine_parameters
+    # the orders an accepted effect holds off (those its try did not fit) are not fitted
+    held = machine_model(dataclasses.replace(phm, effects=(
+        StageEffect("pinion_shaft_orders", 0, ("A_s5", "A_s6")),)), MODELICA)
+    assert held.affine_parameters == {f"input_stage.A_s{k}" for k in (1, 2, 3, 4, 7, 8, 9, 10)}
+
+
+def test_the_loop_accepts_an_effect_with_what_its_try_did_not_fit_held_off(tmp_path):
+    """The orders a try left unfitted (their lines another shaft's) go into the machine
+    file's ``off`` with the effect, and the file reads back with them."""
+    from pydiag.loop.machine_loop import held_off
+    from pydiag.loop.machine_model import accept
+    path = tmp_path / "phm.toml"
+    path.write_text((ROOT / "examples" / "phm09_spur.toml").read_text())
+    machine = load_machine(path)
+    off = held_off(machine, "pinion_shaft_orders", "input stage",
+                   {"input_stage.A_s1": 400.0, "input_stage.A_s2": 200.0})
+    assert off == tuple(f"A_s{k}" for k in range(3, 11))
+    assert held_off(machine, "mesh_modulation", "output stage",
+                    {f"output_stage.{p}": 0.1 for p in ("m_p", "phi_p", "m_g", "phi_g")}) == ()
+    edited = accept(path, "pinion_shaft_orders", "input stage", off)
+    assert edited.effects[-1].off == off and load_machine(path).effects == edited.effects
+    assert 'off = ["A_s3", "A_s4"' in path.read_text()
 
 
 def test_each_stage_sees_the_machines_lines_from_its_own_shafts():

@@ -80,6 +80,9 @@ def test_example_files_read_and_their_shafts_turn_as_the_teeth_say():
     ({"effects": [{"key": "backlash"}]}, "effects[0].stage"),
     ({"effects": [{"key": "backlash", "stage": "third"}]}, "effects[0].stage"),
     ({"effects": [{"key": "backlash", "stage": "stage 2"}] * 2}, "effects[1].key"),
+    ({"effects": [{"key": "backlash", "stage": "stage 2", "off": ["A_s1"]}]}, "effects[0].off"),
+    ({"effects": [{"key": "pinion_shaft_orders", "stage": "stage 2", "off": "A_s1"}]},
+     "effects[0].off"),
 ])
 def test_a_bad_machine_file_is_refused_naming_the_file_and_the_key(tmp_path, change, key):
     path = tmp_path / "box.toml"
