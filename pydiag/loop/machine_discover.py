@@ -62,6 +62,14 @@ def _try_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key
                         estimator, stage.memo, name)
 
 
+def lacking(machine: Machine, model: MachineModel, stage: int) -> dict[str, Effect]:
+    """The catalogue as stage ``stage`` of ``model`` has it
+    (:func:`~pydiag.loop.machine_model.stage_effects`) but the effects the machine file
+    already gives it, whatever parameters of theirs it holds off."""
+    has = {e.key for e in machine.effects if e.stage == stage}
+    return {key: e for key, e in stage_effects(model, stage).items() if key not in has}
+
+
 def check_effects(effects: list[str] | None) -> None:
     """A UsageError naming those of ``effects`` no stage of a machine's model can have
     (:func:`~pydiag.loop.machine_model.on_a_stage`), before any work."""
@@ -84,7 +92,7 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     share; ``progress`` gets each row as it is done."""
     check_effects(effects)
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
-    catalogues = [stage_effects(model, k) for k in range(len(machine.stages))]
+    catalogues = [lacking(machine, model, k) for k in range(len(machine.stages))]
     views = [stage_view(problem, machine, k) for k in range(len(machine.stages))]
     tasks = [(k, key) for k, catalogue in enumerate(catalogues) for key, effect in
              catalogue.items() if (not effects or key in effects)
@@ -145,7 +153,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     stages, tasks, fmus = {}, [], {}
     for k in range(len(machine.stages)):
-        view, effects = stage_view(problem, machine, k), stage_effects(model, k)
+        view, effects = stage_view(problem, machine, k), lacking(machine, model, k)
         seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
                        parameters=comparison.parameters, effects=effects)
         keys = []
@@ -172,7 +180,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         def fmu(effect: Effect, k: int = k) -> str:
             return effect_model(_with_effect(machine, effect.key, k))
         checked = validate(stage.view, stage.seen, fmu, estimator,
-                           effects=stage_effects(model, k),
+                           effects=lacking(machine, model, k),
                            tried={key: h for (j, key), h in tried.items() if j == k},
                            every_synchronous=every_synchronous,
                            progress=None if progress is None else

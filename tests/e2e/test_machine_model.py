@@ -213,7 +213,8 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
 
 def test_the_loop_accepts_an_effect_with_what_its_try_did_not_fit_held_off(tmp_path):
     """The orders a try left unfitted (their lines another shaft's) go into the machine
-    file's ``off`` with the effect, and the file reads back with them."""
+    file's ``off`` with the effect, the file reads back with them, and the effect is not
+    tried on that stage again."""
     from pydiag.loop.machine_loop import held_off
     from pydiag.loop.machine_model import accept
     path = tmp_path / "phm.toml"
@@ -227,6 +228,11 @@ def test_the_loop_accepts_an_effect_with_what_its_try_did_not_fit_held_off(tmp_p
     edited = accept(path, "pinion_shaft_orders", "input stage", off)
     assert edited.effects[-1].off == off and load_machine(path).effects == edited.effects
     assert 'off = ["A_s3", "A_s4"' in path.read_text()
+    # and it is not tried on that stage again for what it holds off
+    from pydiag.loop.machine_discover import lacking
+    model = machine_model(edited, MODELICA)
+    assert "pinion_shaft_orders" not in lacking(edited, model, 0)
+    assert "pinion_shaft_orders" in lacking(edited, model, 1)
 
 
 def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
