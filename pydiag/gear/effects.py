@@ -44,6 +44,8 @@ class Effect:
         parameters: what it adds, named as its FMU variables, with the ranges its Modelica
             file declares
         weight: its signature, (line or None, freq_hz, f_mesh_hz) -> 0..1
+        claim: its signature where it depends on the whole pair, (line or None, freq_hz,
+            kinematics) -> 0..1, in place of ``weight`` (:meth:`weight_at`)
         hint: (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted here}
         in_base: its parameters are the base model's, neutral by default: it frees them in
             the base FMU instead of building a model of its own
@@ -94,6 +96,15 @@ class Effect:
     machine_values: Callable[[GearKinematics | None], dict[str, float]] | None = None
     missing: Callable[[GearKinematics | None], str] | None = None
     transfer: HousingMode | None = None
+    claim: Callable[[KinematicLine | None, float, GearKinematics], float] | None = None
+
+    def weight_at(self, line: KinematicLine | None, freq_hz: float,
+                  kinematics: GearKinematics) -> float:
+        """Its signature's weight at ``freq_hz`` (``line``: the kinematic line there) on the
+        pair of ``kinematics``."""
+        if self.claim is not None:
+            return self.claim(line, freq_hz, kinematics)
+        return self.weight(line, freq_hz, kinematics.f_mesh_hz)
 
     @property
     def own_fmu(self) -> bool:
@@ -208,22 +219,51 @@ def _pinion_shaft(line, freq, f_mesh):
     return 0.5 if set(line.also) & set(OTHER_SHAFTS) else 1.0
 
 
+def _every_order_shared(kin: GearKinematics) -> bool:
+    """Whether the pinion's 1x, and so each of its orders, is an order of another shaft
+    (a 32-tooth pinion driving 96: the gear turns once in 3 of its turns)."""
+    fp = kin.f_pinion_hz
+    for f_shaft in _other_speeds(kin):
+        turns = fp / f_shaft
+        if not math.isclose(f_shaft, fp, rel_tol=1e-9) and abs(turns - round(turns)) <= 1e-6:
+            return True
+    return False
+
+
+def _other_speeds(kin: GearKinematics) -> list[float]:
+    """The speeds of the shafts other than the pinion's that the kinematics know."""
+    fp = kin.f_pinion_hz
+    speeds = [kin.f_gear_hz] + ([kin.f_other_shaft_hz] if kin.f_other_shaft_hz else [])
+    if kin.machine is not None:
+        speeds += [shaft.ratio * fp for shaft in kin.machine.shafts]
+    return speeds
+
+
+def _pinion_shaft_claim(line, freq, kin: GearKinematics) -> float:
+    # a shared order is claimed only where the pinion has no order of its own (each is
+    # another shaft's too): where it has, those are the evidence of its vibration, and a
+    # shared line, which the other shaft's comb may make (a broken gear tooth strikes at
+    # every gear order), is left to neither
+    weight = _pinion_shaft(line, freq, kin.f_mesh_hz)
+    return weight if weight == 1.0 or _every_order_shared(kin) else 0.0
+
+
 def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """The orders whose line it does not claim (:func:`_pinion_shaft`: one a bearing's
-    line falls on, or a mesh sideband on a pinion of few teeth) are not fitted, nor one
-    another shaft turns at too unless the residual's line there stands
-    :data:`SHARED_ORDER_MARGIN` times above each such shaft's orders 1 and 2 either side
-    of it that are no pinion order: a line of another shaft's comb (a gear's faulty
-    tooth strikes at every one of its orders) is as high as its neighbours, and the
-    pinion's own vibration stands out of it. Without a spectrum (``bin_hz`` 0: what the
-    pair alone says) a shared order may be fitted."""
+    """The orders whose line it does not claim (:func:`_pinion_shaft_claim`: one a
+    bearing's line falls on, a mesh sideband on a pinion of few teeth, one another shaft
+    turns at too where the pinion has orders of its own) are not fitted, nor a shared
+    one whose residual's line does not stand :data:`SHARED_ORDER_MARGIN` times above each
+    other shaft's orders 1 and 2 either side of it that are no pinion order: a line of
+    another shaft's comb is as high as its neighbours, the pinion's own vibration stands
+    out of it. Without a spectrum (``bin_hz`` 0: what the pair alone says) a shared order
+    it claims may be fitted."""
     if kin is None:
         return {}
     fp = kin.f_pinion_hz
     lines = kinematic_map(kin, (SHAFT_ORDERS + 0.5) * fp)
     out = {}
     for k in range(1, SHAFT_ORDERS + 1):
-        weight = _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin.f_mesh_hz)
+        weight = _pinion_shaft_claim(match(k * fp, lines, 1e-6 * fp), k * fp, kin)
         if weight == 0 or (weight < 1 and bin_hz > 0
                            and not _stands_out(k * fp, peaks, bin_hz, kin)):
             out[f"A_s{k}"] = None
@@ -239,11 +279,8 @@ def _stands_out(freq_hz: float, peaks: list[Peak], bin_hz: float, kin: GearKinem
                    default=0.0)
 
     fp = kin.f_pinion_hz
-    shafts = [kin.f_gear_hz, kin.f_other_shaft_hz or fp]
-    if kin.machine is not None:
-        shafts += [shaft.ratio * fp for shaft in kin.machine.shafts]
     neighbours = []
-    for f_shaft in shafts:
+    for f_shaft in _other_speeds(kin):
         order = freq_hz / f_shaft
         if math.isclose(f_shaft, fp, rel_tol=1e-9) or abs(order - round(order)) > 1e-6:
             continue
@@ -502,7 +539,8 @@ EFFECTS = {e.key: e for e in (
            "looseness)",
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
-           _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True),
+           _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True,
+           claim=_pinion_shaft_claim),
     # the same, of a shaft beyond the pair at a speed ratio the kinematics give: not
     # synchronous with the pair's period in general (a motor shaft at 29/17 of the pinion's)
     Effect("other_shaft_orders", "GearDiag.Effects.OtherShaftOrders",

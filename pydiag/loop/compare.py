@@ -99,9 +99,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
              for ch, p, line, f, m, s in candidates]
     suggestions, claims = [], {}
     for effect in effects.values():
-        weight = effect.weight
         changed = evidence_channels(problem, effect)
-        support = [(weight(line, f, kin.f_mesh_hz) * pk.energy_fraction, i, pk)
+        support = [(effect.weight_at(line, f, kin) * pk.energy_fraction, i, pk)
                    for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))
                    if pk.channel in changed]
         support = [(w, i, pk) for w, i, pk in support if w > 0]

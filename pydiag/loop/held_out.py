@@ -245,11 +245,10 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     test_half = fit_half.other_half()
     bin_hz = 1.0 / (n_half * kin.period_s)
     lines = shared.lines  # where the halves' spectra show them (a non-synchronous one moves)
-    weight = effect.weight
     changed = evidence_channels(problem, effect)  # on the others, none of its evidence
     all_freqs = next(iter(measured_a.spectra.values())).freq_hz
     def claim(mask: np.ndarray) -> np.ndarray:  # whether its signature claims each bin
-        return np.array([weight(match(fk, lines, bin_hz), fk, kin.f_mesh_hz) > 0
+        return np.array([effect.weight_at(match(fk, lines, bin_hz), fk, kin) > 0
                          for fk in all_freqs[mask]], dtype=bool)
     freqs = all_freqs[bins]
     claims = claim(bins)

@@ -205,8 +205,8 @@ def test_a_competitor_the_shared_lines_tell_apart_does_not_beat_an_effect():
 
 
 def test_an_effect_is_in_the_model_when_every_parameter_it_fits_on_this_pair_is():
-    """The pinion shaft's orders 8 to 10 are mesh sidebands on 14/21 teeth and never
-    fitted: a model fitting its first seven has it; one fitting some of them does not."""
+    """The pinion shaft's even orders are gear orders on 14/21 teeth and never fitted: a
+    model fitting its odd ones has it; one fitting some of them does not."""
     from types import SimpleNamespace
 
     from pydiag.core.parameters import Parameter
@@ -215,8 +215,8 @@ def test_an_effect_is_in_the_model_when_every_parameter_it_fits_on_this_pair_is(
     def problem(names):
         return SimpleNamespace(parameters=tuple(Parameter(n, 0.0, 1.0) for n in names),
                                kinematics=GearKinematics(14, 21, 25.0))
-    assert in_model(problem(["a0", *(f"A_s{k}" for k in range(1, 8))]), shaft)
-    assert not in_model(problem(["a0", "A_s1", "A_s3", "A_s5", "A_s7"]), shaft)
+    assert in_model(problem(["a0", "A_s1", "A_s3", "A_s5", "A_s7"]), shaft)
+    assert not in_model(problem(["a0", "A_s1", "A_s3"]), shaft)
     assert not in_model(problem(["a0"]), EFFECTS["housing_sensor"])
     assert in_model(problem(["a0", "f_housing", "zeta_housing"]), EFFECTS["housing_sensor"])
     # another shaft's orders are fitted where the record has lines: a model with some of
