@@ -27,12 +27,13 @@ With ``--tacho-angle`` the stages are judged on every shaft's TSA along the tach
 (the speed column stays the mesh's, found without the tacho).
 
 With ``--angle-swing`` each record's input-shaft angle is compared along the tacho and
-along the mesh: the tacho's angle's swing once a turn of each slower shaft (degrees of the
-input's turn, as ``indicators --machine`` reports it), and the input shaft's FM4 (mean of
-the channels) along four angles: the tacho's; the tacho's without what swings above half the slowest shaft's speed
-(low-passed); the mesh's; the mesh's with the tacho's swing between half the slowest
-shaft's speed and half the input's added back. Which of them show a local fault of the
-input pinion says whether the mesh's angle loses it by not following that swing.
+along the mesh: the tacho's angle's swing once a turn of each slower shaft (degrees of
+the input's turn, as ``indicators --machine`` reports it), and the input shaft's FM4
+(mean of the channels) along four angles: the tacho's; the tacho's without what swings
+above half the slowest shaft's speed (low-passed); the mesh's; the mesh's with the
+tacho's swing between half the slowest shaft's speed and half the input's added back.
+Which of them show a local fault of the input pinion says whether the mesh's angle loses
+it by not following that swing.
 
 Labels: ``spur 1`` all good; ``spur 2`` the 32-tooth input pinion chipped and the
 48-tooth idler pinion eccentric (both stages); other cases are shown without a label.
@@ -246,9 +247,10 @@ def angle_swing(machine, files: list[Path]) -> int:
             fm4.append(float(np.mean([v["fm4"] for v in shafts[0].indicators.values()])))
         print(f"{path.stem[:23]:<24}" + "".join(f"{s:>12.4f}" for s in swings)
               + "".join(f"{v:>{w}.2f}" for v, w in zip(fm4, (8, 10, 8, 12))))
-    print("deg: the swing of the tacho's angle once a turn of the shaft, degrees of the input's "
-          f"turn (as indicators --machine reports it); lp: below {0.5 * min(ratios):.2f}x the input's "
-          "speed; mesh+swing: the tacho's angle less the mesh's between that and 0.5x added")
+    print("deg: the swing of the tacho's angle once a turn of the shaft, degrees of the "
+          "input's turn (as indicators --machine reports it); lp: below "
+          f"{0.5 * min(ratios):.2f}x the input's speed; mesh+swing: the tacho's angle less "
+          "the mesh's between that and 0.5x added")
     return 0
 
 

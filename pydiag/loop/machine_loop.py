@@ -5,12 +5,12 @@ its stage, and again with the model that has it, until nothing is confident.
 Each step's fit also starts from the step before's, with the accepted effect at its
 held-out fit (:func:`pydiag.loop.machine_model.fit_machine`), so the error it fits does
 not rise from step to step; the parameters its try did not fit (a shaft's orders whose
-lines are another shaft's) are held off in the accepted model (:func:`held_off`). Every accepted effect is written into a copy of the machine
-file (:func:`pydiag.loop.
-machine_model.accept`), so the loop ends with a machine file the user can read, compare
-with another record, edit, and loop on again; each step's model is built from that file
-(:func:`pydiag.loop.machine_model.machine_fmu`). The steps are the pair loop's
-(:class:`pydiag.loop.accumulate.LoopStep`), an effect named with its stage.
+lines did not stand out of another shaft's) are held off in the accepted model
+(:func:`held_off`). Every accepted effect is written into a copy of the machine file
+(:func:`pydiag.loop.machine_model.accept`), so the loop ends with a machine file the user
+can read, compare with another record, edit, and loop on again; each step's model is
+built from that file (:func:`pydiag.loop.machine_model.machine_fmu`). The steps are the
+pair loop's (:class:`pydiag.loop.accumulate.LoopStep`), an effect named with its stage.
 """
 
 from __future__ import annotations
@@ -79,8 +79,8 @@ def held_off(machine: Machine, key: str, stage: str, fitted: dict[str, float]
              ) -> tuple[str, ...]:
     """The parameters of the effect ``key`` that stage ``stage`` of ``machine`` could have
     and its try did not fit (``fitted``, named ``<instance>.<name>``): a shaft's orders
-    whose lines stood out of no other shaft's. The accepted model holds them off, so that
-    it fits what the try was confirmed with."""
+    whose lines did not stand out of another shaft's orders around them. The accepted
+    model holds them off, so that it fits what the try was confirmed with."""
     index = machine.stage_index(stage)
     own = {name.split(".", 1)[-1] for name in fitted}
     possible = EFFECTS[key].bounds([], 0.0, machine.stage_kinematics(index, machine.input_hz

@@ -426,9 +426,9 @@ def accept(path: str | Path, key: str, stage: str | None = None,
     """Give the machine of the file ``path`` the effect ``key`` on ``stage`` (its name or
     number; may be left out for a machine of one stage), with its parameters ``off`` held
     at their neutral value: an ``[[effects]]`` table added at the end of the file, the rest
-    of it (comments too) as it was. The file is checked as
-    it would be read first and replaced whole, so a refused or failed edit leaves it as
-    it was. Returns the machine it now describes."""
+    of it (comments too) as it was. The file is checked as it would be read first and
+    replaced whole, so a refused or failed edit leaves it as it was. Returns the machine
+    it now describes."""
     path = Path(path)
     machine = load_machine(path)
     if key not in EFFECTS:
