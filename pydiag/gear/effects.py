@@ -223,20 +223,21 @@ def _every_order_shared(kin: GearKinematics) -> bool:
     """Whether the pinion's 1x, and so each of its orders, is an order of another shaft
     (a 32-tooth pinion driving 96: the gear turns once in 3 of its turns)."""
     fp = kin.f_pinion_hz
-    for f_shaft in _other_speeds(kin):
-        turns = fp / f_shaft
-        if not math.isclose(f_shaft, fp, rel_tol=1e-9) and abs(turns - round(turns)) <= 1e-6:
-            return True
-    return False
+    return any(abs(fp / f - round(fp / f)) <= 1e-6 for f in _other_speeds(kin))
 
 
 def _other_speeds(kin: GearKinematics) -> list[float]:
-    """The speeds of the shafts other than the pinion's that the kinematics know."""
+    """The speeds of the shafts other than the pinion's that the kinematics know, each
+    once (a gearbox's list holds the pair's two shafts too)."""
     fp = kin.f_pinion_hz
     speeds = [kin.f_gear_hz] + ([kin.f_other_shaft_hz] if kin.f_other_shaft_hz else [])
     if kin.machine is not None:
         speeds += [shaft.ratio * fp for shaft in kin.machine.shafts]
-    return speeds
+    out: list[float] = []
+    for f in speeds:
+        if not any(math.isclose(f, seen, rel_tol=1e-9) for seen in [fp, *out]):
+            out.append(f)
+    return out
 
 
 def _pinion_shaft_claim(line, freq, kin: GearKinematics) -> float:
@@ -282,7 +283,7 @@ def _stands_out(freq_hz: float, peaks: list[Peak], bin_hz: float, kin: GearKinem
     neighbours = []
     for f_shaft in _other_speeds(kin):
         order = freq_hz / f_shaft
-        if math.isclose(f_shaft, fp, rel_tol=1e-9) or abs(order - round(order)) > 1e-6:
+        if abs(order - round(order)) > 1e-6:
             continue
         for step in (-2, -1, 1, 2):
             f = (round(order) + step) * f_shaft

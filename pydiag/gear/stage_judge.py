@@ -275,7 +275,7 @@ def swing_changes(record: MachineRecord, baselines: Sequence[MachineRecord]
     for shaft in record.shafts:
         base = [s.swing_deg for b in baselines for s in b.shafts
                 if s.shaft == shaft.shaft and s.swing_deg is not None]
-        out[shaft.shaft] = None
-        if shaft.swing_deg is not None and base and shaft.swing_deg > 0 and np.mean(base) > 0:
-            out[shaft.shaft] = 20 * math.log10(shaft.swing_deg / float(np.mean(base)))
+        mean = float(np.mean(base)) if base else 0.0
+        ok = shaft.swing_deg is not None and shaft.swing_deg > 0 and mean > 0
+        out[shaft.shaft] = 20 * math.log10(shaft.swing_deg / mean) if ok else None
     return out

@@ -20,14 +20,14 @@ from typing import Callable
 
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine, load_machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.machine_discover import validate_machine
-from pydiag.loop.machine_model import MachineModel, accept, compare_machine, machine_problem
+from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem,
+                                       possible_parameters)
 
 
 def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,
@@ -81,8 +81,6 @@ def held_off(machine: Machine, key: str, stage: str, fitted: dict[str, float]
     and its try did not fit (``fitted``, named ``<instance>.<name>``): a shaft's orders
     whose lines did not stand out of another shaft's orders around them. The accepted
     model holds them off, so that it fits what the try was confirmed with."""
-    index = machine.stage_index(stage)
     own = {name.split(".", 1)[-1] for name in fitted}
-    possible = EFFECTS[key].bounds([], 0.0, machine.stage_kinematics(index, machine.input_hz
-                                                                     or 1.0))
-    return tuple(p.name for p in possible if p.name not in own)
+    return tuple(p.name for p in possible_parameters(machine, machine.stage_index(stage), key)
+                 if p.name not in own)

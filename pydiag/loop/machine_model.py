@@ -182,13 +182,17 @@ def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
     return composed.name
 
 
+def possible_parameters(machine: Machine, k: int, key: str) -> tuple[Parameter, ...]:
+    """The parameters of the effect ``key`` that stage ``k`` of ``machine`` may fit, as the
+    stage's kinematics alone say (no record's spectrum), named as the catalogue names them."""
+    return EFFECTS[key].bounds([], 0.0, machine.stage_kinematics(k, machine.input_hz or 1.0))
+
+
 def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
     """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine`` (every line
     it would fit is another's of the stage: each of the first ten orders of a 6-tooth
     pinion is a mesh harmonic or one of its sidebands), or "" when it has."""
-    effect = EFFECTS[key]
-    kin = machine.stage_kinematics(k, machine.input_hz or 1.0)
-    if effect.parameters and not effect.bounds([], 0.0, kin):
+    if EFFECTS[key].parameters and not possible_parameters(machine, k, key):
         return (f"{key} has nothing to fit on {machine.stages[k].name} (its lines are all "
                 "another's of the stage's)")
     return ""

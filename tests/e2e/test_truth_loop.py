@@ -212,9 +212,7 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
     """14/42 teeth: every pinion order is a gear order (the PHM09 box's 32/96 stage is
     such a pair), so which shaft makes a line there the spectrum alone does not say. The
     simulator's misaligned coupling (1x-3x of the pinion's angle) stands out of the gear's
-    orders around it and is the one confident suggestion; without it nothing is (when
-    pinion_shaft_orders claimed no shared order, the coupling was missed and a housing
-    mode saturated in its place)."""
+    orders around it and is the one confident suggestion; without it nothing is."""
     op = {**OPERATING_POINT, "n_pinion": 14, "n_gear": 42}
     for coupling in (3.0, 0.0):
         g = TruthGear(n_gear=42).with_effects(coupling_acc=coupling)
