@@ -16,6 +16,9 @@ rtol 1e-11), Table 1 case 1's acceleration was off by 26 % of its peak with fmpy
 at rtol 1e-6 (CVode's absolute tolerance is rtol x nominal, and the acceleration is a
 small difference of large forces), 0.45 % at 1e-8; the native engine was off by
 1.7e-5 at 1e-6. So the defaults are 1e-6 (native) and 1e-8 (fmpy); see bench/speed.py.
+A plant whose runs only rank candidates (a swarm's) may ask the native engine for a looser
+tolerance where none was asked for (``native_tolerance``); fmpy keeps its 1e-8, since
+CVode is off by a quarter of the peak already at 1e-6.
 """
 
 from __future__ import annotations
@@ -39,6 +42,10 @@ from pydiag.fmu.description import (outputs_of, read_model_description, require_
 ENGINES = ("auto", "native", "fmpy")
 #: Simulated start-up discarded before an analysed window, unless an adapter says otherwise.
 DEFAULT_WARMUP_S = 0.05
+#: The native engine's relative tolerance when none is asked for (module docstring).
+NATIVE_TOLERANCE = 1e-6
+#: ... and fmpy's (CVode).
+FMPY_TOLERANCE = 1e-8
 
 
 @dataclass(frozen=True)
@@ -52,10 +59,12 @@ class PlantSpec:
     relative_tolerance: float | None = None
     engine: str = "auto"
     cs_step_s: float | None = None
+    native_tolerance: float = NATIVE_TOLERANCE
 
     def open(self) -> "FmuPlant":
         return FmuPlant(self.fmu_path, self.sensors, self.sample_rate_hz,
-                        self.relative_tolerance, self.fixed_values, self.engine, self.cs_step_s)
+                        self.relative_tolerance, self.fixed_values, self.engine, self.cs_step_s,
+                        self.native_tolerance)
 
 
 class FmuPlant:
@@ -65,18 +74,21 @@ class FmuPlant:
         fmu_path: the FMU file
         sensors: names of the output variables to return (one row each)
         sample_rate_hz: output sample rate of :meth:`simulate`
-        relative_tolerance: solver tolerance; None: 1e-6 native, 1e-8 fmpy (see above)
+        relative_tolerance: solver tolerance; None: ``native_tolerance`` with the native
+            engine, :data:`FMPY_TOLERANCE` with fmpy (see above)
         fixed_values: start values applied to every run (e.g. from an adapter)
         engine: "auto", "native" or "fmpy" (see the module docstring)
         cs_step_s: Co-Simulation only: largest communication step; runs sub-step between
             output samples when it is smaller than 1/sample_rate_hz
+        native_tolerance: the native engine's tolerance when ``relative_tolerance`` is None
     """
 
     def __init__(self, fmu_path: str | Path, sensors: tuple[str, ...],
                  sample_rate_hz: float = 10_000.0,
                  relative_tolerance: float | None = None,
                  fixed_values: dict[str, float] | None = None, engine: str = "auto",
-                 cs_step_s: float | None = None) -> None:
+                 cs_step_s: float | None = None,
+                 native_tolerance: float = NATIVE_TOLERANCE) -> None:
         if engine not in ENGINES:
             raise PlantError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
         self.fmu_path = Path(fmu_path)
@@ -84,7 +96,9 @@ class FmuPlant:
             raise PlantError(f"sample rate must be positive, got {sample_rate_hz}")
         self.sample_rate_hz = float(sample_rate_hz)
         self._requested_tolerance = relative_tolerance
-        self.relative_tolerance = relative_tolerance or 1e-6
+        if not native_tolerance > 0:
+            raise PlantError(f"the native tolerance must be positive, got {native_tolerance}")
+        self.relative_tolerance = relative_tolerance or native_tolerance
         self.model_description, self.validation_warnings = read_model_description(self.fmu_path)
         self.variables = variables_of(self.model_description)
         self.sensors = tuple(sensors)
@@ -129,7 +143,7 @@ class FmuPlant:
         self._native = None
         self.engine = "fmpy"
         if self._requested_tolerance is None:
-            self.relative_tolerance = 1e-8
+            self.relative_tolerance = FMPY_TOLERANCE
 
     def _native_runner(self, required: bool):
         try:

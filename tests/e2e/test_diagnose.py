@@ -37,7 +37,8 @@ def test_cli_diagnose_json_contract(gear_fmu, tmp_path):
     assert res.returncode == (1 if data["fault_mode"] == "no_diagnosis" else 0), res.stderr
     assert {"parameters", "fault_mode", "severity", "error", "evaluations", "elapsed_s"} <= set(data)
     assert set(data["parameters"]) == set(NAMES)
-    assert data["evaluations"] == 8 and data["error"] > 0
+    # the swarm's 8 at its own tolerance, then its best distinct positions (3 at most) again
+    assert 8 < data["evaluations"] <= 8 + 3 and data["error"] > 0
     # a pair is a machine of one stage: the JSON of a machine's diagnosis, one stage
     (stage,) = data["stages"]
     assert (stage["pinion_teeth"], stage["gear_teeth"]) == (14, 21)  # GearPair's defaults

@@ -1,6 +1,8 @@
 """The estimator on our own FMU: the objective prefers the truth, results do not depend on
 the worker count, a fit writes nothing."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from conftest import NAMES, noisy_measurement
@@ -36,6 +38,47 @@ def test_result_does_not_depend_on_worker_count(gear_fmu):
     other_seed = FaultEstimator(n_workers=2, **{**kwargs, "seed": 4}).fit(m)
     assert other_seed.parameters != one.parameters
 
+
+
+def test_the_swarm_ranks_at_its_own_tolerance_and_the_answer_is_at_the_problems(
+        gear_fmu, monkeypatch):
+    """The swarm's simulations run at ``swarm_tolerance`` (the native engine), the polish's
+    and the starts' again at the problem's (1e-6), and the error reported is the
+    problem's at the estimate, not the swarm's. A problem that asks for a tolerance of its
+    own is simulated at it throughout."""
+    problem = build_problem(gear_fmu, noisy_measurement(gear_fmu, 8, 0, periods=2))
+    tolerances = []  # (tolerance, batch size) of every batch, in order
+    pool_map = IsolatedPool.map
+
+    def spy(self, xs):
+        spec = self.objective.problem.spec
+        tolerances.append((spec.relative_tolerance or spec.native_tolerance, len(xs)))
+        return pool_map(self, xs)
+
+    monkeypatch.setattr(IsolatedPool, "map", spy)
+    settings = dict(n_particles=4, iterations=3, polish_evaluations=30, polish_starts=2,
+                    n_workers=2, swarm_tolerance=1e-3)
+    r = FaultEstimator(**settings).fit(problem)
+    assert [t for t, _ in tolerances[:3]] == [1e-3] * 3  # the swarm's three iterations
+    assert tolerances[3] == (1e-6, 2)  # its two best distinct positions, again
+    assert {t for t, _ in tolerances[3:]} == {1e-6}
+    objective = ProblemObjective(problem)
+    at_estimate = objective(np.array([r.parameters[n] for n in NAMES]))
+    objective.close()
+    assert r.error == pytest.approx(at_estimate, rel=1e-12)
+    coarse = ProblemObjective(dataclasses.replace(problem, spec=dataclasses.replace(
+        problem.spec, native_tolerance=1e-3)))
+    assert coarse(np.array([r.parameters[n] for n in NAMES])) != pytest.approx(at_estimate,
+                                                                               rel=1e-9)
+    coarse.close()
+
+    tolerances.clear()
+    own = dataclasses.replace(problem, spec=dataclasses.replace(problem.spec,
+                                                                relative_tolerance=1e-7))
+    FaultEstimator(**settings).fit(own)
+    assert {t for t, _ in tolerances} == {1e-7}
+    with pytest.raises(UsageError, match="swarm's tolerance must be positive"):
+        FaultEstimator(swarm_tolerance=0.0).fit(problem)
 
 
 def test_refine_polishes_from_its_start_and_stays_in_its_basin(gear_fmu):

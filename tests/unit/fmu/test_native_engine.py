@@ -169,6 +169,26 @@ def test_driver_integrates_and_stops_when_the_fmu_asks_for_an_event(fmi_version,
         assert rc == native_me.PD_EVENT and n_steps.value == event_after_steps
 
 
+def test_a_native_tolerance_applies_to_the_native_engine_alone(gear_fmu):
+    """``native_tolerance`` (a swarm's plant) loosens the native engine where no
+    tolerance is asked for, and nothing else: an asked tolerance wins, and fmpy keeps its
+    1e-8 (CVode is off by a quarter of the peak at 1e-6). The looser run really is
+    looser: it differs from the default one by more than the default's own error."""
+    params = TABLE1[7].parameters
+    with FmuPlant(gear_fmu, SENSORS, engine="native", native_tolerance=1e-3) as loose, \
+            FmuPlant(gear_fmu, SENSORS, engine="native") as default:
+        assert loose.relative_tolerance == 1e-3
+        a, b = loose.simulate(params, 0.12, 0.05), default.simulate(params, 0.12, 0.05)
+        assert np.max(np.abs(a - b)) > NATIVE_DEFAULT_ACCURACY * np.max(np.abs(b))
+    with FmuPlant(gear_fmu, SENSORS, engine="native", relative_tolerance=1e-7,
+                  native_tolerance=1e-3) as asked:
+        assert asked.relative_tolerance == 1e-7
+    with FmuPlant(gear_fmu, SENSORS, engine="fmpy", native_tolerance=1e-3) as fmpy_:
+        assert fmpy_.relative_tolerance == 1e-8
+    with pytest.raises(PlantError, match="native tolerance must be positive"):
+        FmuPlant(gear_fmu, SENSORS, native_tolerance=0.0)
+
+
 def test_an_fmu_with_events_falls_back_to_fmpy(gear_fmu, monkeypatch):
     """engine auto: the run that meets an event is redone by fmpy, and fmpy (with its own
     default tolerance) serves from then on; engine native: a clear error."""
