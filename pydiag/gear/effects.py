@@ -43,9 +43,9 @@ class Effect:
         description: what it is, in a line
         parameters: what it adds, named as its FMU variables, with the ranges its Modelica
             file declares
-        weight: its signature, (line or None, freq_hz, f_mesh_hz) -> 0..1
-        claim: its signature where it depends on the whole pair, (line or None, freq_hz,
-            kinematics) -> 0..1, in place of ``weight`` (:meth:`weight_at`)
+        weight: its signature, (line or None, freq_hz, kinematics) -> 0..1: the weight of
+            a residual line at ``freq_hz`` (``line``: the kinematic line there) on the pair
+            of ``kinematics``
         hint: (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted here}
         in_base: its parameters are the base model's, neutral by default: it frees them in
             the base FMU instead of building a model of its own
@@ -84,7 +84,7 @@ class Effect:
     model: str
     description: str
     parameters: tuple[Parameter, ...]
-    weight: Callable[[KinematicLine | None, float, float], float]
+    weight: Callable[[KinematicLine | None, float, GearKinematics], float]
     hint: Callable[[list[Peak], float, GearKinematics | None], dict] | None = None
     in_base: bool = False
     synchronous: bool = True
@@ -96,15 +96,6 @@ class Effect:
     machine_values: Callable[[GearKinematics | None], dict[str, float]] | None = None
     missing: Callable[[GearKinematics | None], str] | None = None
     transfer: HousingMode | None = None
-    claim: Callable[[KinematicLine | None, float, GearKinematics], float] | None = None
-
-    def weight_at(self, line: KinematicLine | None, freq_hz: float,
-                  kinematics: GearKinematics) -> float:
-        """Its signature's weight at ``freq_hz`` (``line``: the kinematic line there) on the
-        pair of ``kinematics``."""
-        if self.claim is not None:
-            return self.claim(line, freq_hz, kinematics)
-        return self.weight(line, freq_hz, kinematics.f_mesh_hz)
 
     @property
     def own_fmu(self) -> bool:
@@ -144,7 +135,7 @@ class Effect:
         return {p.fmu_variable: p.fmu_value(p.off) for p in self.parameters}
 
 
-def _gear_eccentricity(line, freq, f_mesh):
+def _gear_eccentricity(line, freq, kin):
     if line is None:
         return 0.0
     if line.family == "gear":
@@ -152,7 +143,7 @@ def _gear_eccentricity(line, freq, f_mesh):
     return 1.0 if line.family == "mesh_sb_gear" and abs(line.order) == 1 else 0.0
 
 
-def _mesh_modulation(line, freq, f_mesh):
+def _mesh_modulation(line, freq, kin):
     # amplitude modulation once per turn of a shaft: the first sideband of that shaft's
     # order either side of every mesh harmonic, and, at half weight, the shaft's first
     # order (the deflection under load)
@@ -163,7 +154,7 @@ def _mesh_modulation(line, freq, f_mesh):
     return 0.5 if line.family in ("pinion", "gear") and line.order == 1 else 0.0
 
 
-def _gear_tooth_fault(line, freq, f_mesh):
+def _gear_tooth_fault(line, freq, kin):
     if line is None:
         return 0.0
     if line.family == "gear":
@@ -173,7 +164,7 @@ def _gear_tooth_fault(line, freq, f_mesh):
     return 0.0
 
 
-def _second_pinion_tooth(line, freq, f_mesh):
+def _second_pinion_tooth(line, freq, kin):
     if line is None:
         return 0.0
     if line.family == "mesh_sb_pinion":
@@ -181,7 +172,7 @@ def _second_pinion_tooth(line, freq, f_mesh):
     return 0.5 if line.family == "pinion" and line.order >= 2 else 0.0
 
 
-def _backlash(line, freq, f_mesh):
+def _backlash(line, freq, kin):
     # the contact lost where the deflection is lowest: every mesh harmonic, the higher
     # ones above all, and, at half weight, the lines of the pinion's turn (its faulty
     # tooth's, its runout's) whose troughs the loss clips
@@ -205,18 +196,23 @@ SHARED_ORDER_MARGIN = 2.0
 OTHER_SHAFTS = ("gear", "other_shaft", "machine_shaft")
 
 
-def _pinion_shaft(line, freq, f_mesh):
+def _pinion_shaft(line, freq, kin):
     # the pinion shaft's own lines: its first orders, far below the mesh's sidebands. An
     # order another shaft turns at too (2x pinion is 3x gear on 14/21 teeth; every order
     # of the PHM09 box's 32-tooth input pinion is an order of its idler's and of its
-    # output's) is a line it may make (0.5), which the hint fits only where the line
-    # stands above the other shaft's orders around it. One a bearing's line falls on (in
-    # a spectrum of joined halves, within half a bin: 2x BPFO on 7x pinion on the
-    # catalogue's 6205) is no evidence for it
+    # output's) is claimed only where the pinion has no order of its own (each is another
+    # shaft's too), as a line it may make (0.5), which the hint fits only where the line
+    # stands above the other shaft's orders around it; where the pinion has orders of its
+    # own, those are the evidence of its vibration, and a shared line, which the other
+    # shaft's comb may make (a broken gear tooth strikes at every gear order), is left to
+    # neither. One a bearing's line falls on (in a spectrum of joined halves, within half
+    # a bin: 2x BPFO on 7x pinion on the catalogue's 6205) is no evidence for it
     if (line is None or line.family != "pinion" or line.order > SHAFT_ORDERS
             or set(line.also) & set(BEARING_FAMILIES)):
         return 0.0
-    return 0.5 if set(line.also) & set(OTHER_SHAFTS) else 1.0
+    if not set(line.also) & set(OTHER_SHAFTS):
+        return 1.0
+    return 0.5 if _every_order_shared(kin) else 0.0
 
 
 def _every_order_shared(kin: GearKinematics) -> bool:
@@ -240,17 +236,8 @@ def _other_speeds(kin: GearKinematics) -> list[float]:
     return out
 
 
-def _pinion_shaft_claim(line, freq, kin: GearKinematics) -> float:
-    # a shared order is claimed only where the pinion has no order of its own (each is
-    # another shaft's too): where it has, those are the evidence of its vibration, and a
-    # shared line, which the other shaft's comb may make (a broken gear tooth strikes at
-    # every gear order), is left to neither
-    weight = _pinion_shaft(line, freq, kin.f_mesh_hz)
-    return weight if weight == 1.0 or _every_order_shared(kin) else 0.0
-
-
 def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """The orders whose line it does not claim (:func:`_pinion_shaft_claim`: one a
+    """The orders whose line it does not claim (:func:`_pinion_shaft`: one a
     bearing's line falls on, a mesh sideband on a pinion of few teeth, one another shaft
     turns at too where the pinion has orders of its own) are not fitted, nor a shared
     one whose residual's line does not stand :data:`SHARED_ORDER_MARGIN` times above each
@@ -264,7 +251,7 @@ def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | N
     lines = kinematic_map(kin, (SHAFT_ORDERS + 0.5) * fp)
     out = {}
     for k in range(1, SHAFT_ORDERS + 1):
-        weight = _pinion_shaft_claim(match(k * fp, lines, 1e-6 * fp), k * fp, kin)
+        weight = _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin)
         if weight == 0 or (weight < 1 and bin_hz > 0
                            and not _stands_out(k * fp, peaks, bin_hz, kin)):
             out[f"A_s{k}"] = None
@@ -294,7 +281,7 @@ def _stands_out(freq_hz: float, peaks: list[Peak], bin_hz: float, kin: GearKinem
     return own > 0 and own > SHARED_ORDER_MARGIN * max(neighbours, default=0.0)
 
 
-def _other_shaft(line, freq, f_mesh):
+def _other_shaft(line, freq, kin):
     # another shaft's first orders, but for those a line of the gear pair (or a bearing)
     # falls on: which shaft makes such a line the record does not say
     ok = (line is not None and line.family == "other_shaft" and line.order <= SHAFT_ORDERS
@@ -317,7 +304,7 @@ def _other_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | No
            if ln.family == "other_shaft"}
     seen = {p.order for p in peaks if p.family == "other_shaft"}
     return {name: None for k, name in enumerate(names, 1) if k not in seen or k not in own
-            or _other_shaft(own[k], own[k].freq_hz, kin.f_mesh_hz) == 0}
+            or _other_shaft(own[k], own[k].freq_hz, kin) == 0}
 
 
 def _other_shaft_values(kin) -> dict[str, float]:
@@ -330,12 +317,12 @@ def _other_shaft_missing(kin) -> str:
 
 
 def _family(name):
-    def weight(line, freq, f_mesh):
+    def weight(line, freq, kin):
         return 1.0 if line is not None and line.family in name else 0.0
     return weight
 
 
-def _stiffness_shape(line, freq, f_mesh):
+def _stiffness_shape(line, freq, kin):
     # an even harmonic of the healthy mesh's stiffness: the mesh harmonics, 2x above all
     if line is None or line.family != "mesh":
         return 0.0
@@ -410,13 +397,14 @@ MAX_STRIKE_M_S2 = 5000.0
 MAX_RIPPLE_HZ = 20.0
 
 
-def _load_fluctuation(line, freq, f_mesh):
+def _load_fluctuation(line, freq, kin):
     # a torque ripple is not kinematic: its line (and its mesh sidebands) match no family.
     # It predicts lines only at its own frequency (<= MAX_RIPPLE_HZ) and within that of a
     # mesh harmonic; a non-kinematic line elsewhere (another shaft, the mains, a
     # resonance) is no evidence for it.
     if line is not None:
         return 0.0
+    f_mesh = kin.f_mesh_hz
     harmonic = round(freq / f_mesh)
     near_mesh = harmonic >= 1 and abs(freq - harmonic * f_mesh) <= MAX_RIPPLE_HZ
     return 1.0 if freq <= MAX_RIPPLE_HZ or near_mesh else 0.0
@@ -540,8 +528,7 @@ EFFECTS = {e.key: e for e in (
            "looseness)",
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
-           _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True,
-           claim=_pinion_shaft_claim),
+           _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True),
     # the same, of a shaft beyond the pair at a speed ratio the kinematics give: not
     # synchronous with the pair's period in general (a motor shaft at 29/17 of the pinion's)
     Effect("other_shaft_orders", "GearDiag.Effects.OtherShaftOrders",

@@ -100,7 +100,7 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     suggestions, claims = [], {}
     for effect in effects.values():
         changed = evidence_channels(problem, effect)
-        support = [(effect.weight_at(line, f, kin) * pk.energy_fraction, i, pk)
+        support = [(effect.weight(line, f, kin) * pk.energy_fraction, i, pk)
                    for i, (pk, (_, _, line, f, _, _)) in enumerate(zip(peaks, candidates))
                    if pk.channel in changed]
         support = [(w, i, pk) for w, i, pk in support if w > 0]

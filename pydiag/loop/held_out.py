@@ -248,7 +248,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     changed = evidence_channels(problem, effect)  # on the others, none of its evidence
     all_freqs = next(iter(measured_a.spectra.values())).freq_hz
     def claim(mask: np.ndarray) -> np.ndarray:  # whether its signature claims each bin
-        return np.array([effect.weight_at(match(fk, lines, bin_hz), fk, kin) > 0
+        return np.array([effect.weight(match(fk, lines, bin_hz), fk, kin) > 0
                          for fk in all_freqs[mask]], dtype=bool)
     freqs = all_freqs[bins]
     claims = claim(bins)

@@ -39,7 +39,7 @@ def test_the_other_shafts_first_orders_are_kinematic_lines_when_its_ratio_is_giv
 def test_it_claims_and_fits_the_orders_no_line_of_the_pair_falls_on():
     kin = GearKinematics(14, 21, 25.0, other_shaft_ratio=MOTOR)
     lines = kinematic_map(kin, 2000.0)
-    claimed = [ln.order for ln in lines if OTHER.weight(ln, ln.freq_hz, kin.f_mesh_hz) > 0]
+    claimed = [ln.order for ln in lines if OTHER.weight(ln, ln.freq_hz, kin) > 0]
     assert claimed == list(range(1, SHAFT_ORDERS + 1))
     # only the orders the residual has a peak at are fitted (the others, not synchronous
     # with the pair, would take noise peaks of a half by their leakage)
@@ -50,7 +50,7 @@ def test_it_claims_and_fits_the_orders_no_line_of_the_pair_falls_on():
     # shaft makes those lines the record does not say, so they are neither claimed nor fitted
     half = GearKinematics(14, 21, 25.0, other_shaft_ratio=1.5)
     lines = kinematic_map(half, 2000.0)
-    claimed = [ln.order for ln in lines if OTHER.weight(ln, ln.freq_hz, half.f_mesh_hz) > 0]
+    claimed = [ln.order for ln in lines if OTHER.weight(ln, ln.freq_hz, half) > 0]
     assert claimed == [1, 3, 5, 7, 9]
     assert fitted(half, range(1, 11)) == ["A_o1", "A_o3", "A_o5", "A_o7", "A_o9"]
     # within half a bin of a pinion order is on its bin: at 1.505 x 25 Hz, its 2x is 0.25 Hz

@@ -46,13 +46,12 @@ def test_the_housing_claims_every_line_the_gear_pair_makes():
     frequency."""
     weight = EFFECTS["housing_sensor"].weight
     inside = KinematicLine(1290.0, "pinion", 43, "43x pinion")
-    assert weight(inside, inside.freq_hz, KIN.f_mesh_hz) == 1.0
-    assert weight(KinematicLine(800.0, "pinion", 27, ""), 800.0, KIN.f_mesh_hz) == 1.0
-    assert weight(KinematicLine(KIN.f_mesh_hz, "mesh", 1, ""), KIN.f_mesh_hz,
-                  KIN.f_mesh_hz) == 1.0
+    assert weight(inside, inside.freq_hz, KIN) == 1.0
+    assert weight(KinematicLine(800.0, "pinion", 27, ""), 800.0, KIN) == 1.0
+    assert weight(KinematicLine(KIN.f_mesh_hz, "mesh", 1, ""), KIN.f_mesh_hz, KIN) == 1.0
     # a gear order: the base gear pair does not make it, no mode reshapes it into being
-    assert weight(KinematicLine(1300.0, "gear", 109, ""), 1300.0, KIN.f_mesh_hz) == 0.0
-    assert weight(None, 1300.0, KIN.f_mesh_hz) == 0.0
+    assert weight(KinematicLine(1300.0, "gear", 109, ""), 1300.0, KIN) == 0.0
+    assert weight(None, 1300.0, KIN) == 0.0
 
 
 def test_no_peaks_of_the_gear_pair_no_band_no_bounds():

@@ -12,8 +12,8 @@ def weights(kin: GearKinematics) -> dict[int, float]:
     """The effect's weight at each pinion order it claims (1: its own line, 0.5: the gear's
     shaft turns at it too)."""
     lines = kinematic_map(kin, 2000.0)
-    out = {k: SHAFT.weight_at(match(k * kin.f_pinion_hz, lines, 0.1), k * kin.f_pinion_hz,
-                              kin) for k in range(1, 40)}
+    out = {k: SHAFT.weight(match(k * kin.f_pinion_hz, lines, 0.1), k * kin.f_pinion_hz, kin)
+           for k in range(1, 40)}
     return {k: w for k, w in out.items() if w > 0}
 
 

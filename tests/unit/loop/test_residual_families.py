@@ -51,6 +51,6 @@ def test_a_non_kinematic_line_is_described_and_claimed_by_no_signature_that_miss
     text = describe_non_kinematic(150.0, KIN, 0.1)
     assert text.startswith("not kinematic: 5.03x pinion, 12.6x gear") and "3x 50 Hz mains" in text
     ripple = EFFECTS["load_fluctuation"].weight
-    assert ripple(None, 7.5, KIN.f_mesh_hz) == 1.0  # the ripple itself
-    assert ripple(None, KIN.f_mesh_hz + 7.5, KIN.f_mesh_hz) == 1.0  # its mesh sideband
-    assert ripple(None, 150.0, KIN.f_mesh_hz) == 0.0  # neither: another source
+    assert ripple(None, 7.5, KIN) == 1.0  # the ripple itself
+    assert ripple(None, KIN.f_mesh_hz + 7.5, KIN) == 1.0  # its mesh sideband
+    assert ripple(None, 150.0, KIN) == 0.0  # neither: another source
