@@ -16,12 +16,12 @@ from pydiag.gear.peaks import Peak
 from pydiag.loop.results import Comparison
 from pydiag.signal.transfer import HousingMode
 
-#: The refit of an effect's few parameters: a smaller swarm than a full diagnosis, and
-#: looser stops, as the effect is judged by a held-out test, not reported to six digits.
-#: The swarm stops when its best cost stood still (by 1e-3 of 1 + the cost) for 2
-#: iterations; one polish, from the swarm's best, stops at steps under 1e-3 of the ranges
-#: (its own difference step) or when a step lowers the squared error by under 1e-6 of it:
-#: changes worth well under 1 in the held-out z (bench/RESULTS.md, section 11).
+#: The refit of an effect's few parameters: a smaller swarm than a full diagnosis, which
+#: stops when its best cost stood still (by 1e-3 of 1 + the cost) for 2 iterations, and
+#: one polish, from the swarm's best, which stops at steps under 1e-3 of the ranges (its
+#: own difference step; a diagnosis's, 1e-4) or when a step lowers the squared error by
+#: under 1e-6 of it: changes worth well under 1 in the held-out z (bench/RESULTS.md,
+#: section 11).
 EFFECT_REFIT = dict(n_particles=8, iterations=6, polish_evaluations=60, polish_starts=1,
                     polish_xtol=1e-3, polish_ftol=1e-6, swarm_ftol=1e-3, swarm_ftol_iter=2)
 #: Swarm positions an effect that reshapes the base's lines is polished from, base held
