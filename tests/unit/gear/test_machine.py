@@ -58,6 +58,11 @@ def test_example_files_read_and_their_shafts_turn_as_the_teeth_say():
     assert (kin.n_pinion, kin.n_gear, kin.f_pinion_hz) == (48, 80, pytest.approx(10.0))
     gfd = load_machine(EXAMPLES / "gfd_spectraquest.toml")
     assert len(gfd.stages) == 1 and gfd.input_hz == pytest.approx(30.0)
+    # the data set's helical set: the spur set's shaft speeds, other meshes
+    helical = load_machine(EXAMPLES / "phm09_helical.toml")
+    assert [(s.pinion_teeth, s.gear_teeth) for s in helical.stages] == [(16, 48), (24, 40)]
+    assert [helical.shaft_ratio(k) for k in range(3)] == [phm.shaft_ratio(k) for k in range(3)]
+    assert helical.mesh_order(0) == 16 and helical.mesh_order(1) == 8
 
 
 @pytest.mark.parametrize("change, key", [
