@@ -181,6 +181,10 @@ class Machine:
         """How a stage may be named, for a message: "1 or 'first', 2 or 'second'"."""
         return ", ".join(f"{k} or {s.name!r}" for k, s in enumerate(self.stages, 1))
 
+    def effect_keys(self, stage: int) -> set[str]:
+        """The keys of the effects the file gives stage ``stage``, whatever they hold off."""
+        return {e.key for e in self.effects if e.stage == stage}
+
     def mesh_order(self, stage: int) -> Fraction:
         """Stage ``stage``'s mesh frequency in orders of the input shaft."""
         return self.stages[stage].pinion_teeth * self.shaft_ratio(stage)

@@ -66,7 +66,7 @@ def lacking(machine: Machine, model: MachineModel, stage: int) -> dict[str, Effe
     """The catalogue as stage ``stage`` of ``model`` has it
     (:func:`~pydiag.loop.machine_model.stage_effects`) but the effects the machine file
     already gives it, whatever parameters of theirs it holds off."""
-    has = {e.key for e in machine.effects if e.stage == stage}
+    has = machine.effect_keys(stage)
     return {key: e for key, e in stage_effects(model, stage).items() if key not in has}
 
 

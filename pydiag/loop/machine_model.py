@@ -444,7 +444,7 @@ def accept(path: str | Path, key: str, stage: str | None = None,
                          f"is on ({machine.stage_choices()})")
     index = 0 if stage is None else machine.stage_index(stage)
     name = machine.stages[index].name
-    if any((e.key, e.stage) == (key, index) for e in machine.effects):
+    if key in machine.effect_keys(index):
         raise UsageError(f"{path}: {key} is on {name} already")
     text = path.read_text(encoding="utf-8")
     text += ("" if text.endswith("\n") or not text else "\n") + \
