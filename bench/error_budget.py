@@ -28,8 +28,29 @@ lines left out, the speed from the meshes). Printed:
 - the share of the error's square below half the mesh frequency (the shafts' low orders,
   far from any mesh harmonic), by group.
 
+With ``--bounds`` (no fit, a few seconds a record), what a model could reach held out, as
+the loop scores it (half A of the periods fitted, noise-corrected Eq. 12 on half B at
+the bins A chose): half A's lines, their noise taken out (``sqrt(max(A^2 - P, 0))``),
+put exactly where A has them and nothing elsewhere, on
+
+- every synchronous line (the best any model synchronous with the pair can do);
+- the lines within K orders of either shaft of every mesh harmonic, the zeroth too (a
+  shaft's own orders, any modulation or transmission error of either shaft by its angle,
+  any shape, amplitude and phase free on every line);
+- the combination lines of both shafts within K orders of each (the pair's tooth-pair
+  pattern, its hunting/assembly lines, that no one shaft's form makes);
+- each gear's tooth-by-tooth error sequence (Z values a turn, of any shape: a pitch,
+  profile or runout error of every tooth) through a smooth transfer path: the line at
+  m f_mesh + k f_s (m >= 1) is ``H(f) |E_s(k mod Z_s)|``, one amplitude for each of the
+  sequence's orders at every mesh harmonic, the same for k and -k (a real sequence), the
+  shafts' own orders (m = 0) free as the shaft-order effects make them, H piecewise
+  linear in frequency with a node at every mesh harmonic (the gain curve as it is) or
+  NODES nodes a mesh harmonic (a transfer path resolved finer); fitted on A by
+  alternating least squares in amplitude (a bound's fit, not Eq. 12's).
+
 Usage:
     .venv/bin/python bench/error_budget.py [--data ../shared/data/gfd] [--records b30hz90,...]
+        [--bounds]
     .venv/bin/python bench/error_budget.py --phm09 ../shared/data/phm09 \
         [--records "spur 1_30hz_High_1,spur 2_30hz_High_1"]
 """
@@ -47,6 +68,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
+from pydiag.fit.gain import curve_basis, curve_nodes, fitted_curve  # noqa: E402
+from pydiag.gear.features import FullSpectrumFeaturizer  # noqa: E402
 from pydiag.fit.objective import noise_corrected_error, spectral_residuals  # noqa: E402
 from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.features import other_stages_lines  # noqa: E402
@@ -57,7 +80,7 @@ from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.residual import RESIDUAL_GROUPS, bin_groups, measured_spectra  # noqa: E402
 from pydiag.loop.stages import machine_speed, stage_problem  # noqa: E402
-from pydiag.signal.spectra import local_maxima  # noqa: E402
+from pydiag.signal.spectra import local_maxima, whole_periods  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
@@ -69,6 +92,14 @@ SIDEBAND_ORDERS = (1, 3, 6, 10, 16)
 #: The groups of bins a comb of random line amplitudes is put on.
 COMBS = (("gear_orders", "assembly_hunting"),
          ("gear_orders", "assembly_hunting", "pinion_orders"))
+#: The false-alarm rate of the peaks a half's bins are chosen by (compare's default).
+FALSE_ALARM_RATE = 0.01
+#: Orders of either shaft round each mesh harmonic a bound's lines reach (``--bounds``) ...
+BOUND_ORDERS = (10, 20, 40)
+#: ... and of both shafts at once, for the pair's combination lines.
+PAIR_ORDERS = 10
+#: Nodes a mesh harmonic of the finer transfer curve a tooth sequence is seen through.
+NODES = 8
 
 
 def local_power(freqs: np.ndarray, amplitude: np.ndarray, among: np.ndarray,
@@ -176,10 +207,116 @@ def budget(name: str, problem) -> None:
               f"error {noise_corrected_error(model[bins], meas[bins], power[bins]):.3f}")
 
 
+def lines_near(freqs: np.ndarray, bin_hz: float, f_mesh_hz: float,
+                shafts_hz: tuple[float, ...], k_max: int, together: bool = False
+                ) -> dict[int, tuple[int, int, int]]:
+    """The bins (index into ``freqs``, entry k at (k+1) ``bin_hz``) of the lines m f_mesh +
+    k f_s, |k| <= ``k_max``, m >= 0, above 0 Hz, each with its shaft's index, k and m (the
+    first shaft's where two coincide); ``together``: m f_mesh + k1 f_1 + k2 f_2 instead,
+    shaft index -1 and k 0."""
+    k = np.arange(-k_max, k_max + 1)
+    if together:
+        combos = [(-1, 0, float(a * shafts_hz[0] + b * shafts_hz[1]))
+                  for a in k for b in k]
+    else:
+        combos = [(s, int(kk), float(kk * f)) for s, f in enumerate(shafts_hz) for kk in k]
+    out: dict[int, tuple[int, int, int]] = {}
+    for m in range(int(freqs[-1] / f_mesh_hz) + 2):
+        for s, kk, offset in combos:
+            f = m * f_mesh_hz + offset
+            j = int(round(f / bin_hz)) - 1
+            if f > 0 and 0 <= j < freqs.size and j not in out:
+                out[j] = (s, kk, m)
+    return out
+
+
+def sequence_lines(freqs: np.ndarray, bin_hz: float, f_mesh_hz: float,
+                   shafts: tuple[tuple[float, int], ...]) -> dict[int, tuple[int, int]]:
+    """The bins of every line m f_mesh + k f_s of each shaft s (speed, teeth Z), |k| <=
+    Z/2, each with a key: round a mesh harmonic (m >= 1), the shaft's index and the order of
+    its tooth sequence the line shows, ``min(k mod Z, Z - k mod Z)``; a shaft's own order
+    (m = 0: its unbalance, misalignment, ..., no tooth's) a key of its own, ``(S + s, k)``
+    for S shafts (the first shaft's where two coincide)."""
+    out: dict[int, tuple[int, int]] = {}
+    for s, (f_shaft, teeth) in enumerate(shafts):
+        found = lines_near(freqs, bin_hz, f_mesh_hz, (f_shaft,), teeth // 2)
+        for j, (_, k, m) in found.items():
+            out.setdefault(j, (len(shafts) + s, k) if m == 0
+                           else (s, min(k % teeth, teeth - k % teeth)))
+    return out
+
+
+def sequence_fit(freqs: np.ndarray, amplitude: np.ndarray, lines: dict[int, tuple[int, int]],
+                 nodes_hz: np.ndarray, iterations: int = 150) -> np.ndarray:
+    """Line amplitudes ``H(f) e_key`` fitted to ``amplitude`` on ``lines`` (each bin's key:
+    the sequence and its order), H piecewise linear between ``nodes_hz``, both
+    non-negative, by alternating (non-negative) least squares; zero off the lines."""
+    js = np.array(sorted(lines))
+    _, which = np.unique(np.array([lines[j] for j in js]), axis=0, return_inverse=True)
+    which = which.ravel()
+    y = amplitude[js]
+    hat = curve_basis(freqs[js], nodes_hz)
+    h, e = np.ones(nodes_hz.size), np.zeros(which.max() + 1)
+    for _ in range(iterations):
+        transfer = hat @ h
+        e = np.maximum(np.bincount(which, transfer * y, e.size)
+                       / np.maximum(np.bincount(which, transfer ** 2, e.size), 1e-300), 0.0)
+        h = fitted_curve(e[which], y, hat)
+    out = np.zeros(amplitude.size)
+    out[js] = (hat @ h) * e[which]
+    return out
+
+
+def held_out_bounds(name: str, problem) -> None:
+    """Print what the model forms of the module docstring (``--bounds``) could reach held
+    out: half A's lines predicting half B, on the bins A chose."""
+    kin, m = problem.kinematics, problem.measurement
+    channel, top = problem.channels[0], problem.featurizer.max_freq_hz
+    n_half = whole_periods(m.n_samples, m.sample_rate_hz, kin.period_s)[0] // 2
+    if n_half < 1:
+        print(f"\n{name}: fewer than two fundamental periods, no halves")
+        return
+    measured = measured_spectra(problem, FALSE_ALARM_RATE, featurizer=FullSpectrumFeaturizer(
+        kin, n_half, top, half=0))
+    a, bins = measured.spectra[channel], measured.featurizer.bins
+    b = FullSpectrumFeaturizer(kin, n_half, top, half=1).spectrum(m.channels[channel],
+                                                                  m.sample_rate_hz)
+    bin_hz = float(a.freq_hz[0])
+    synchronous = (np.arange(a.amplitude.size) + 1) % n_half == 0
+    lines_a = np.where(synchronous, np.sqrt(np.maximum(a.amplitude ** 2 - a.noise_power, 0.0)),
+                       0.0)
+    shafts = (kin.f_pinion_hz, kin.f_gear_hz)
+
+    def on_b(model: np.ndarray) -> float:
+        return noise_corrected_error(model[bins], b.amplitude[bins], b.noise_power)
+
+    def only(lines: dict) -> np.ndarray:
+        mask = np.zeros(lines_a.size, dtype=bool)
+        mask[list(lines)] = True
+        return np.where(mask, lines_a, 0.0)
+
+    row = [f"{on_b(np.zeros(lines_a.size)):.3f}", f"{on_b(lines_a):.3f}"]
+    row += [f"{on_b(only(lines_near(a.freq_hz, bin_hz, kin.f_mesh_hz, shafts, k))):.3f}"
+            for k in BOUND_ORDERS]
+    row.append(f"{on_b(only(lines_near(a.freq_hz, bin_hz, kin.f_mesh_hz, shafts, PAIR_ORDERS, together=True))):.3f}")
+    sequences = sequence_lines(a.freq_hz, bin_hz, kin.f_mesh_hz,
+                               ((kin.f_pinion_hz, kin.n_pinion), (kin.f_gear_hz, kin.n_gear)))
+    harmonics = curve_nodes(kin, top)
+    finer = np.arange(0.0, harmonics[-1] + 1e-9, kin.f_mesh_hz / NODES)
+    for nodes in (harmonics, finer):
+        model = sequence_fit(a.freq_hz, lines_a, sequences, nodes)
+        fitted = noise_corrected_error(model[bins], a.amplitude[bins], a.noise_power)
+        row.append(f"{on_b(model):.3f} (A {fitted:.3f})")
+    print(f"| {name} ({kin.n_pinion}/{kin.n_gear}) | {n_half} | " + " | ".join(row) + " |",
+          flush=True)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "gfd")
     ap.add_argument("--phm09", type=Path, help="the PHM09 folder (its zips) instead")
+    ap.add_argument("--bounds", action="store_true",
+                    help="only what model forms could reach held out (no fit)")
     ap.add_argument("--records", help="names without their extension (default: the GFD four; "
                     "with --phm09 spur 1_30hz_High_1 and spur 2_30hz_High_1)")
     args = ap.parse_args()
@@ -194,9 +331,17 @@ def main() -> int:
         print(f"error_budget: no record {', '.join(missing)}", file=sys.stderr)
         return 2
     print(f"{platform.machine()}, Python {platform.python_version()}")
+    if args.bounds:
+        print("\nHeld-out error (half A's lines predict half B) of a model that has exactly:\n\n"
+              "| record | periods a half | nothing | every synchronous line | "
+              + " | ".join(f"either shaft's orders within {k} of each mesh harmonic"
+                           for k in BOUND_ORDERS)
+              + f" | both shafts' combinations within {PAIR_ORDERS} | each gear's tooth "
+              f"sequence, the gain curve | the same, {NODES} nodes a mesh harmonic |\n"
+              + "|---" * (6 + len(BOUND_ORDERS)) + "|")
     for path in paths:
         for name, problem in (phm09_problems if args.phm09 else gfd_problems)(path).items():
-            budget(name, problem)
+            (held_out_bounds if args.bounds else budget)(name, problem)
     return 0
 
 
