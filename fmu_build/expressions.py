@@ -1,5 +1,9 @@
 """Translate rumoca's flat expression trees into CasADi SX expressions.
 
+An element of a one-dimensional array parameter at a literal index is the scalar of that
+name (``a[2]``, :func:`fmu_build.flatten.element_trees`); ``sum`` of an array rumoca
+unrolled (a reduction ``sum(f(k) for k in 1:n)``) is the sum of its elements.
+
 User functions are inlined by symbolic execution of their algorithm sections:
 assignments rebind names, ``if`` statements merge both branches with ``if_else``,
 ``for`` loops over literal ranges are unrolled. Anything else raises
@@ -13,7 +17,7 @@ from typing import Any, Callable
 import casadi as ca
 
 from fmu_build.errors import ModelicaBuildError
-from fmu_build.flatten import SourceMap, Tree
+from fmu_build.flatten import SourceMap, Tree, element_name
 
 SX = ca.SX
 
@@ -75,9 +79,12 @@ class ExpressionTranslator:
                 raise self.error("string literals are not supported", tree)
             return SX(float(value))
         if kind == "VarRef":
-            if node.get("subscripts"):
-                raise self.error("subscripted variables (arrays) are not supported", tree)
             name = node["name"]["name"]
+            if node.get("subscripts"):  # an element of an array parameter at a literal index
+                try:
+                    name = element_name(name, node["subscripts"])
+                except ValueError as err:
+                    raise self.error(f"{err} (only literal indices are supported)", tree) from err
             if name not in env:
                 raise self.error(f"unknown name '{name}'", tree)
             return env[name]
@@ -112,6 +119,11 @@ class ExpressionTranslator:
                 arg["VarRef"].get("span")))
         if name == "Smooth":  # smooth(order, expr) is expr
             return self.translate(args[1], env)
+        if name == "Sum" and len(args) == 1 and "Array" in args[0]:  # a reduction, unrolled
+            total = SX(0.0)
+            for element in args[0]["Array"]["elements"]:
+                total = total + self.translate(element, env)
+            return total
         if name in _UNARY_BUILTINS and len(args) == 1:
             return _UNARY_BUILTINS[name](self.translate(args[0], env))
         if name in _BINARY_BUILTINS and len(args) == 2:

@@ -119,27 +119,32 @@ def flatten(model_file: str | Path, model: str,
     for name, var in flat["variables"].items():
         if name not in roles:
             continue  # constants, folded into literals by rumoca
-        if var.get("dims"):
-            raise ModelicaBuildError(f"array variable '{name}' is not supported",
-                                     sources.locate(var.get("source_span")))
+        location = sources.locate(var.get("source_span"))
         type_name = flat["variable_type_names"].get(name, "Real") if isinstance(
             flat.get("variable_type_names"), dict) else "Real"
         fixed = var.get("fixed")  # rumoca gives [bool] or null
         if isinstance(fixed, list):
             fixed = fixed[0] if fixed else None
-        variables[name] = Variable(
-            name=name,
-            role=roles[name],
-            type_name=type_name,
-            unit=var.get("unit"),
-            description=var.get("description"),
-            start=var.get("start"),
-            binding=var.get("binding"),
-            fixed=None if fixed is None else bool(fixed),
-            location=sources.locate(var.get("source_span")),
-            nominal=var.get("nominal"),
-        )
-    missing = set(roles) - set(variables)
+        common = dict(role=roles[name], type_name=type_name, unit=var.get("unit"),
+                      description=var.get("description"),
+                      fixed=None if fixed is None else bool(fixed), location=location,
+                      nominal=var.get("nominal"))
+        dims = var.get("dims") or []
+        if not dims:
+            variables[name] = Variable(name=name, start=var.get("start"),
+                                       binding=var.get("binding"), **common)
+            continue
+        if roles[name] != "parameter" or len(dims) != 1:
+            raise ModelicaBuildError(f"array variable '{name}' is not supported (only "
+                                     "one-dimensional parameters are)", location)
+        starts = element_trees(name, var.get("start"), dims[0], location)
+        bindings = element_trees(name, var.get("binding"), dims[0], location)
+        for i in range(dims[0]):
+            element = f"{name}[{i + 1}]"
+            variables[element] = Variable(name=element, start=starts[i], binding=bindings[i],
+                                          **common)
+    missing = {name for name in roles if not any(
+        v == name or v.startswith(f"{name}[") for v in variables)}
     if missing:
         raise ModelicaBuildError(f"rumoca's flat model lacks variables {sorted(missing)}")
 
@@ -154,6 +159,43 @@ def flatten(model_file: str | Path, model: str,
             raise ModelicaBuildError(f"equation form {next(iter(eq))} is not supported")
         equations.append(Equation(eq["residual"], sources.locate(_first_span(eq["residual"]))))
     return FlatModel(model, variables, equations, flat["functions"], sources)
+
+
+def element_name(name: str, subscripts: list[Tree]) -> str:
+    """The scalar name of ``name`` at literal ``subscripts`` (``a[2]``): how a one-dimensional
+    array parameter is named once expanded (:func:`element_trees`)."""
+    indices = []
+    for sub in subscripts:
+        if "Index" not in sub:
+            raise ValueError(f"a subscript of '{name}' is not a literal index")
+        indices.append(str(int(sub["Index"]["value"])))
+    return f"{name}[{','.join(indices)}]"
+
+
+def element_trees(name: str, tree: Tree | None, size: int,
+                  location: str | None) -> list[Tree | None]:
+    """The ``size`` element expressions of an array parameter's value ``tree``: an array
+    literal's elements, another array parameter's elements (``c = a`` in a modification),
+    ``fill(v, n)``, ``zeros(n)``, ``ones(n)``, or one scalar for every element."""
+    if tree is None:
+        return [None] * size
+    (kind, node), = tree.items()
+    if kind == "Array" and len(node["elements"]) == size:
+        return list(node["elements"])
+    if kind == "VarRef" and not node.get("subscripts"):
+        return [{"VarRef": {**node, "subscripts": [{"Index": {"value": i + 1}}]}}
+                for i in range(size)]
+    if kind == "BuiltinCall" and node["function"] in ("Fill", "Zeros", "Ones"):
+        value = {"Fill": node["args"][0] if node["args"] else None,
+                 "Zeros": {"Literal": {"value": {"Real": 0.0}}},
+                 "Ones": {"Literal": {"value": {"Real": 1.0}}}}[node["function"]]
+        if value is not None:
+            return [value] * size
+    if kind == "Literal":
+        return [tree] * size
+    raise ModelicaBuildError(f"the value of array parameter '{name}' is not supported (an "
+                             f"array literal of {size} elements, another array parameter, "
+                             "fill(), zeros() or ones() are)", location)
 
 
 def _first_span(tree: Any) -> dict | None:

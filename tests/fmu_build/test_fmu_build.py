@@ -207,8 +207,75 @@ def test_array_variables_are_refused_with_location(tmp_path):
           der(x) = -x;
         end A;
         """)
-    with pytest.raises(ModelicaBuildError, match=r"M\.mo:3: array variable 'x' is not supported"):
+    with pytest.raises(ModelicaBuildError,
+                       match=r"M\.mo:3: array variable 'x' is not supported \(only one-dim"):
         ode_system(mo, "A")
+
+
+ARRAY_MODEL = """
+    package T
+      model Series "A Fourier series whose coefficients are array parameters"
+        parameter Integer n = 3;
+        parameter Real c[n] = fill(0, n);
+        parameter Real s[n] = zeros(n);
+        input Real w;
+        output Real y;
+      equation
+        y = sum(c[k]*cos(k*w) + s[k]*sin(k*w) for k in 1:n);
+      end Series;
+      model A
+        parameter Real a[3] = {1, 2, 3};
+        parameter Real b[3] = {0, 0.5, 0};
+        Series ser(n = 3, c = a, s = b);
+        Series unset(n = 2);
+        Real x(start = 0, fixed = true);
+      equation
+        ser.w = time;
+        unset.w = time;
+        der(x) = -x + ser.y + a[2] + unset.y;
+      end A;
+    end T;
+    """
+
+
+def test_array_parameters_are_tunable_elements_through_modifications(tmp_path):
+    """One-dimensional array parameters become one scalar parameter an element (``a[2]``),
+    an element at a literal index and a ``sum`` reduction are expressions of them, and a
+    component's array bound to the model's follows it element by element in the FMU."""
+    folder = tmp_path / "T"
+    folder.mkdir()
+    mo = write_model(folder, ARRAY_MODEL, "package.mo")
+    system = ode_system(mo, "T.A")
+    free = {p.name: p.value for p in system.parameters}
+    assert {k: free[k] for k in ("a[1]", "a[2]", "a[3]", "b[2]", "unset.c[2]", "unset.s[1]")} \
+        == {"a[1]": 1.0, "a[2]": 2.0, "a[3]": 3.0, "b[2]": 0.5, "unset.c[2]": 0.0,
+            "unset.s[1]": 0.0}
+    assert {d.name for d in system.derived} == {f"ser.{c}[{k}]" for c in "cs" for k in (1, 2, 3)}
+    fmu = build_fmu(mo, "T.A", tmp_path / "A.fmu")
+
+    def x_end(a2: float) -> float:
+        return float(fmpy.simulate_fmu(str(fmu), stop_time=2.0, output=["x"], relative_tolerance=1e-9,
+                                       start_values={"a[2]": a2})["x"][-1])
+
+    # a[2] enters as itself and through ser.c[2]: dx/dt gains d (1 + cos 2t), so x(2) gains
+    # d times the integral of exp(tau - 2) (1 + cos 2 tau) over 0..2
+    tau = np.linspace(0.0, 2.0, 200_001)
+    gain = np.trapezoid(np.exp(tau - 2.0) * (1.0 + np.cos(2.0 * tau)), tau)
+    assert x_end(5.0) - x_end(2.0) == pytest.approx(3.0 * gain, rel=1e-5)
+
+
+def test_array_parameter_values_it_cannot_expand_are_refused(tmp_path):
+    mo = write_model(tmp_path, """
+        model B
+          parameter Real k = 2;
+          parameter Real a[2] = k*{1, 2};
+          Real x(start = 0, fixed = true);
+        equation
+          der(x) = a[1];
+        end B;
+        """)
+    with pytest.raises(ModelicaBuildError, match=r"M\.mo:4: the value of array parameter 'a'"):
+        ode_system(mo, "B")
 
 
 def test_cli_errors_are_one_line_without_traceback(tmp_path):
