@@ -1,12 +1,16 @@
 """The fit of parameters the model's outputs are affine in.
 
-When every output is ``y(a) = y(low) + sum_j (a_j - low_j) / (high_j - low_j) * (y_j -
-y(low))``, with ``y_j`` the outputs with parameter j at its upper bound and the others at
-their lower ones (a bearing's strike amplitude, a shaft's lines at its orders, added to
-what the sensor sees of the mesh), one simulation more than there are parameters gives
-the outputs at every point of the box; the Eq. (12) error is then minimised over it with
-no further simulation: a bounded scalar search (Brent's method) and both ends for one
-parameter, bounded least squares (trust-region reflective) for several.
+When every output is ``y(a) = y(off) + sum_j (a_j - off_j) / (end_j - off_j) * (y_j -
+y(off))``, with ``off`` every parameter's off value (:attr:`Parameter.off`), ``end_j`` the
+end of parameter j's range farther from its off value and ``y_j`` the outputs with it
+there and the others off (a bearing's strike amplitude, a shaft's lines at its orders,
+added to what the sensor sees of the mesh), one simulation more than there are
+parameters gives the outputs at every point of the box; the Eq. (12) error is then
+minimised over it with no further simulation: a bounded scalar search (Brent's method)
+and both ends for one parameter, bounded least squares (trust-region reflective) for
+several. Taken at the off values and one parameter at a time, the same simulations
+linearise a model that is affine only near them (a signed coefficient of many, which at
+a corner of the box would all be far out together) where the fit starts.
 """
 
 from __future__ import annotations
@@ -42,14 +46,21 @@ def fit_affine(problem: FitProblem) -> AffineFit:
     (the caller knows they are). A parameter the problem's features do not see
     (:data:`UNSEEN`: a shaft order outside every feature band) stays at its off value."""
     params = problem.parameters
-    low = np.array([p.low for p in params])
+    off = np.array([p.off for p in params])
     with problem.spec.open() as plant:
-        y_low = problem.simulate(plant, low)
-        slopes = []
+        y_off = problem.simulate(plant, off)
+        steps = []
         for j, p in enumerate(params):
-            x = low.copy()
-            x[j] = p.high
-            slopes.append(problem.simulate(plant, x) - y_low)
+            x = off.copy()
+            x[j] = p.high if p.high - p.off >= p.off - p.low else p.low
+            steps.append((x[j] - p.off, problem.simulate(plant, x) - y_off))
+    # the outputs at each parameter's low end (all at once) and the change over its range,
+    # as _residuals takes them: u_j, the place in the range, from 0 to 1
+    y_low, slopes = y_off, []
+    for p, (step, change) in zip(params, steps):
+        if p.low != p.off:
+            y_low = y_low + (p.low - p.off) / step * change
+        slopes.append(change if step == p.high - p.low else (p.high - p.low) / step * change)
     every = _residuals(problem, y_low, np.array(slopes))
     off_all = np.array([(p.off - p.low) / (p.high - p.low) for p in params])
     r0 = every(off_all)

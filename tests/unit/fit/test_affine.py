@@ -128,3 +128,17 @@ def test_a_parameter_whose_lines_no_feature_sees_stays_off(linear):
     assert fitted["a2"] == 0.0 and fit.unseen == ("a2",)  # off: the low end
     assert [fitted["a0"], fitted["a1"]] == pytest.approx([2.5, 1.0], abs=1e-2)
     assert error < 1e-2
+
+
+def test_signed_coefficients_are_simulated_off_and_one_at_a_time():
+    """Signed ranges: the simulations are all coefficients off (0) and each alone at the
+    far end of its range from 0, not every one at its low end at once, where a model
+    affine only near 0 (a tooth's lead or lag through the mesh's angle) is far from it;
+    an affine model is fitted the same way."""
+    p, calls = lines([2.5, -1.0, 7.25], low=-10.0, high=4.0)
+    fit = fit_affine(p)
+    assert sorted(calls) == [(-10.0, 0.0, 0.0), (0.0, -10.0, 0.0), (0.0, 0.0, -10.0),
+                             (0.0, 0.0, 0.0)]
+    assert np.abs([fit.values[f"a{j}"] for j in range(3)]) == pytest.approx(
+        [2.5, 1.0, 7.25], abs=1e-2)  # an amplitude spectrum does not tell the sign
+    assert fit.values["a2"] == pytest.approx(-7.25, abs=1e-2)  # +7.25 is out of range
