@@ -67,3 +67,29 @@ def test_the_idler_shaft_couples_the_two_stages(built):
         assert _line(acc, rate, 470.0) > 10 * _line(acc, rate, 500.0)
     assert ratio[2e5] > 0.03
     assert ratio[2e5] > 10 * ratio[2e3]
+
+
+def test_a_tooth_sequence_is_its_fourier_series_in_the_shafts_angle(tmp_path):
+    """GearDiag.Components.ToothSequence (array parameters a model binds element by element)
+    makes e = sum_k c[k] cos(k w) + s[k] sin(k w), w the shaft's angle, exactly."""
+    from conftest import ROOT
+    wrapper = tmp_path / "Wrap.mo"
+    wrapper.write_text(
+        "model Wrap\n"
+        "  parameter Real c[3] = {1e-6, 0, 2e-6};\n"
+        "  parameter Real s[3] = {0, 3e-6, 0};\n"
+        "  GearDiag.Components.ToothSequence teeth(n = 3, f_shaft = 7.0, t_angle = time,\n"
+        "    c = c, s = s);\n"
+        "  Real x(start = 0, fixed = true);\n"
+        "  output Real e = teeth.e;\n"
+        "equation\n"
+        "  der(x) = -x;\n"
+        "end Wrap;\n")
+    fmu = build_fmu(wrapper, "Wrap", tmp_path / "Wrap.fmu",
+                    library_roots=(ROOT / "modelica",))
+    values = {"c[2]": -1e-6, "s[3]": 0.5e-6}
+    r = _simulate(fmu, values, ["e"], 0.3, 1e-3, 1e-6)
+    w = 2 * np.pi * 7.0 * r["time"]
+    c, s = [1e-6, -1e-6, 2e-6], [0.0, 3e-6, 0.5e-6]
+    expected = sum(c[k] * np.cos((k + 1) * w) + s[k] * np.sin((k + 1) * w) for k in range(3))
+    assert np.max(np.abs(r["e"] - expected)) < 1e-12
