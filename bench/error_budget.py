@@ -60,6 +60,7 @@ from __future__ import annotations
 import argparse
 import platform
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -80,7 +81,7 @@ from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.residual import RESIDUAL_GROUPS, bin_groups, measured_spectra  # noqa: E402
 from pydiag.loop.stages import machine_speed, stage_problem  # noqa: E402
-from pydiag.signal.spectra import local_maxima, whole_periods  # noqa: E402
+from pydiag.signal.spectra import Spectrum, local_maxima, whole_periods  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented
@@ -231,17 +232,18 @@ def lines_near(freqs: np.ndarray, bin_hz: float, f_mesh_hz: float,
 
 
 def sequence_lines(freqs: np.ndarray, bin_hz: float, f_mesh_hz: float,
-                   shafts: tuple[tuple[float, int], ...]) -> dict[int, tuple[int, int]]:
+                   shafts: tuple[tuple[float, int], ...], own_orders_free: bool = True
+                   ) -> dict[int, tuple[int, int]]:
     """The bins of every line m f_mesh + k f_s of each shaft s (speed, teeth Z), |k| <=
-    Z/2, each with a key: round a mesh harmonic (m >= 1), the shaft's index and the order of
-    its tooth sequence the line shows, ``min(k mod Z, Z - k mod Z)``; a shaft's own order
+    Z/2, each with a key: the shaft's index and the order of its tooth sequence the line
+    shows, ``min(k mod Z, Z - k mod Z)``; with ``own_orders_free`` a shaft's own order
     (m = 0: its unbalance, misalignment, ..., no tooth's) a key of its own, ``(S + s, k)``
     for S shafts (the first shaft's where two coincide)."""
     out: dict[int, tuple[int, int]] = {}
     for s, (f_shaft, teeth) in enumerate(shafts):
         found = lines_near(freqs, bin_hz, f_mesh_hz, (f_shaft,), teeth // 2)
         for j, (_, k, m) in found.items():
-            out.setdefault(j, (len(shafts) + s, k) if m == 0
+            out.setdefault(j, (len(shafts) + s, k) if m == 0 and own_orders_free
                            else (s, min(k % teeth, teeth - k % teeth)))
     return out
 
@@ -267,46 +269,81 @@ def sequence_fit(freqs: np.ndarray, amplitude: np.ndarray, lines: dict[int, tupl
     return out
 
 
-def held_out_bounds(name: str, problem) -> None:
-    """Print what the model forms of the module docstring (``--bounds``) could reach held
-    out: half A's lines predicting half B, on the bins A chose."""
+@dataclass
+class HalfLines:
+    """Half A's spectrum, its lines with the noise taken out and the bins it chose, and
+    half B's spectrum: what a bound is fitted on and scored on."""
+
+    a: Spectrum
+    b: Spectrum
+    bins: np.ndarray
+    lines_a: np.ndarray
+
+    def on_b(self, model: np.ndarray) -> float:
+        """Noise-corrected Eq. 12 of ``model`` (amplitude at every bin) on B, at A's bins."""
+        return noise_corrected_error(model[self.bins], self.b.amplitude[self.bins],
+                                     self.b.noise_power)
+
+    def on_a(self, model: np.ndarray) -> float:
+        return noise_corrected_error(model[self.bins], self.a.amplitude[self.bins],
+                                     self.a.noise_power)
+
+
+def half_lines(problem) -> HalfLines | None:
+    """The :class:`HalfLines` of ``problem``'s record (None: under two periods)."""
     kin, m = problem.kinematics, problem.measurement
     channel, top = problem.channels[0], problem.featurizer.max_freq_hz
     n_half = whole_periods(m.n_samples, m.sample_rate_hz, kin.period_s)[0] // 2
     if n_half < 1:
-        print(f"\n{name}: fewer than two fundamental periods, no halves")
-        return
+        return None
     measured = measured_spectra(problem, FALSE_ALARM_RATE, featurizer=FullSpectrumFeaturizer(
         kin, n_half, top, half=0))
-    a, bins = measured.spectra[channel], measured.featurizer.bins
+    a = measured.spectra[channel]
     b = FullSpectrumFeaturizer(kin, n_half, top, half=1).spectrum(m.channels[channel],
                                                                   m.sample_rate_hz)
-    bin_hz = float(a.freq_hz[0])
     synchronous = (np.arange(a.amplitude.size) + 1) % n_half == 0
     lines_a = np.where(synchronous, np.sqrt(np.maximum(a.amplitude ** 2 - a.noise_power, 0.0)),
                        0.0)
-    shafts = (kin.f_pinion_hz, kin.f_gear_hz)
+    return HalfLines(a, b, measured.featurizer.bins, lines_a)
 
-    def on_b(model: np.ndarray) -> float:
-        return noise_corrected_error(model[bins], b.amplitude[bins], b.noise_power)
+
+def sequence_bound(problem, halves: HalfLines, nodes_hz: np.ndarray,
+                   own_orders_free: bool = True) -> np.ndarray:
+    """The tooth sequences' model (:func:`sequence_fit`) of ``problem``'s pair on half A."""
+    kin = problem.kinematics
+    lines = sequence_lines(halves.a.freq_hz, float(halves.a.freq_hz[0]), kin.f_mesh_hz,
+                           ((kin.f_pinion_hz, kin.n_pinion), (kin.f_gear_hz, kin.n_gear)),
+                           own_orders_free)
+    return sequence_fit(halves.a.freq_hz, halves.lines_a, lines, nodes_hz)
+
+
+def held_out_bounds(name: str, problem) -> None:
+    """Print what the model forms of the module docstring (``--bounds``) could reach held
+    out: half A's lines predicting half B, on the bins A chose."""
+    kin, top = problem.kinematics, problem.featurizer.max_freq_hz
+    halves = half_lines(problem)
+    if halves is None:
+        print(f"\n{name}: fewer than two fundamental periods, no halves")
+        return
+    freqs, lines_a = halves.a.freq_hz, halves.lines_a
+    bin_hz = float(freqs[0])
+    shafts = (kin.f_pinion_hz, kin.f_gear_hz)
 
     def only(lines: dict) -> np.ndarray:
         mask = np.zeros(lines_a.size, dtype=bool)
         mask[list(lines)] = True
         return np.where(mask, lines_a, 0.0)
 
-    row = [f"{on_b(np.zeros(lines_a.size)):.3f}", f"{on_b(lines_a):.3f}"]
-    row += [f"{on_b(only(lines_near(a.freq_hz, bin_hz, kin.f_mesh_hz, shafts, k))):.3f}"
+    row = [f"{halves.on_b(np.zeros(lines_a.size)):.3f}", f"{halves.on_b(lines_a):.3f}"]
+    row += [f"{halves.on_b(only(lines_near(freqs, bin_hz, kin.f_mesh_hz, shafts, k))):.3f}"
             for k in BOUND_ORDERS]
-    row.append(f"{on_b(only(lines_near(a.freq_hz, bin_hz, kin.f_mesh_hz, shafts, PAIR_ORDERS, together=True))):.3f}")
-    sequences = sequence_lines(a.freq_hz, bin_hz, kin.f_mesh_hz,
-                               ((kin.f_pinion_hz, kin.n_pinion), (kin.f_gear_hz, kin.n_gear)))
+    row.append(f"{halves.on_b(only(lines_near(freqs, bin_hz, kin.f_mesh_hz, shafts, PAIR_ORDERS, together=True))):.3f}")
     harmonics = curve_nodes(kin, top)
     finer = np.arange(0.0, harmonics[-1] + 1e-9, kin.f_mesh_hz / NODES)
     for nodes in (harmonics, finer):
-        model = sequence_fit(a.freq_hz, lines_a, sequences, nodes)
-        fitted = noise_corrected_error(model[bins], a.amplitude[bins], a.noise_power)
-        row.append(f"{on_b(model):.3f} (A {fitted:.3f})")
+        model = sequence_bound(problem, halves, nodes)
+        row.append(f"{halves.on_b(model):.3f} (A {halves.on_a(model):.3f})")
+    n_half = int(round(1.0 / (bin_hz * kin.period_s)))
     print(f"| {name} ({kin.n_pinion}/{kin.n_gear}) | {n_half} | " + " | ".join(row) + " |",
           flush=True)
 
