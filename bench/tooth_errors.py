@@ -11,7 +11,10 @@ pair (``--form``):
 - ``displacement``: each tooth a little high or low, added to the pair's transmission
   error (``e_extra``), in m, +-50 um. Slow against the mesh, the teeth's deflection
   follows it (x - e barely changes), so it makes sidebands only through the mesh's
-  dynamics.
+  dynamics;
+- ``lag+orders``: ``lag`` and each shaft's own orders 1-10 at the sensor
+  (GearDiag.Components.ShaftOrders, as the catalogue's shaft orders), fitted with it and
+  claiming those orders too.
 
 The model is written here and built with the library (``build/bench/<name>.mo``): it is
 not in the catalogue. As an effect it is affine in its coefficients (``lag``: near 0,
@@ -92,7 +95,22 @@ model ToothErrorsTrial "Each tooth of both gears a little high or low (bench/too
 {_PARTS}
 end ToothErrorsTrial;
 """, 50.0, "um", 1e-6),
+    "lag+orders": ("ToothLagOrdersTrial", f"""within GearDiag;
+model ToothLagOrdersTrial "Each tooth of both gears a little early or late, and both shafts' own orders (bench/tooth_errors.py)"
+  extends GearDiag.GearPair(t_angle = time + (pinion_teeth.e + wheel_teeth.e)/f_mesh,
+    acc_sensor = der(v) + pinion_orders.a + wheel_orders.a);
+{_ARRAYS}
+{_PARTS}
+  GearDiag.Components.ShaftOrders pinion_orders(f_shaft = f_pinion, t_angle = time)
+    "The pinion shaft's own orders 1-10 at the sensor";
+  GearDiag.Components.ShaftOrders wheel_orders(f_shaft = f_wheel, t_angle = time)
+    "The gear shaft's own orders 1-10 at the sensor";
+end ToothLagOrdersTrial;
+""", 0.05, "pitch", 1.0),
 }
+#: The shafts' own orders of ``lag+orders`` (GearDiag.Components.ShaftOrders): their
+#: number and each amplitude's range at the sensor, m/s2 (the catalogue's shaft orders').
+SHAFT_ORDERS, MAX_ORDER_M_S2 = 10, 5000.0
 
 
 def effect(form: str) -> Effect:
@@ -101,16 +119,24 @@ def effect(form: str) -> Effect:
     parameters = tuple(Parameter(f"{c}_{g}{k}", -extent, extent, variable=f"{c}_{g}[{k}]",
                                  scale=scale)
                        for g in "pg" for c in "cs" for k in range(1, ORDERS + 1))
+    orders = form.endswith("+orders")
+    if orders:
+        parameters += tuple(Parameter(f"A_{g}{k}", 0.0, MAX_ORDER_M_S2,
+                                      variable=f"{shaft}_orders.A_{k}")
+                            for g, shaft in (("p", "pinion"), ("g", "wheel"))
+                            for k in range(1, SHAFT_ORDERS + 1))
 
     def orders_of_its_teeth(peaks, bin_hz, kin):  # 1..Z/2 of each gear; the rest stay 0
         if kin is None:
             return {}
         half = {"p": kin.n_pinion // 2, "g": kin.n_gear // 2}
-        return {p.name: None for p in parameters if int(p.name[3:]) > half[p.name[2]]}
+        return {p.name: None for p in parameters
+                if not p.name.startswith("A_") and int(p.name[3:]) > half[p.name[2]]}
 
-    def sidebands(line, freq, kin):
-        return 1.0 if line is not None and line.family in ("mesh_sb_pinion",
-                                                           "mesh_sb_gear") else 0.0
+    claimed = ("mesh_sb_pinion", "mesh_sb_gear") + (("pinion", "gear") if orders else ())
+
+    def sidebands(line, freq, kin):  # and with the shafts' orders, those
+        return 1.0 if line is not None and line.family in claimed else 0.0
     return Effect(f"tooth_{form}", f"GearDiag.{name}", f"each tooth of both gears ({form})",
                   parameters, sidebands, orders_of_its_teeth, affine=True)
 
@@ -157,7 +183,7 @@ def main() -> int:
     ap.add_argument("--records", default="spur 1_30hz_High_1,spur 2_30hz_High_1")
     ap.add_argument("--gfd", type=Path, help="also the GFD records of this folder")
     ap.add_argument("--gfd-records", default="h30hz0,b30hz90")
-    ap.add_argument("--form", choices=sorted(FORMS), default="lag")
+    ap.add_argument("--form", choices=list(FORMS), default="lag")
     args = ap.parse_args()
     paths = [(phm09_problems, args.phm09 / f"{name}.zip") for name in args.records.split(",")]
     if args.gfd:
