@@ -12,6 +12,8 @@ pair (``--form``):
   error (``e_extra``), in m, +-50 um. Slow against the mesh, the teeth's deflection
   follows it (x - e barely changes), so it makes sidebands only through the mesh's
   dynamics;
+- ``stiffness``: each tooth a little stiffer or softer, the mesh stiffness scaled by 1 +
+  both sequences (as GearDiag.Effects.MeshModulation scales it once a turn), +-0.05;
 - ``lag+orders``: ``lag`` and each shaft's own orders 1-10 at the sensor
   (GearDiag.Components.ShaftOrders, as the catalogue's shaft orders), fitted with it and
   claiming those orders too.
@@ -29,10 +31,13 @@ effect held out as the loop tries one (:func:`pydiag.loop.held_out.held_out`: z,
 share of its lines' residual explained, the held-out error base -> with it, the
 coefficients at a bound), and the bound of its form from half A's lines
 (:func:`error_budget.sequence_bound`, the gain curve's nodes): with the shafts' own orders
-tied to the sequence, as the model has them, and free.
+tied to the sequence, as the model has them, and free; and each gear's fitted sequence
+read back tooth by tooth (half A's fit): the tooth farthest from the others, its value and
+how many robust spreads of the others that is (a chipped tooth should stand out).
 
 Usage:
-    .venv/bin/python bench/tooth_errors.py [--form lag|displacement] [--phm09 ../shared/data/phm09]
+    .venv/bin/python bench/tooth_errors.py [--form lag|displacement|stiffness|lag+orders] [--extent X]
+        [--phm09 ../shared/data/phm09]
         [--records "spur 1_30hz_High_1,spur 2_30hz_High_1"] [--gfd ../shared/data/gfd
         --gfd-records h30hz0,b30hz90]
 """
@@ -44,6 +49,8 @@ import platform
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -95,6 +102,15 @@ model ToothErrorsTrial "Each tooth of both gears a little high or low (bench/too
 {_PARTS}
 end ToothErrorsTrial;
 """, 50.0, "um", 1e-6),
+    "stiffness": ("ToothStiffnessTrial", f"""within GearDiag;
+model ToothStiffnessTrial "Each tooth of both gears a little stiffer or softer (bench/tooth_errors.py)"
+  // the mesh stiffness (its mean and the wave a*sigma) scaled by 1 + both sequences, as
+  // MeshModulation scales it once a turn
+  extends GearDiag.GearPair(k_mod = (1 + a*sigma)*(pinion_teeth.e + wheel_teeth.e));
+{_ARRAYS}
+{_PARTS}
+end ToothStiffnessTrial;
+""", 0.05, "of the stiffness", 1.0),
     "lag+orders": ("ToothLagOrdersTrial", f"""within GearDiag;
 model ToothLagOrdersTrial "Each tooth of both gears a little early or late, and both shafts' own orders (bench/tooth_errors.py)"
   extends GearDiag.GearPair(t_angle = time + (pinion_teeth.e + wheel_teeth.e)/f_mesh,
@@ -113,9 +129,11 @@ end ToothLagOrdersTrial;
 SHAFT_ORDERS, MAX_ORDER_M_S2 = 10, 5000.0
 
 
-def effect(form: str) -> Effect:
-    """The form's effect: its coefficients, the sidebands its claim, affine."""
-    name, _, extent, _, scale = FORMS[form]
+def effect(form: str, extent: float | None = None) -> Effect:
+    """The form's effect: its coefficients (in +-``extent``, default the form's), the
+    sidebands its claim, affine."""
+    name, _, default, _, scale = FORMS[form]
+    extent = extent or default
     parameters = tuple(Parameter(f"{c}_{g}{k}", -extent, extent, variable=f"{c}_{g}[{k}]",
                                  scale=scale)
                        for g in "pg" for c in "cs" for k in range(1, ORDERS + 1))
@@ -158,6 +176,22 @@ def gfd_problems(path: Path):
         speed=SpeedSettings("auto"), fit_gain=True, gain_curve=True)
 
 
+def most_off_tooth(values: dict[str, float], gear: str, teeth: int) -> str:
+    """The tooth of ``gear`` ("p" or "g") whose value of the fitted sequence (sampled at each
+    tooth's angle, from the model's origin) is farthest from the median of the teeth, and
+    by how many robust spreads of the others (1.4826 x their median absolute deviation)."""
+    n = np.arange(teeth)
+    w = 2 * np.pi * n / teeth
+    sequence = sum(values.get(f"c_{gear}{k}", 0.0) * np.cos(k * w)
+                   + values.get(f"s_{gear}{k}", 0.0) * np.sin(k * w)
+                   for k in range(1, teeth // 2 + 1))
+    off = sequence - np.median(sequence)
+    worst = int(np.argmax(np.abs(off)))
+    rest = np.delete(off, worst)
+    spread = 1.4826 * np.median(np.abs(rest - np.median(rest)))
+    return f"{worst} ({off[worst]:+.3g}, {abs(off[worst]) / spread:.1f})"
+
+
 def row(name: str, problem, tried_effect: Effect, fmu: str) -> str:
     kin = problem.kinematics
     t0 = time.perf_counter()
@@ -174,7 +208,8 @@ def row(name: str, problem, tried_effect: Effect, fmu: str) -> str:
     return (f"| {name} | {kin.n_pinion}/{kin.n_gear} | {fitted} | {base.error:.3f} | "
             f"{tried.error_base:.3f} -> {tried.error_effect:.3f} | {tried.z:.1f} | "
             f"{tried.explained:.2f} | {at_bound} | {tried.status.value} | {bounds} | "
-            f"{seconds:.0f} |")
+            f"{most_off_tooth(tried.parameters, 'p', kin.n_pinion)} | "
+            f"{most_off_tooth(tried.parameters, 'g', kin.n_gear)} | {seconds:.0f} |")
 
 
 def main() -> int:
@@ -184,6 +219,8 @@ def main() -> int:
     ap.add_argument("--gfd", type=Path, help="also the GFD records of this folder")
     ap.add_argument("--gfd-records", default="h30hz0,b30hz90")
     ap.add_argument("--form", choices=list(FORMS), default="lag")
+    ap.add_argument("--extent", type=float,
+                    help="each coefficient's range, +-this (default: the form's)")
     args = ap.parse_args()
     paths = [(phm09_problems, args.phm09 / f"{name}.zip") for name in args.records.split(",")]
     if args.gfd:
@@ -195,17 +232,18 @@ def main() -> int:
         return 2
     t0 = time.perf_counter()
     name, source, extent, unit, _ = FORMS[args.form]
+    extent = args.extent or extent
     fmu = built_fmu(name, source, ROOT / "modelica", ROOT / "build" / "bench")
     print(f"{platform.machine()}, Python {platform.python_version()}; {args.form}: "
           f"coefficients in +-{extent:g} {unit}; the model built or found in "
           f"{time.perf_counter() - t0:.1f} s: {fmu.fmu}\n")
     print("| record, stage | teeth | coefficients | error | held out, base -> with it | z | "
           "explained | at a bound | verdict | its form's bound held out, own orders tied / "
-          "free | s |")
-    print("|---" * 11 + "|")
+          f"free | the pinion's most off tooth ({unit}, spreads) | the gear's | s |")
+    print("|---" * 13 + "|")
     for problems, path in paths:
         for label, problem in problems(path):
-            print(row(label, problem, effect(args.form), str(fmu.fmu)), flush=True)
+            print(row(label, problem, effect(args.form, extent), str(fmu.fmu)), flush=True)
     return 0
 
 
