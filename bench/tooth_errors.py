@@ -83,8 +83,8 @@ _PARTS = f"""  parameter Real f_wheel(unit="Hz") = f_mesh/Ng "Gear shaft speed";
     t_angle = time, c = c_p, s = s_p) "The pinion's teeth";
   GearDiag.Components.ToothSequence wheel_teeth(n = {ORDERS}, f_shaft = f_wheel,
     t_angle = time, c = c_g, s = s_g) "The gear's teeth";"""
-#: The two forms (module docstring): the model's name, its source, each coefficient's
-#: range (its unit) and the scale to the FMU's.
+#: The forms (module docstring): the model's name, its source, each coefficient's range,
+#: its unit and the scale to the FMU's.
 FORMS = {
     "lag": ("ToothLagTrial", f"""within GearDiag;
 model ToothLagTrial "Each tooth of both gears a little early or late (bench/tooth_errors.py)"
@@ -130,8 +130,8 @@ SHAFT_ORDERS, MAX_ORDER_M_S2 = 10, 5000.0
 
 
 def effect(form: str, extent: float | None = None) -> Effect:
-    """The form's effect: its coefficients (in +-``extent``, default the form's), the
-    sidebands its claim, affine."""
+    """The form's effect: its coefficients (in +-``extent``, default the form's), claiming
+    the sidebands of either shaft (and with the shafts' orders, those), affine."""
     name, _, default, _, scale = FORMS[form]
     extent = extent or default
     parameters = tuple(Parameter(f"{c}_{g}{k}", -extent, extent, variable=f"{c}_{g}[{k}]",
