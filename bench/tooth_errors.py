@@ -33,7 +33,9 @@ coefficients at a bound), and the bound of its form from half A's lines
 (:func:`error_budget.sequence_bound`, the gain curve's nodes): with the shafts' own orders
 tied to the sequence, as the model has them, and free; and each gear's fitted sequence
 read back tooth by tooth (half A's fit): the tooth farthest from the others, its value and
-how many robust spreads of the others that is (a chipped tooth should stand out).
+how many robust spreads of the others that is (a chipped tooth should stand out), and its
+largest orders (a few low ones: the shaft's angle swinging over its turn rather than its
+teeth).
 
 Usage:
     .venv/bin/python bench/tooth_errors.py [--form lag|displacement|stiffness|lag+orders] [--extent X]
@@ -192,6 +194,16 @@ def most_off_tooth(values: dict[str, float], gear: str, teeth: int) -> str:
     return f"{worst} ({off[worst]:+.3g}, {abs(off[worst]) / spread:.1f})"
 
 
+def largest_orders(values: dict[str, float], gear: str, teeth: int, most: int = 3) -> str:
+    """The ``most`` orders of ``gear``'s fitted sequence with the largest amplitude
+    (``hypot(c_k, s_k)``), and the share of the sequence's power they hold."""
+    amplitude = np.array([np.hypot(values.get(f"c_{gear}{k}", 0.0), values.get(f"s_{gear}{k}", 0.0))
+                          for k in range(1, teeth // 2 + 1)])
+    top = np.argsort(-amplitude)[:most]
+    share = np.sum(amplitude[top] ** 2) / max(np.sum(amplitude ** 2), 1e-300)
+    return ", ".join(f"{k + 1}: {amplitude[k]:.2g}" for k in top) + f" ({share:.0%})"
+
+
 def row(name: str, problem, tried_effect: Effect, fmu: str) -> str:
     kin = problem.kinematics
     t0 = time.perf_counter()
@@ -209,7 +221,9 @@ def row(name: str, problem, tried_effect: Effect, fmu: str) -> str:
             f"{tried.error_base:.3f} -> {tried.error_effect:.3f} | {tried.z:.1f} | "
             f"{tried.explained:.2f} | {at_bound} | {tried.status.value} | {bounds} | "
             f"{most_off_tooth(tried.parameters, 'p', kin.n_pinion)} | "
-            f"{most_off_tooth(tried.parameters, 'g', kin.n_gear)} | {seconds:.0f} |")
+            f"{most_off_tooth(tried.parameters, 'g', kin.n_gear)} | "
+            f"{largest_orders(tried.parameters, 'p', kin.n_pinion)} | "
+            f"{largest_orders(tried.parameters, 'g', kin.n_gear)} | {seconds:.0f} |")
 
 
 def main() -> int:
@@ -239,8 +253,9 @@ def main() -> int:
           f"{time.perf_counter() - t0:.1f} s: {fmu.fmu}\n")
     print("| record, stage | teeth | coefficients | error | held out, base -> with it | z | "
           "explained | at a bound | verdict | its form's bound held out, own orders tied / "
-          f"free | the pinion's most off tooth ({unit}, spreads) | the gear's | s |")
-    print("|---" * 13 + "|")
+          f"free | the pinion's most off tooth ({unit}, spreads) | the gear's | the "
+          "pinion's largest orders (share of its sequence's power) | the gear's | s |")
+    print("|---" * 15 + "|")
     for problems, path in paths:
         for label, problem in problems(path):
             print(row(label, problem, effect(args.form, extent), str(fmu.fmu)), flush=True)
