@@ -39,6 +39,7 @@ teeth).
 
 Usage:
     .venv/bin/python bench/tooth_errors.py [--form lag|displacement|stiffness|lag+orders] [--extent X]
+        [--orders N]
         [--phm09 ../shared/data/phm09]
         [--records "spur 1_30hz_High_1,spur 2_30hz_High_1"] [--gfd ../shared/data/gfd
         --gfd-records h30hz0,b30hz90]
@@ -131,9 +132,10 @@ end ToothLagOrdersTrial;
 SHAFT_ORDERS, MAX_ORDER_M_S2 = 10, 5000.0
 
 
-def effect(form: str, extent: float | None = None) -> Effect:
-    """The form's effect: its coefficients (in +-``extent``, default the form's), claiming
-    the sidebands of either shaft (and with the shafts' orders, those), affine."""
+def effect(form: str, extent: float | None = None, most: int | None = None) -> Effect:
+    """The form's effect: its coefficients (in +-``extent``, default the form's; each
+    gear's orders up to ``most``, default Z/2), claiming the sidebands of either shaft (and
+    with the shafts' orders, those), affine."""
     name, _, default, _, scale = FORMS[form]
     extent = extent or default
     parameters = tuple(Parameter(f"{c}_{g}{k}", -extent, extent, variable=f"{c}_{g}[{k}]",
@@ -149,7 +151,8 @@ def effect(form: str, extent: float | None = None) -> Effect:
     def orders_of_its_teeth(peaks, bin_hz, kin):  # 1..Z/2 of each gear; the rest stay 0
         if kin is None:
             return {}
-        half = {"p": kin.n_pinion // 2, "g": kin.n_gear // 2}
+        half = {"p": min(kin.n_pinion // 2, most or ORDERS),
+                "g": min(kin.n_gear // 2, most or ORDERS)}
         return {p.name: None for p in parameters
                 if not p.name.startswith("A_") and int(p.name[3:]) > half[p.name[2]]}
 
@@ -235,6 +238,8 @@ def main() -> int:
     ap.add_argument("--form", choices=list(FORMS), default="lag")
     ap.add_argument("--extent", type=float,
                     help="each coefficient's range, +-this (default: the form's)")
+    ap.add_argument("--orders", type=int,
+                    help="each gear's orders up to this only (default: Z/2, every tooth)")
     args = ap.parse_args()
     paths = [(phm09_problems, args.phm09 / f"{name}.zip") for name in args.records.split(",")]
     if args.gfd:
@@ -258,7 +263,8 @@ def main() -> int:
     print("|---" * 15 + "|")
     for problems, path in paths:
         for label, problem in problems(path):
-            print(row(label, problem, effect(args.form, extent), str(fmu.fmu)), flush=True)
+            print(row(label, problem, effect(args.form, extent, args.orders), str(fmu.fmu)),
+                  flush=True)
     return 0
 
 
