@@ -46,9 +46,9 @@ from pydiag.fmu.isolation import IsolatedPool
 DEFAULT_EVAL_TIMEOUT_S = 60.0
 #: Failed simulations in a row that stop a fit.
 DEFAULT_MAX_CONSECUTIVE_FAILURES = 20
-#: The native engine's tolerance in the swarm's simulations (``swarm_tolerance``): 1 % of
-#: the peak on Table 1 case 8 (bench/speed.py), a third faster than at 1e-6, and the swarm
-#: only ranks positions; the polish and the reported error keep the problem's tolerance.
+#: The native engine's tolerance in the swarm's simulations (``swarm_tolerance``): the
+#: swarm only ranks positions; the polish and the reported error keep the problem's
+#: tolerance (its accuracy and speed: bench/speed.py, bench/RESULTS.md sections 1 and 12).
 SWARM_TOLERANCE = 1e-4
 
 
