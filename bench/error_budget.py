@@ -124,22 +124,25 @@ def repeatability(signal: np.ndarray, samples: int, orders: np.ndarray) -> float
     return float(np.sum(np.abs(a - b) ** 2) / np.sum(np.abs(a) ** 2 + np.abs(b) ** 2))
 
 
-def gfd_problems(path: Path) -> dict:
+def gfd_problems(path: Path, gain_curve: bool = False) -> dict:
+    """The record's problem (GearPair, the channel gain or with ``gain_curve`` the gain
+    curve fitted), by the record's name."""
     m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
     return {path.name: build_problem(str(ROOT / "build" / "GearPair.fmu"), m,
                                      operating_point=OPERATING_POINT,
-                                     speed=SpeedSettings("auto"), fit_gain=True)}
+                                     speed=SpeedSettings("auto"), fit_gain=True,
+                                     gain_curve=gain_curve)}
 
 
-def phm09_problems(path: Path) -> dict:
+def phm09_problems(path: Path, gain_curve: bool = False) -> dict:
     """Each stage's problem (its channel as ``acc``, the tacho left out, the speed from
-    every mesh) of a 30 Hz PHM09 record."""
+    every mesh) of a 30 Hz PHM09 record, by the record's and the stage's names."""
     machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
     m = read_measurement(path, PHM09_RATE_HZ)
     found = machine_speed(m, machine, 30.0, SpeedSettings("mesh", tacho="ch3"))
     return {f"{path.name} {stage.name}": stage_problem(
         str(ROOT / "build" / "GearPair.fmu"), m, machine, k, found, fit_gain=True,
-        drop=("ch3",)) for k, stage in enumerate(machine.stages)}
+        drop=("ch3",), gain_curve=gain_curve) for k, stage in enumerate(machine.stages)}
 
 
 def budget(name: str, problem) -> None:

@@ -26,7 +26,8 @@ harmonic (at a shaft's own low orders a tooth's error makes only a small quasi-s
 motion).
 
 For each record (each stage of ``examples/phm09_spur.toml`` on its own for PHM09, the
-tacho's speed; GearPair with the gain curve as the base): the base fit's error, the
+speed from the meshes, as ``error_budget`` takes them; GearPair with the gain curve as
+the base): the base fit's error, the
 effect held out as the loop tries one (:func:`pydiag.loop.held_out.held_out`: z, the
 share of its lines' residual explained, the held-out error base -> with it, the
 coefficients at a bound), and the bound of its form from half A's lines
@@ -59,21 +60,16 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from error_budget import (OPERATING_POINT, PHM09_RATE_HZ, SAMPLE_RATE_HZ,  # noqa: E402
-                          half_lines, sequence_bound)
+from error_budget import (gfd_problems, half_lines, phm09_problems,  # noqa: E402
+                          sequence_bound)
 
 from pydiag.core.parameters import Parameter  # noqa: E402
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.gain import curve_nodes  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.effects import Effect  # noqa: E402
-from pydiag.gear.machine import load_machine  # noqa: E402
-from pydiag.gear.speed import SpeedSettings  # noqa: E402
-from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.compose import built_fmu  # noqa: E402
 from pydiag.loop.held_out import held_out  # noqa: E402
-from pydiag.loop.stages import machine_speed, stage_problem  # noqa: E402
 
 #: Orders of each gear's series in the model: a gear of up to twice as many teeth.
 ORDERS = 48
@@ -138,9 +134,10 @@ def effect(form: str, extent: float | None = None, most: int | None = None) -> E
     with the shafts' orders, those), affine."""
     name, _, default, _, scale = FORMS[form]
     extent = extent or default
-    parameters = tuple(Parameter(f"{c}_{g}{k}", -extent, extent, variable=f"{c}_{g}[{k}]",
-                                 scale=scale)
-                       for g in "pg" for c in "cs" for k in range(1, ORDERS + 1))
+    coefficients = [(f"{c}_{g}", g, k) for g in "pg" for c in "cs" for k in range(1, ORDERS + 1)]
+    order = {f"{array}{k}": (g, k) for array, g, k in coefficients}  # name -> gear, order
+    parameters = tuple(Parameter(f"{array}{k}", -extent, extent, variable=f"{array}[{k}]",
+                                 scale=scale) for array, _, k in coefficients)
     orders = form.endswith("+orders")
     if orders:
         parameters += tuple(Parameter(f"A_{g}{k}", 0.0, MAX_ORDER_M_S2,
@@ -153,8 +150,7 @@ def effect(form: str, extent: float | None = None, most: int | None = None) -> E
             return {}
         half = {"p": min(kin.n_pinion // 2, most or ORDERS),
                 "g": min(kin.n_gear // 2, most or ORDERS)}
-        return {p.name: None for p in parameters
-                if not p.name.startswith("A_") and int(p.name[3:]) > half[p.name[2]]}
+        return {name: None for name, (g, k) in order.items() if k > half[g]}
 
     claimed = ("mesh_sb_pinion", "mesh_sb_gear") + (("pinion", "gear") if orders else ())
 
@@ -162,23 +158,6 @@ def effect(form: str, extent: float | None = None, most: int | None = None) -> E
         return 1.0 if line is not None and line.family in claimed else 0.0
     return Effect(f"tooth_{form}", f"GearDiag.{name}", f"each tooth of both gears ({form})",
                   parameters, sidebands, orders_of_its_teeth, affine=True)
-
-
-def phm09_problems(path: Path):
-    machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
-    m = read_measurement(path, PHM09_RATE_HZ)
-    found = machine_speed(m, machine, 30.0, SpeedSettings("mesh", tacho="ch3"))
-    for k, stage in enumerate(machine.stages):
-        yield f"{path.stem}, {stage.name}", stage_problem(
-            str(ROOT / "build" / "GearPair.fmu"), m, machine, k, found, fit_gain=True,
-            drop=("ch3",), gain_curve=True)
-
-
-def gfd_problems(path: Path):
-    m = read_measurement(path, SAMPLE_RATE_HZ, ["a1=acc"], ["g"])
-    yield path.name.split(".")[0], build_problem(
-        str(ROOT / "build" / "GearPair.fmu"), m, operating_point=OPERATING_POINT,
-        speed=SpeedSettings("auto"), fit_gain=True, gain_curve=True)
 
 
 def most_off_tooth(values: dict[str, float], gear: str, teeth: int) -> str:
@@ -262,7 +241,7 @@ def main() -> int:
           "pinion's largest orders (share of its sequence's power) | the gear's | s |")
     print("|---" * 15 + "|")
     for problems, path in paths:
-        for label, problem in problems(path):
+        for label, problem in problems(path, gain_curve=True).items():
             print(row(label, problem, effect(args.form, extent, args.orders), str(fmu.fmu)),
                   flush=True)
     return 0
