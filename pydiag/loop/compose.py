@@ -6,16 +6,18 @@ Every effect of the catalogue with a model of its own extends GearDiag.GearPair 
 one of its hooks (``GearDiag/Effects/package.mo``). Contributions combine as the physics
 does:
 
-- ``k_mod`` (relative stiffness), ``e_extra`` (transmission error), ``F_extra`` (force)
-  and what ``acc_sensor`` adds to ``der(v)`` (a shaft's or a bearing's own vibration at
-  the sensor) are sums: each effect's term is added;
-- ``contact`` (the teeth separate) and ``t_angle`` (the shafts' angle) are the state of
-  the mesh itself: one effect at most may set each.
+- ``k_mod`` (relative stiffness), ``e_extra`` (transmission error), ``F_extra`` (force),
+  what ``acc_sensor`` adds to ``der(v)`` (a shaft's or a bearing's own vibration at the
+  sensor) and what ``t_angle`` adds to ``time`` (a speed's fluctuation, a shaft's swing:
+  angles add) are sums: each effect's term is added;
+- ``contact`` (the teeth separate) is the state of the mesh itself: one effect at most
+  may set it.
 
 The same effects compose on a stage's mesh between two shafts
 (``GearDiag.Components.GearMesh``, :data:`MESH`, a machine's model's stage): its
-``acc_sensor`` starts from what the housing sees of the mesh force, and it has no
-``F_extra`` (a force on a stage is a torque on its shafts: a component of the machine).
+``acc_sensor`` starts from what the housing sees of the mesh force, its ``t_angle`` from
+the stage's own phase, and it has no ``F_extra`` (a force on a stage is a torque on its
+shafts: a component of the machine).
 
 The effects' declarations (parameters, components) are copied as written; a component
 name two effects use is prefixed with the effect's key in the second; a parameter two
@@ -36,12 +38,12 @@ from pydiag.core.errors import UsageError
 from pydiag.gear.effects import EFFECTS, model_file
 
 #: Hooks whose contributions add.
-SUMMED_HOOKS = ("k_mod", "e_extra", "F_extra", "acc_sensor")
+SUMMED_HOOKS = ("k_mod", "e_extra", "F_extra", "acc_sensor", "t_angle")
 #: Hooks one effect at most may set.
-SOLE_HOOKS = ("contact", "t_angle")
-#: What every effect's contribution to ``acc_sensor`` is added to in its own model: the
-#: pair's mesh acceleration.
-SENSOR_BASE = "der(v)"
+SOLE_HOOKS = ("contact",)
+#: What an effect's contribution to a hook is added to in its own model, for the hooks
+#: that are not 0 without effects: the pair's mesh acceleration, its steady angle.
+PAIR_STARTS = {"acc_sensor": "der(v)", "t_angle": "time"}
 
 _EXTENDS = re.compile(r"extends\s+GearDiag\.GearPair\s*\(")
 _COMPONENT = re.compile(r"^\s*GearDiag\.[\w.]+\s+(\w+)\s*[(\s\"]", re.M)
@@ -50,19 +52,20 @@ _PARAMETER = re.compile(r"^\s*parameter\s+\w+\s+(\w+)", re.M)
 
 @dataclass(frozen=True)
 class Base:
-    """What composed effects extend: its class, its ``acc_sensor`` without effects, the
-    hooks it has."""
+    """What composed effects extend: its class, the hooks it has, and what each of
+    :data:`PAIR_STARTS`' hooks is without effects."""
 
     model: str
-    sensor: str
     hooks: tuple[str, ...]
+    starts: dict[str, str]
 
 
 #: The paper's pair: every effect's own model extends it.
-PAIR = Base("GearDiag.GearPair", SENSOR_BASE, SUMMED_HOOKS + SOLE_HOOKS)
+PAIR = Base("GearDiag.GearPair", SUMMED_HOOKS + SOLE_HOOKS, PAIR_STARTS)
 #: A stage's mesh between two shafts (a machine's model).
-MESH = Base("GearDiag.Components.GearMesh", "(T/r_p - mesh_force)/m_s",
-            ("k_mod", "e_extra", "acc_sensor", "contact", "t_angle"))
+MESH = Base("GearDiag.Components.GearMesh",
+            ("k_mod", "e_extra", "acc_sensor", "t_angle", "contact"),
+            {"acc_sensor": "(T/r_p - mesh_force)/m_s", "t_angle": "time + t_phase"})
 
 
 class CompositionError(UsageError):
@@ -105,11 +108,12 @@ def read_effect(key: str, modelica_root: Path) -> EffectSource:
         raise CompositionError(f"{path}: gives {hook or 'nothing'}; an effect gives one of "
                                f"the hooks {', '.join(SUMMED_HOOKS + SOLE_HOOKS)}")
     expression = " ".join(expression.split())
-    if hook == "acc_sensor":
-        if not expression.startswith(SENSOR_BASE + " +"):
-            raise CompositionError(f"{path}: acc_sensor = {expression[:40]}...: only a term "
-                                   f"added to {SENSOR_BASE} combines with other effects")
-        expression = expression[len(SENSOR_BASE) + 2:].strip()
+    if hook in PAIR_STARTS:
+        start = PAIR_STARTS[hook]
+        if not expression.startswith(start + " +"):
+            raise CompositionError(f"{path}: {hook} = {expression[:40]}...: only a term "
+                                   f"added to {start} combines with other effects")
+        expression = expression[len(start) + 2:].strip()
     body = text[text.index(";", end) + 1:]
     closing = re.search(rf"^\s*end\s+{path.stem}\s*;", body, re.M)
     if closing is None:
@@ -210,7 +214,7 @@ def compose(keys: tuple[str, ...], modelica_root: Path, base: Base = PAIR) -> Co
     for hook in SUMMED_HOOKS + SOLE_HOOKS:
         if hook in terms:
             added = " + ".join(f"({t})" for t in terms[hook])
-            modifiers.append(f"{hook} = {base.sensor} + {added}" if hook == "acc_sensor"
+            modifiers.append(f"{hook} = {base.starts[hook]} + {added}" if hook in base.starts
                              else f"{hook} = {added}")
     name = base.model.rsplit(".", 1)[1] + "With" + "".join(
         EFFECTS[k].model.rsplit(".", 1)[1] for k in keys)

@@ -15,7 +15,8 @@ levels are fitted with the stages' fault parameters; the channel's overall level
 fit's gain, as for a pair. A sensor's output adds the stages' signals as they are
 simulated, so a line two stages share has the level their phases give: each stage after
 the first meshes at a phase of its own relative to the first's (``<stage>_mesh_phase``, a
-share of its mesh cycle by which its ``t_angle`` is ahead), fitted too.
+share of its mesh cycle by which its ``t_angle`` is ahead: ``GearMesh``'s ``t_phase``),
+fitted too.
 
 A stage carries the catalogue effects the machine file gives it (``[[effects]]``, which
 ``pydiag accept`` writes): those with models of their own make its mesh their composed
@@ -273,7 +274,7 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
             name = _identifier(f"{inst}_mesh_phase", f"stage{k + 1}_mesh_phase", taken)
             lines.append(f"  parameter Real {name} = 0 \"{s.name}'s mesh relative to "
                          f"{machine.stages[0].name}'s, a share of its mesh cycle\";")
-            phase = f", t_angle=time + {name}/({s.pinion_teeth}*{speed})"
+            phase = f", t_phase={name}/({s.pinion_teeth}*{speed})"
             phases.append(Parameter(name, 0.0, 1.0, periodic=True))
         lines.append(f"  {cls} {inst}(Np={s.pinion_teeth}, Ng={s.gear_teeth}, "
                      f"f_pinion={speed}{phase}) \"{s.name}: {s.pinion_teeth}/"

@@ -86,7 +86,7 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     written = source.read_text()
     assert "GearDiag.Components.GearMesh stage_1(Np=18, Ng=36, f_pinion=f_input)" in written
     assert ("GearDiag.Components.GearMesh stage_2(Np=20, Ng=50, f_pinion=f_input*1/2, "
-            "t_angle=time + stage_2_mesh_phase/(20*f_input*1/2))") in written
+            "t_phase=stage_2_mesh_phase/(20*f_input*1/2))") in written
     assert "stage_2.a_f=" in r.stdout and "acc_stage_2_dB=" in r.stdout
     assert "stage_2_mesh_phase=" in r.stdout
     for args, message in (

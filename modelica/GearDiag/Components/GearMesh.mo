@@ -10,8 +10,11 @@ model GearMesh "A gear stage's mesh between its pinion's and its gear's shafts, 
   // far above its modes, (T/r_p - F)/m_s (acc). A pinion at its steady speed and a gear of
   // inertia m_s*r_g^2 under a load T*r_g/r_p make GearPair of mass m_s: the same acc
   // (tests/fmu_build hold them to it). k_mod, e_extra, t_angle (the law's), contact and
-  // acc_sensor are hooks with neutral declaration equations, as GearPair's.
-  extends GearDiag.Interfaces.PartialMeshLaw;
+  // acc_sensor are hooks with neutral declaration equations, as GearPair's; its t_angle
+  // starts t_phase ahead (a machine's stage meshing at a phase of its own relative to its
+  // first stage's), so that an effect's angle adds to the stage's phase.
+  extends GearDiag.Interfaces.PartialMeshLaw(t_angle = time + t_phase);
+  parameter Real t_phase(unit="s") = 0 "Time the mesh's angle is ahead of its steady turning by (a machine's stage relative to its first)";
   parameter Real r_g(unit="m") = r_p*Ng/Np "Gear pitch radius";
   parameter Real m_s(unit="kg") = 0.5 "Apparent mass of the housing at the sensor: what the mesh force's change accelerates";
   GearDiag.Interfaces.Flange flange_a "The pinion's shaft";
