@@ -154,6 +154,15 @@ def _mesh_modulation(line, freq, kin):
     return 0.5 if line.family in ("pinion", "gear") and line.order == 1 else 0.0
 
 
+def _shaft_swing(line, freq, kin):
+    # the mesh's phase modulated at each shaft's speed: the first sideband of that shaft
+    # either side of every mesh harmonic, and, at half weight, the second (a deep swing's);
+    # no line at the shaft's own order (the phase of a force, not its size, swings)
+    if line is None or line.family not in ("mesh_sb_pinion", "mesh_sb_gear"):
+        return 0.0
+    return 1.0 if abs(line.order) == 1 else 0.5 if abs(line.order) == 2 else 0.0
+
+
 def _gear_tooth_fault(line, freq, kin):
     if line is None:
         return 0.0
@@ -393,6 +402,9 @@ def _bearing_missing(kin) -> str:
 #: a fitted channel gain scales it to the measurement's, and real records fit gains down
 #: to about 0.01.
 MAX_STRIKE_M_S2 = 5000.0
+#: The largest swing of a shaft's speed once a turn the shaft-swing effect fits, relative
+#: to its mean speed: a drive train's torsional swing is a few per cent of it.
+MAX_SWING = 0.05
 #: The highest torque-ripple frequency the load-fluctuation effect models, Hz.
 MAX_RIPPLE_HZ = 20.0
 
@@ -521,6 +533,16 @@ EFFECTS = {e.key: e for e in (
            "the shafts' speed fluctuates (phase modulation of every line)",
            (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
            _load_fluctuation, _ripple_hint("f_speed"), synchronous=False, reshapes_base=True),
+    # a torsional swing at each shaft's own speed (a misaligned coupling, a bent shaft): the
+    # mesh's phase modulated once a turn of either shaft, synchronous with the pair. Deep
+    # (the gear's swing is Ng times deeper in the mesh's phase), so far from affine, and it
+    # takes energy from the mesh harmonics into their sidebands: fitted with the base free
+    Effect("shaft_swing", "GearDiag.Effects.ShaftSwing",
+           "each shaft's speed swings once a turn (phase modulation of the mesh at each "
+           "shaft's speed)",
+           (Parameter("s_p", 0.0, MAX_SWING), Parameter("psi_p", -math.pi, math.pi, periodic=True),
+            Parameter("s_g", 0.0, MAX_SWING), Parameter("psi_g", -math.pi, math.pi, periodic=True)),
+           _shaft_swing, reshapes_base=True),
     # a shaft's unbalance, misalignment or looseness, seen at the sensor through its
     # bearings: one amplitude an order (the outputs are affine in all of them)
     Effect("pinion_shaft_orders", "GearDiag.Effects.PinionShaftOrders",

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from pydiag.fmu.plant import FmuPlant
+from pydiag.gear.effects import EFFECTS
 from pydiag.loop.compose import CompositionError, compose, composed_fmu
 from pydiag.loop.discover import effect_fmu
 
@@ -56,11 +57,33 @@ def test_effects_that_cannot_share_a_model_are_refused_by_name(modelica_copy):
         compose(("housing_sensor", "gear_eccentricity"), MODELICA)
     runout = modelica_copy / "GearDiag" / "Effects" / "GearEccentricity.mo"
     runout.write_text(runout.read_text().replace("extends GearDiag.GearPair(e_extra =",
-                                                 "extends GearDiag.GearPair(t_angle = time + "))
-    with pytest.raises(CompositionError, match="speed_fluctuation and gear_eccentricity both "
-                                               "set t_angle|gear_eccentricity and "
-                                               "speed_fluctuation both set t_angle"):
-        compose(("gear_eccentricity", "speed_fluctuation"), modelica_copy)
+                                                 "extends GearDiag.GearPair(contact = "))
+    with pytest.raises(CompositionError, match="gear_eccentricity and backlash both set "
+                                               "contact"):
+        compose(("gear_eccentricity", "backlash"), modelica_copy)
+    swing = modelica_copy / "GearDiag" / "Effects" / "ShaftSwing.mo"
+    swing.write_text(swing.read_text().replace("t_angle = time +", "t_angle = 2*time +"))
+    with pytest.raises(CompositionError, match="ShaftSwing.mo: t_angle = 2.time .*only a term "
+                                               "added to time combines"):
+        compose(("shaft_swing", "speed_fluctuation"), modelica_copy)
+
+
+def test_angles_add(effects_dir, tmp_path):
+    """A speed's fluctuation and a shaft's swing each lead the mesh's angle by a term of
+    their own: composed, each does what its own model does while the other is off, and
+    both together lead it by their sum."""
+    fluctuation, swing = {"ds": 0.01, "f_speed": 5.0}, {"s_g": 0.02, "psi_g": 0.7}
+    keys = ("shaft_swing", "speed_fluctuation")
+    assert "t_angle = time + (ds/(2*pi*f_speed)" in compose(keys, MODELICA).source
+    fmu = composed_fmu(keys, MODELICA, tmp_path)
+    off = {**EFFECTS["speed_fluctuation"].neutral_values(),
+           **EFFECTS["shaft_swing"].neutral_values()}
+    for key, values in (("speed_fluctuation", fluctuation), ("shaft_swing", swing)):
+        own = acc(effect_fmu(key, MODELICA, effects_dir), values)
+        np.testing.assert_allclose(acc(fmu, {**off, **values}), own,
+                                   atol=1e-3 * np.max(np.abs(own)))
+    both = acc(fmu, {**fluctuation, **swing})
+    assert np.max(np.abs(both - acc(fmu, {**off, **swing}))) > 0.1 * np.max(np.abs(both))
 
 
 def test_an_edit_of_a_written_model_is_the_users_and_is_built(tmp_path):
