@@ -53,7 +53,10 @@ HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           "pinion_shaft_orders": dict(coupling_acc=3.0),
           # a misaligned motor shaft behind a first stage, 29/17 of the pinion's speed: 1x-3x
           # of its angle, 2x the strongest (GearDiag: ten orders of time, no phases)
-          "other_shaft_orders": dict(other_shaft_acc=3.0)}
+          "other_shaft_orders": dict(other_shaft_acc=3.0),
+          # a load heavier over half of each gear turn: through the shafts' inertia their
+          # speed swings 0.7 % once a gear turn (GearDiag: the angle's swing written down)
+          "shaft_swing": dict(load_swing=0.004)}
 #: A gear tilted on its shaft: the face width in contact, so every tooth pair's stiffness
 #: in the simulator's law (mean and wave), varies by 10 % once per gear turn
 #: (MeshModulation scales its own stiffness law). A small tilt's deflection under load is
@@ -161,7 +164,7 @@ def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effec
 DISCOVERED = ["gear_eccentricity", "gear_tooth_fault", "second_pinion_tooth_fault",
               "load_fluctuation", "speed_fluctuation", "mesh_stiffness_shape",
               "bearing_outer_race", "bearing_inner_race", "housing_sensor",
-              "pinion_shaft_orders", "other_shaft_orders"]
+              "pinion_shaft_orders", "other_shaft_orders", "shaft_swing"]
 
 
 def assert_one_confident_suggestion(c, effect):

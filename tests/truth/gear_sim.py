@@ -17,7 +17,8 @@ Where it differs from GearDiag.GearPair (same kinematics and physical defaults):
   (not a force on the mesh), a torque ripple drives the shafts (and so the speed), the
   housing is a resonance filtered onto the mesh force, backlash is a hard contact loss, a
   misaligned coupling adds the pinion angle's first three orders at the sensor, a misaligned
-  motor shaft behind a first stage (29/17 of the pinion's speed) its own.
+  motor shaft behind a first stage (29/17 of the pinion's speed) its own, a load heavier
+  over half of each gear turn swings the shafts' speed through their inertia.
 
 Integrated with SciPy's LSODA (``odeint``); outputs ``acc`` (the acceleration of the mesh
 deflection, plus what the effects add at the sensor) and ``disp`` (the mesh deflection),
@@ -63,6 +64,11 @@ class Effects:
     # a gear tilted on its shaft: the face width in contact, so every tooth pair's
     # stiffness, varies once per gear turn by this share (a load-distribution factor)
     gear_tilt: float = 0.0
+    # the load torque heavier over half of each gear turn (a bent output shaft, a coupling
+    # to the dynamometer misaligned): its share of the mean load, once a gear turn.
+    # Through the shafts' inertia the speed swings once a gear turn (0.004: about 0.7 % of
+    # it), and the mesh force by a little
+    load_swing: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -177,7 +183,8 @@ def _dynamics(y, t, g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: floa
     else:
         force = k * stretch + g.damping_n_s_m * (dv - te_rate)
     t_in = g.torque_n_m * (1.0 + e.torque_ripple * math.sin(TWO_PI * e.ripple_hz * t))
-    t_load = g.torque_n_m * g.n_gear / g.n_pinion + load_damping * (omega_g - omega_g0)
+    t_load = (g.torque_n_m * g.n_gear / g.n_pinion * (1.0 + e.load_swing * math.cos(theta_g + 2.6))
+              + load_damping * (omega_g - omega_g0))
     acc_p = (t_in - r_p * force) / inertia_p
     acc_g = (r_g * force - t_load) / inertia_g
     return [omega_p, acc_p, dv, r_p * acc_p - r_g * acc_g], force
