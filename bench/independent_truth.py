@@ -42,7 +42,10 @@ CASES = {"none": {}, "gear_eccentricity": dict(gear_runout_m=10e-6),
          # a misaligned motor shaft behind a first stage, 29/17 of the pinion's speed: with
          # that ratio given its lines are kinematic; without it they are not
          "other_shaft_orders": dict(other_shaft_acc=3.0),
-         "other_shaft_orders, ratio not given": dict(other_shaft_acc=3.0)}
+         "other_shaft_orders, ratio not given": dict(other_shaft_acc=3.0),
+         # a load heavier over half of each gear turn: through the shafts' inertia their
+         # speed swings 0.7 % once a gear turn (GearDiag: the angle's swing written down)
+         "shaft_swing": dict(load_swing=0.004)}
 PERIODS, RATE_HZ = 20, 10_000.0
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
 

@@ -536,7 +536,10 @@ EFFECTS = {e.key: e for e in (
     # a torsional swing at each shaft's own speed (a misaligned coupling, a bent shaft): the
     # mesh's phase modulated once a turn of either shaft, synchronous with the pair. Deep
     # (the gear's swing is Ng times deeper in the mesh's phase), so far from affine, and it
-    # takes energy from the mesh harmonics into their sidebands: fitted with the base free
+    # takes energy from the mesh harmonics into their sidebands: fitted with the base free.
+    # On a record tracked by a tacho the swing the tacho sees, of its shaft and of those it
+    # turns rigidly, is out of the record: what it fits there is the mesh's angle against
+    # the tacho's (a transmission error once a turn, a shaft's torsion; RESULTS 13)
     Effect("shaft_swing", "GearDiag.Effects.ShaftSwing",
            "each shaft's speed swings once a turn (phase modulation of the mesh at each "
            "shaft's speed)",
