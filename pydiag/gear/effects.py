@@ -156,11 +156,16 @@ def _mesh_modulation(line, freq, kin):
 
 def _shaft_swing(line, freq, kin):
     # the mesh's phase modulated at each shaft's speed: the first sideband of that shaft
-    # either side of every mesh harmonic, and, at half weight, the second (a deep swing's);
-    # no line at the shaft's own order (the phase of a force, not its size, swings)
+    # either side of every mesh harmonic; no line at the shaft's own order (the phase of a
+    # force, not its size, swings). Only the first: a shallow modulation of the phase and
+    # one of the size (mesh_modulation, which claims these lines and more) make the same
+    # first sidebands in an amplitude spectrum, so wherever the swing is tried on its
+    # score the modulation is too, and the record, held out, tells them apart; a claim on
+    # the second sidebands (a deep swing's) would try it alone on a comb a local fault
+    # makes, and make it confident with its rival untried
     if line is None or line.family not in ("mesh_sb_pinion", "mesh_sb_gear"):
         return 0.0
-    return 1.0 if abs(line.order) == 1 else 0.5 if abs(line.order) == 2 else 0.0
+    return 1.0 if abs(line.order) == 1 else 0.0
 
 
 def _gear_tooth_fault(line, freq, kin):
