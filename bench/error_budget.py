@@ -280,6 +280,7 @@ class HalfLines:
     b: Spectrum
     bins: np.ndarray
     lines_a: np.ndarray
+    n_half: int  # fundamental periods a half holds
 
     def on_b(self, model: np.ndarray) -> float:
         """Noise-corrected Eq. 12 of ``model`` (amplitude at every bin) on B, at A's bins."""
@@ -306,7 +307,7 @@ def half_lines(problem) -> HalfLines | None:
     synchronous = (np.arange(a.amplitude.size) + 1) % n_half == 0
     lines_a = np.where(synchronous, np.sqrt(np.maximum(a.amplitude ** 2 - a.noise_power, 0.0)),
                        0.0)
-    return HalfLines(a, b, measured.featurizer.bins, lines_a)
+    return HalfLines(a, b, measured.featurizer.bins, lines_a, n_half)
 
 
 def sequence_bound(problem, halves: HalfLines, nodes_hz: np.ndarray,
@@ -345,8 +346,7 @@ def held_out_bounds(name: str, problem) -> None:
     for nodes in (harmonics, finer):
         model = sequence_bound(problem, halves, nodes)
         row.append(f"{halves.on_b(model):.3f} (A {halves.on_a(model):.3f})")
-    n_half = int(round(1.0 / (bin_hz * kin.period_s)))
-    print(f"| {name} ({kin.n_pinion}/{kin.n_gear}) | {n_half} | " + " | ".join(row) + " |",
+    print(f"| {name} ({kin.n_pinion}/{kin.n_gear}) | {halves.n_half} | " + " | ".join(row) + " |",
           flush=True)
 
 
