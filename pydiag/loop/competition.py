@@ -10,16 +10,24 @@ not tell them apart, and neither is confident. Unless the lines both claim tell 
 apart (:func:`_told_apart`): the effect removes at least MIN_EXPLAINED of the residual
 there and the competitor under :data:`TOLD_APART` of that (a faulty tooth's fit, which
 leaves a shaft's own orders as they were, against the shaft's lines). Each verdict says
-what the two remove on the lines both claim. compare's validation and discover apply the
-one rule, :func:`settle`.
+what the two remove on the lines both claim.
+
+An effect whose absence bends the base fit (``Effect.reshapes_base``: a torque ripple, a
+transfer path, a swing of a shaft's speed) and that is confident says that the base every
+other effect was tried against is bent: their fits may have taken up what it leaves (a
+non-synchronous ripple's sidebands leak into the bins of the joined halves). Each
+confident effect with a smaller z than the strongest such one is deferred
+(:func:`deferred`): it is judged again once that one is in the model, which is the loop's
+next step. compare's validation and discover apply these rules, :func:`settle`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 
 from pydiag.loop.held_out import FALSE_ALARM_RATE, threshold
-from pydiag.loop.results import MIN_EXPLAINED, HeldOut
+from pydiag.loop.results import MIN_EXPLAINED, HeldOut, Status
 
 #: On the lines two competitors both claim, one that removes less than this share of what
 #: the other removes (which removes at least MIN_EXPLAINED there) is told apart from it.
@@ -27,14 +35,36 @@ TOLD_APART = 0.5
 
 
 def settle(held: dict[str, HeldOut], competing: dict[str, list[str]],
-           false_alarm_rate: float = FALSE_ALARM_RATE) -> dict[str, str]:
-    """The confident effects of ``held`` (key -> held-out verdict) a competitor beats, each
-    with the sentence that says so; ``competing``: the effects compare found claiming the
-    same peaks as each (``Suggestion.competing``)."""
-    return outcompeted({k: h.z for k, h in held.items() if h.confident},
-                       rivals(competing, {k: h.claimed for k, h in held.items() if h.tried}),
-                       {k: h.z for k, h in held.items() if h.significant},
-                       threshold(false_alarm_rate), held)
+           bending: Collection[str] = (), false_alarm_rate: float = FALSE_ALARM_RATE
+           ) -> dict[str, tuple[Status, str]]:
+    """The confident effects of ``held`` (key -> held-out verdict) that are not confident
+    after all, each with its status and the sentence that says why: those a competitor
+    beats (outcompeted), and of the others those a stronger effect of ``bending`` defers
+    (:func:`deferred`). ``competing``: the effects compare found claiming the same peaks
+    as each (``Suggestion.competing``); ``bending``: the effects whose absence bends the
+    base (``Effect.reshapes_base``)."""
+    confident = {k: h.z for k, h in held.items() if h.confident}
+    beaten = outcompeted(confident,
+                         rivals(competing, {k: h.claimed for k, h in held.items() if h.tried}),
+                         {k: h.z for k, h in held.items() if h.significant},
+                         threshold(false_alarm_rate), held)
+    waiting = deferred({k: z for k, z in confident.items() if k not in beaten}, bending)
+    return ({k: (Status.OUTCOMPETED, why) for k, why in beaten.items()}
+            | {k: (Status.DEFERRED, why) for k, why in waiting.items()})
+
+
+def deferred(confident_z: dict[str, float], bending: Collection[str]) -> dict[str, str]:
+    """Of the ``confident_z`` effects (key -> held-out z), those with a smaller z than the
+    strongest of them whose absence bends the base (``bending``), each with the sentence
+    that says so: they were tried against the bent base (module docstring)."""
+    ranked = sorted(confident_z, key=lambda k: -confident_z[k])
+    top = next((k for k in ranked if k in bending), None)
+    if top is None:
+        return {}
+    return {k: (f"confirmed held out (z {confident_z[k]:.1f}), but against a base that "
+                f"{top}'s absence bends ({top} is confident, z {confident_z[top]:.1f}): "
+                f"judged again once {top} is in the model")
+            for k in ranked[ranked.index(top) + 1:]}
 
 
 def rivals(competing: dict[str, list[str]], claimed: dict[str, tuple[str, ...]]

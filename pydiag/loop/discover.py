@@ -226,10 +226,12 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
         problem, base, key, fmus[key], estimator, memo)), keys, effect_estimator, progress)
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     beaten = settle({d.effect: d.held_out for d in found if d.held_out is not None},
-                    {s.effect: s.competing for s in base.suggested_effects})
+                    {s.effect: s.competing for s in base.suggested_effects},
+                    {key for key in keys if EFFECTS[key].reshapes_base})
     for d in found:
         if d.effect in beaten:
-            d.confident, d.status, d.message = False, Status.OUTCOMPETED, beaten[d.effect]
+            d.confident = False
+            d.status, d.message = beaten[d.effect]
     return base, found
 
 

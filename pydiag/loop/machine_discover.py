@@ -130,10 +130,12 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     for k, stage in stages.items():
         mine = [d for d in found if d.stage == name[k]]
         beaten = settle({d.effect: d.held_out for d in mine if d.held_out is not None},
-                        {s.effect: s.competing for s in stage.seen.suggested_effects})
+                        {s.effect: s.competing for s in stage.seen.suggested_effects},
+                        {d.effect for d in mine if catalogues[k][d.effect].reshapes_base})
         for d in mine:
             if d.effect in beaten:
-                d.confident, d.status, d.message = False, Status.OUTCOMPETED, beaten[d.effect]
+                d.confident = False
+                d.status, d.message = beaten[d.effect]
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     return found
 

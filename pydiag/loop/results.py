@@ -27,6 +27,7 @@ class Status(str, Enum):
     WORSE = "worse held out"  # explains its lines, but predicts the other half worse
     CONFIRMED = "confirmed"
     OUTCOMPETED = "outcompeted"  # confirmed, but a competitor explains its lines as well
+    DEFERRED = "deferred"  # confirmed, but on a base a stronger effect's absence bends
 
 
 def labelled(effect: str, stage: str | None) -> str:

@@ -108,10 +108,12 @@ def validate(problem: FitProblem, comparison: Comparison,
         fits[s.effect] = h
         s.held_out = h if h.tried else None
         s.status, s.message, s.confident = h.status, h.message, h.confident
-    beaten = settle(fits, {s.effect: s.competing for s in suggestions}, false_alarm_rate)
+    beaten = settle(fits, {s.effect: s.competing for s in suggestions},
+                    {key for key in fits if catalogue[key].reshapes_base}, false_alarm_rate)
     for s in suggestions:
         if s.effect in beaten:
-            s.confident, s.status, s.message = False, Status.OUTCOMPETED, beaten[s.effect]
+            s.confident = False
+            s.status, s.message = beaten[s.effect]
     return dataclasses.replace(comparison, suggested_effects=suggestions)
 
 

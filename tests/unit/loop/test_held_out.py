@@ -9,7 +9,7 @@ from scipy.stats import norm
 
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.loop.competition import outcompeted, rivals
+from pydiag.loop.competition import deferred, outcompeted, rivals, settle
 from pydiag.loop.effect_fit import in_model
 from pydiag.core.parameters import Parameter
 from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out_statistic, pressed_bounds
@@ -118,6 +118,22 @@ def test_one_confident_effect_per_set_of_competing_lines():
     assert set(beaten) == {"housing", "backlash"}
     assert beaten["housing"].startswith("competes with shape") and "120.0 > 80.0" in beaten["housing"]
     assert outcompeted({"tooth": 5.0}, competing) == {}
+
+
+def test_a_confident_effect_whose_absence_bends_the_base_defers_the_weaker_ones():
+    """The torque ripple's record of the independent simulator (seed 6): the ripple's
+    sidebands, not synchronous, leak into the swing's bins of the joined halves, and the
+    swing, fitted with the base free, took them up (z 16.1 beside the ripple's 121.1)."""
+    confident = {"ripple": 121.1, "swing": 16.1, "runout": 594.0}
+    waiting = deferred(confident, bending={"ripple", "swing"})
+    assert set(waiting) == {"swing"}  # the runout, stronger than the ripple, stands
+    assert "ripple's absence bends" in waiting["swing"] and "z 121.1" in waiting["swing"]
+    assert deferred(confident, bending=()) == {}
+    assert deferred({"runout": 594.0, "swing": 16.1}, bending={"swing"}) == {}  # weakest
+    # settle: outcompeted first, then deferred among those left
+    held = {k: HeldOut(k, z, 2.3, 0.9, 0.8, 0.5, {}) for k, z in confident.items()}
+    verdicts = settle(held, {"runout": [], "ripple": [], "swing": []}, {"ripple", "swing"})
+    assert {k: status for k, (status, _) in verdicts.items()} == {"swing": Status.DEFERRED}
 
 
 def test_a_line_between_the_synchronous_ones_moves_where_the_half_joins_periods():
