@@ -36,6 +36,9 @@ input shaft's: shaft k turns at ``Machine.shaft_ratio(k)`` times it. Example::
     stage = "first"                   #   these; the stage may be left out of one stage's)
     off = ["A_s5"]                    # optional: its parameters held at their neutral
                                       #   value (pydiag loop: those its try did not fit)
+    [start]                           # optional: a fit of the machine's model before, by
+    "first.a0" = 0.12                 #   parameter name (pydiag loop writes its last);
+                                      #   every fit also polishes from there
 
 Planetary stages (``type = "planetary"``) are recognised and refused: their kinematics
 are not built yet. Every mistake is a :class:`~pydiag.core.errors.MachineError` naming the
@@ -67,7 +70,7 @@ PARALLEL_TYPES = ("spur", "helical")
 LATER_TYPES = ("planetary",)
 
 _TOP_KEYS = {"name", "input_rpm", "shafts", "stages", "bearings", "sensors", "tacho",
-             "effects"}
+             "effects", "start"}
 _STAGE_KEYS = {"name", "type", "pinion_teeth", "gear_teeth"}
 _BEARING_KEYS = {"name", "shaft", "n_balls", "ball_diameter_mm", "pitch_diameter_mm",
                  "contact_angle_deg"}
@@ -130,7 +133,9 @@ class StageEffect:
 @dataclass(frozen=True)
 class Machine:
     """A gearbox: stages from the input, shaft names (input first), bearings, sensors,
-    tacho; ``input_hz`` the nominal input speed or None (then ``--rpm`` must say it)."""
+    tacho; ``input_hz`` the nominal input speed or None (then ``--rpm`` must say it);
+    ``effects``: what its own model adds; ``start``: (name, value) of each parameter of a
+    fit of that model before, which every fit of it also polishes from."""
 
     name: str
     stages: tuple[Stage, ...]
@@ -141,6 +146,7 @@ class Machine:
     tacho: Tacho | None = None
     source: str = "(in memory)"
     effects: tuple[StageEffect, ...] = ()
+    start: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         if not self.stages:
@@ -433,8 +439,15 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
             raise MachineError(f"{_where(source, where, 'off')}: a list of {key}'s parameters "
                                f"({', '.join(known)}), got {off!r}")
         effects.append(StageEffect(key, names.index(stage), tuple(off)))
+    start = data.get("start", {})
+    if not isinstance(start, dict) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in start.values()):
+        raise MachineError(f"{source}: start: a table of parameter names and finite numbers "
+                           "([start])")
     return Machine(machine.name, stages, machine.shafts, machine.input_hz, tuple(bearings),
-                   tuple(sensors), tacho, source, tuple(effects))
+                   tuple(sensors), tacho, source, tuple(effects),
+                   tuple((str(k), float(v)) for k, v in start.items()))
 
 
 def load_machine(path: str | Path) -> Machine:

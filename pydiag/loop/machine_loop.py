@@ -7,9 +7,12 @@ held-out fit (:func:`pydiag.loop.machine_model.fit_machine`), so the error it fi
 not rise from step to step; the parameters its try did not fit (a shaft's orders whose
 lines did not stand out of another shaft's) are held off in the accepted model
 (:func:`held_off`). Every accepted effect is written into a copy of the machine file
-(:func:`pydiag.loop.machine_model.accept`), so the loop ends with a machine file the user
-can read, compare with another record, edit, and loop on again; each step's model is
-built from that file (:func:`pydiag.loop.machine_model.machine_fmu`). The steps are the
+(:func:`pydiag.loop.machine_model.accept`), and each step's fit, to start the next one
+from, as its ``[start]`` table (:func:`pydiag.loop.machine_model.record_start`), so the
+loop ends with a machine file the user can read, compare with another record, edit, and
+loop on again from where it stopped (a fit of the model's many parameters from nothing
+lands elsewhere); each step's model is built from that file
+(:func:`pydiag.loop.machine_model.machine_fmu`). The steps are the
 pair loop's (:class:`pydiag.loop.accumulate.LoopStep`), an effect named with its stage.
 """
 
@@ -27,7 +30,7 @@ from pydiag.loop.compose import BuiltModel
 from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.machine_discover import validate_machine
 from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem,
-                                       possible_parameters)
+                                       possible_parameters, record_start)
 
 
 def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,
@@ -46,13 +49,13 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
     estimator = estimator or FaultEstimator()
     refit = refit or FaultEstimator(**EFFECT_REFIT)
     steps: list[LoopStep] = []
-    start = None  # the fit before, and the accepted effect's held-out fit
     while True:
-        machine = load_machine(path)
+        machine = load_machine(path)  # its start: the fit before, and the accepted effect's
         model, built = build(machine)
         problem = machine_problem(built.fmu, model, measurement, machine, speed, fit_gain,
                                   feature_mode, drop, gain_curve)
-        c = compare_machine(problem, model, estimator, refit, start=start)
+        c = compare_machine(problem, model, estimator, refit,
+                            start=dict(machine.start) or None)
         c = validate_machine(problem, machine, model, c,
                              lambda other: str(build(other)[1].fmu), refit,
                              every_synchronous=c.error > 0)
@@ -69,10 +72,11 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
         if progress:
             progress(steps[-1])
         if steps[-1].accepted is None:
+            record_start(path, c.parameters)
             return steps
         accept(path, best.effect, best.stage, held_off(machine, best.effect, best.stage,
                                                          h.parameters))
-        start = {**c.parameters, **h.parameters}
+        record_start(path, {**c.parameters, **h.parameters})
 
 
 def held_off(machine: Machine, key: str, stage: str, fitted: dict[str, float]

@@ -48,8 +48,10 @@ import dataclasses
 import functools
 import hashlib
 import json
+import math
 import re
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -452,6 +454,31 @@ def accept(path: str | Path, key: str, stage: str | None = None,
         f'\n[[effects]]\nkey = "{key}"\nstage = {json.dumps(name)}\n'
     if off:
         text += f"off = {json.dumps(list(off))}\n"
+    edited = machine_from_dict(tomllib.loads(text), str(path))
+    write_text(path, text, force=True)
+    return edited
+
+
+#: The line the loop writes above a machine file's [start] table.
+START_NOTE = ("# a fit of this machine's model (pydiag loop's last): every fit of it "
+              "also polishes from here")
+
+
+def record_start(path: str | Path, values: Mapping[str, float]) -> Machine:
+    """Write ``values`` (a fit of the machine's model, by parameter name) as the file's
+    ``[start]`` table, in place of the one it had, at its end; the rest of the file
+    (comments too) as it was. Checked as it would be read and replaced whole, as
+    :func:`accept` does. Returns the machine it now describes."""
+    path = Path(path)
+    kept, inside = [], False
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.lstrip().startswith("["):
+            inside = line.split("#", 1)[0].strip() == "[start]"
+        if not inside and line != START_NOTE:
+            kept.append(line)
+    rows = "".join(f"{json.dumps(name)} = {float(value)!r}\n"
+                   for name, value in sorted(values.items()) if math.isfinite(value))
+    text = "\n".join(kept).rstrip("\n") + f"\n\n{START_NOTE}\n[start]\n{rows}"
     edited = machine_from_dict(tomllib.loads(text), str(path))
     write_text(path, text, force=True)
     return edited
