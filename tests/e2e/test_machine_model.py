@@ -20,6 +20,11 @@ from pydiag.loop.stages import machine_speed
 ROOT = Path(__file__).resolve().parents[2]
 MODELICA = ROOT / "modelica"
 SMALL = dict(n_particles=8, iterations=4, polish_evaluations=40)
+#: The short-period test box's machine file, and the same with a comment of the user's.
+BOX = ('name = "short box"\ninput_rpm = 1500\n'
+       '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
+       '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
+COMMENTED_BOX = BOX.replace('"short box"\n', '"short box"  # the test box\n', 1)
 
 
 def test_the_machine_model_explains_the_second_stages_lines(tmp_path):
@@ -71,9 +76,7 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     rec = tmp_path / "box.csv"
     write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
     machine = tmp_path / "box.toml"
-    text = ('name = "short box"  # the test box\ninput_rpm = 1500\n'
-            '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
-            '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
+    text = COMMENTED_BOX
     machine.write_text(text)
     common = ("-m", "pydiag", "compare", "--measurement", str(rec), "--machine", str(machine),
               "--build-dir", str(tmp_path / "build"), "--history", str(tmp_path / "h.sqlite"),
@@ -246,9 +249,7 @@ def test_a_fit_written_as_the_machine_files_start_is_where_compare_starts(tmp_pa
     from pydiag.loop.machine_model import START_NOTE, record_start
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
     write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
-    text = ('name = "short box"  # the test box\ninput_rpm = 1500\n'
-            '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
-            '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
+    text = COMMENTED_BOX
     machine.write_text(text)
     common = ("-m", "pydiag", "compare", "--measurement", str(rec), "--machine", str(machine),
               "--build-dir", str(tmp_path / "build"), "--history", str(tmp_path / "h.sqlite"),
@@ -320,11 +321,6 @@ def test_the_effect_the_box_has_is_confirmed_held_out_on_each_stage(tmp_path):
     assert sorted((s["effect"], s["stage"]) for s in found if s["confident"]) == [
         ("mesh_stiffness_shape", "stage 1"), ("mesh_stiffness_shape", "stage 2")]
     assert "mesh_stiffness_shape on stage 2" in r.stdout
-
-
-BOX = ('name = "short box"\ninput_rpm = 1500\n'
-       '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
-       '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
 
 
 def test_discover_tries_an_effect_on_every_stage_of_the_machines_model(tmp_path, capsys):
