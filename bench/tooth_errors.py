@@ -16,7 +16,11 @@ pair (``--form``):
   both sequences (as GearDiag.Effects.MeshModulation scales it once a turn), +-0.05;
 - ``lag+orders``: ``lag`` and each shaft's own orders 1-10 at the sensor
   (GearDiag.Components.ShaftOrders, as the catalogue's shaft orders), fitted with it and
-  claiming those orders too.
+  claiming those orders too;
+- ``lag+stiffness``: ``lag`` and ``stiffness`` at once, each with sequences of its own
+  (``k``-prefixed for the stiffness): a modulation of the mesh's phase and of its size at
+  the same orders, whose sidebands add on one side of a mesh line and cancel on the other
+  (the comb ``spur 2_30hz_High_1`` leaves, heavier below its output mesh: RESULTS 13).
 
 The model is written here and built with the library (``build/bench/<name>.mo``): it is
 not in the catalogue. As an effect it is affine in its coefficients (``lag``: near 0,
@@ -39,7 +43,8 @@ largest orders (a few low ones: the shaft's angle swinging over its turn rather 
 teeth).
 
 Usage:
-    .venv/bin/python bench/tooth_errors.py [--form lag|displacement|stiffness|lag+orders] [--extent X]
+    .venv/bin/python bench/tooth_errors.py [--form lag|displacement|stiffness|lag+orders|lag+stiffness]
+        [--extent X]
         [--orders N]
         [--phm09 ../shared/data/phm09]
         [--records "spur 1_30hz_High_1,spur 2_30hz_High_1"] [--gfd ../shared/data/gfd
@@ -123,6 +128,21 @@ model ToothLagOrdersTrial "Each tooth of both gears a little early or late, and 
 end ToothLagOrdersTrial;
 """, 0.05, "pitch", 1.0),
 }
+_STIFFNESS_ARRAYS = _ARRAYS.replace("parameter Real c_", "parameter Real kc_").replace(
+    "parameter Real s_", "parameter Real ks_").replace("sequence, ", "stiffness sequence, ")
+FORMS["lag+stiffness"] = ("ToothLagStiffnessTrial", f"""within GearDiag;
+model ToothLagStiffnessTrial "Each tooth of both gears a little early or late, and a little stiffer or softer (bench/tooth_errors.py)"
+  extends GearDiag.GearPair(t_angle = time + (pinion_teeth.e + wheel_teeth.e)/f_mesh,
+    k_mod = (1 + a*sigma)*(pinion_stiffness.e + wheel_stiffness.e));
+{_ARRAYS}
+{_STIFFNESS_ARRAYS}
+{_PARTS}
+  GearDiag.Components.ToothSequence pinion_stiffness(n = {ORDERS}, f_shaft = f_pinion,
+    t_angle = time, c = kc_p, s = ks_p) "The pinion's teeth's stiffness";
+  GearDiag.Components.ToothSequence wheel_stiffness(n = {ORDERS}, f_shaft = f_wheel,
+    t_angle = time, c = kc_g, s = ks_g) "The gear's teeth's stiffness";
+end ToothLagStiffnessTrial;
+""", 0.05, "pitch (lag) or of the stiffness", 1.0)
 #: The shafts' own orders of ``lag+orders`` (GearDiag.Components.ShaftOrders): their
 #: number and each amplitude's range at the sensor, m/s2 (the catalogue's shaft orders').
 SHAFT_ORDERS, MAX_ORDER_M_S2 = 10, 5000.0
@@ -134,7 +154,8 @@ def effect(form: str, extent: float | None = None, most: int | None = None) -> E
     with the shafts' orders, those), affine."""
     name, _, default, _, scale = FORMS[form]
     extent = extent or default
-    coefficients = [(f"{c}_{g}", g, k) for g in "pg" for c in "cs" for k in range(1, ORDERS + 1)]
+    kinds = ("c", "s", "kc", "ks") if form == "lag+stiffness" else ("c", "s")
+    coefficients = [(f"{c}_{g}", g, k) for g in "pg" for c in kinds for k in range(1, ORDERS + 1)]
     order = {f"{array}{k}": (g, k) for array, g, k in coefficients}  # name -> gear, order
     parameters = tuple(Parameter(f"{array}{k}", -extent, extent, variable=f"{array}[{k}]",
                                  scale=scale) for array, _, k in coefficients)
