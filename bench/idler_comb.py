@@ -1,11 +1,11 @@
 """The comb the PHM09 machine loop leaves on ``spur 2_30hz_High_1`` (bench/RESULTS.md
-section 13): ch1 resampled at the tacho's angle, averaged over the idler's turn, its lines
-in idler orders round the output stage's mesh (48 idler orders), the two halves of the
-turns side by side; the mesh band's envelope over the turn; and the best single strike
-once an idler turn ringing one structural mode (the bearing effects' ring-down, written
-here), by least squares on the idler orders 30-66 but the mesh line.
+section 13): ch1 (or ch2) resampled at the tacho's angle, averaged over the idler's turn,
+its lines in idler orders round the output stage's mesh (48 idler orders), the two halves
+of the turns side by side; the mesh band's envelope over the turn; and the best single
+strike once an idler turn ringing one structural mode (the bearing effects' ring-down,
+written here), by least squares on the idler orders 30-66 but the mesh line.
 
-    .venv/bin/python bench/idler_comb.py [--record PATH]
+    .venv/bin/python bench/idler_comb.py [--record PATH] [--channel ch2]
 """
 
 from __future__ import annotations
@@ -26,11 +26,11 @@ MESH = 48  # the output stage's mesh, in idler orders
 SAMPLES_PER_REV = 2048
 
 
-def idler_turns(path: Path) -> tuple[np.ndarray, float]:
-    """ch1 at SAMPLES_PER_REV a turn of the input, cut into whole idler turns (rows), and
-    the input's mean speed from the tacho, Hz."""
+def idler_turns(path: Path, channel: str = "ch1") -> tuple[np.ndarray, float]:
+    """``channel`` at SAMPLES_PER_REV a turn of the input, cut into whole idler turns
+    (rows), and the input's mean speed from the tacho, Hz."""
     m = read_measurement(path, sample_rate_hz=RATE_HZ)
-    x, tacho = m.channels["ch1"], m.channels["ch3"]
+    x, tacho = m.channels[channel], m.channels["ch3"]
     level = 0.5 * (tacho.max() + tacho.min())
     pulse = np.flatnonzero((tacho[1:] > level) & (tacho[:-1] <= level)) / m.sample_rate_hz
     t = np.arange(x.size) / m.sample_rate_hz
@@ -59,13 +59,15 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--record", type=Path,
                     default=ROOT.parent / "shared/data/phm09/spur 2_30hz_High_1.zip")
-    record = ap.parse_args().record
-    turns, input_hz = idler_turns(record)
+    ap.add_argument("--channel", default="ch1", choices=("ch1", "ch2"))
+    args = ap.parse_args()
+    record = args.record
+    turns, input_hz = idler_turns(record, args.channel)
     average = turns.mean(axis=0)
     spectrum = lines(average)
     halves = [lines(h.mean(axis=0)) for h in np.array_split(turns, 2)]
     sidebands = range(-8, 9)
-    print(f"{record.name}: ch1 over {turns.shape[0]} idler turns; lines at the output mesh "
+    print(f"{record.name}: {args.channel} over {turns.shape[0]} idler turns; lines at the output mesh "
           f"({MESH} idler orders) + k, 1e-4 V")
     print("| k | " + " | ".join(f"{k:+d}" for k in sidebands) + " |")
     print("|---|" + "---|" * len(sidebands))
