@@ -17,6 +17,7 @@ import numpy as np
 from scipy.signal import hilbert
 
 from pydiag.io.readers import read_measurement
+from pydiag.signal.angle import angular_resample, tacho_revolutions
 
 ROOT = Path(__file__).resolve().parents[1]
 RATE_HZ = 66_666.67  # the challenge's documentation (../shared/data/phm09/README.md)
@@ -27,19 +28,16 @@ SAMPLES_PER_REV = 2048
 
 
 def idler_turns(path: Path, channel: str = "ch1") -> tuple[np.ndarray, float]:
-    """``channel`` at SAMPLES_PER_REV a turn of the input, cut into whole idler turns
-    (rows), and the input's mean speed from the tacho, Hz."""
+    """``channel`` at SAMPLES_PER_REV a turn of the input (pydiag's order tracking on the
+    tacho's angle), cut into whole idler turns (rows), and the input's mean speed, Hz."""
     m = read_measurement(path, sample_rate_hz=RATE_HZ)
-    x, tacho = m.channels[channel], m.channels["ch3"]
-    level = 0.5 * (tacho.max() + tacho.min())
-    pulse = np.flatnonzero((tacho[1:] > level) & (tacho[:-1] <= level)) / m.sample_rate_hz
-    t = np.arange(x.size) / m.sample_rate_hz
-    inside = (t >= pulse[0]) & (t <= pulse[-1])
-    angle = np.interp(t[inside], pulse, np.arange(pulse.size) / PULSES_PER_REV)
-    n = int((angle[-1] - angle[0]) // IDLER_REVS)
-    grid = angle[0] + np.arange(n * IDLER_REVS * SAMPLES_PER_REV) / SAMPLES_PER_REV
-    speed_hz = (pulse.size - 1) / PULSES_PER_REV / (pulse[-1] - pulse[0])
-    return np.interp(grid, angle, x[inside]).reshape(n, IDLER_REVS * SAMPLES_PER_REV), speed_hz
+    revs = tacho_revolutions(m.channels["ch3"], PULSES_PER_REV)
+    first = float(np.ceil(revs[0]))
+    n = int((revs[-1] - first) // IDLER_REVS)
+    tracked = angular_resample([m.channels[channel]], revs, SAMPLES_PER_REV, first,
+                               n * IDLER_REVS)[0]
+    speed_hz = (revs[-1] - revs[0]) / (revs.size - 1) * m.sample_rate_hz
+    return tracked.reshape(n, IDLER_REVS * SAMPLES_PER_REV), speed_hz
 
 
 def lines(average: np.ndarray) -> np.ndarray:

@@ -242,8 +242,8 @@ def test_a_fit_written_as_the_machine_files_start_is_where_compare_starts(tmp_pa
     """record_start (the loop's, at every step) writes a fit as the file's [start] table,
     in place of the one before and after the user's text; compare --machine then polishes
     from it as well, so its fit is no worse than the one written, at a budget whose own
-    swarm lands far from it (1.07 without the start, 0.68 the fit written, on 2026-11-27).
-    A [start] that is not a table of numbers is one line."""
+    swarm lands far from it (bench/RESULTS.md section 13). A [start] that is not a table of
+    numbers is one line."""
     import json
 
     from pydiag.loop.machine_model import START_NOTE, record_start

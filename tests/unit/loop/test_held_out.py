@@ -121,9 +121,9 @@ def test_one_confident_effect_per_set_of_competing_lines():
 
 
 def test_a_confident_effect_whose_absence_bends_the_base_defers_the_weaker_ones():
-    """The torque ripple's record of the independent simulator (seed 6): the ripple's
+    """As on the torque ripple's record of the independent simulator: the ripple's
     sidebands, not synchronous, leak into the swing's bins of the joined halves, and the
-    swing, fitted with the base free, took them up (z 16.1 beside the ripple's 121.1)."""
+    swing, fitted with the base free, takes them up (bench/RESULTS.md changelog)."""
     confident = {"ripple": 121.1, "swing": 16.1, "runout": 594.0}
     waiting = deferred(confident, bending={"ripple", "swing"})
     assert set(waiting) == {"swing"}  # the runout, stronger than the ripple, stands
