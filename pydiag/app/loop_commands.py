@@ -144,7 +144,7 @@ def cmd_compare(args) -> int:
             c = compare_machine(problem, machine_model[0], estimator,
                                 _effect_estimator(args).replace(progress=update),
                                 args.false_alarm_rate,
-                                start=dict(args.machine_description.start) or None)
+                                start=args.machine_description.fit_start())
         if effect is not None:
             base, c = c, refit_with_effect(problem, c, effect, args.fmu, _effect_estimator(args))
             problem = with_effect(problem, base, effect, args.fmu)  # validated with its lines
@@ -209,7 +209,7 @@ def cmd_discover(args) -> int:
             base = compare_machine(problem, model,
                                    FaultEstimator(**estimator_settings(args), progress=update),
                                    _effect_estimator(args).replace(progress=update),
-                                   start=dict(args.machine_description.start) or None)
+                                   start=args.machine_description.fit_start())
         finally:
             close()
         found = discover_machine(problem, args.machine_description, model, base,

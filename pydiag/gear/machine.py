@@ -165,6 +165,11 @@ class Machine:
                  "stages": [[s.pinion_teeth, s.gear_teeth] for s in self.stages]}
         return hashlib.sha256(json.dumps(facts, sort_keys=True).encode()).hexdigest()
 
+    def fit_start(self) -> dict[str, float] | None:
+        """The ``[start]`` table as a dict (parameter name -> value), or None when the file
+        has none: what a fit of the machine's model polishes from besides its own swarm."""
+        return dict(self.start) or None
+
     def shaft_ratio(self, shaft: int) -> Fraction:
         """Speed of shaft ``shaft`` over the input shaft's (exact)."""
         ratio = Fraction(1)

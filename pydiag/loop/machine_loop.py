@@ -55,7 +55,7 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
         problem = machine_problem(built.fmu, model, measurement, machine, speed, fit_gain,
                                   feature_mode, drop, gain_curve)
         c = compare_machine(problem, model, estimator, refit,
-                            start=dict(machine.start) or None)
+                            start=machine.fit_start())
         c = validate_machine(problem, machine, model, c,
                              lambda other: str(build(other)[1].fmu), refit,
                              every_synchronous=c.error > 0)

@@ -88,6 +88,7 @@ def test_example_files_read_and_their_shafts_turn_as_the_teeth_say():
     ({"effects": [{"key": "backlash", "stage": "stage 2", "off": ["A_s1"]}]}, "effects[0].off"),
     ({"effects": [{"key": "pinion_shaft_orders", "stage": "stage 2", "off": "A_s1"}]},
      "effects[0].off"),
+    ({"start": {"input_stage.a0": "high"}}, "start"),
 ])
 def test_a_bad_machine_file_is_refused_naming_the_file_and_the_key(tmp_path, change, key):
     path = tmp_path / "box.toml"
@@ -97,6 +98,14 @@ def test_a_bad_machine_file_is_refused_naming_the_file_and_the_key(tmp_path, cha
     message = str(err.value)
     assert str(path) in message and key in message, message
     assert "\n" not in message
+
+
+def test_a_start_table_is_what_a_fit_polishes_from_and_none_is_none(tmp_path):
+    path = tmp_path / "box.toml"
+    path.write_text(to_toml(TWO_STAGE))
+    assert load_machine(path).fit_start() is None
+    path.write_text(to_toml(TWO_STAGE) + '[start]\n"stage_1.a0" = 0.25\ngain_dB = -3\n')
+    assert load_machine(path).fit_start() == {"stage_1.a0": 0.25, "gain_dB": -3.0}
 
 
 def test_unreadable_machine_files_are_the_users_to_fix(tmp_path):
