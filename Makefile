@@ -69,13 +69,17 @@ loop-real: fmu
 	$(PY) bench/real_loop.py --data "$(GFD_DATA)" --steps 5 --gain curve
 
 # the loop on the machine's own model of the PHM09 gearbox, as section 13 has it (a copy of
-# the example machine file in build/ gets the accepted effects: build/phm09.loop.toml)
+# the example machine file in build/ gets the accepted effects: build/phm09.loop.toml);
+# another record of the five: PHM09_RECORD="spur 2_30hz_High_1", and for a 45 Hz one
+# PHM09_RPM=2700 as well
 PHM09_DATA ?= ../shared/data/phm09
+PHM09_RECORD ?= spur 1_30hz_High_1
+PHM09_RPM ?= 1800
 loop-phm09: fmu
 	cp examples/phm09_spur.toml build/phm09.toml
 	$(PY) -m pydiag loop --machine build/phm09.toml --channel ch1 --sample-rate 66666.67 \
-	    --measurement "$(PHM09_DATA)/spur 1_30hz_High_1.zip" --rpm 1800 --gain curve \
-	    --max-steps 5 --force --history build/phm09_loop.sqlite
+	    --measurement "$(PHM09_DATA)/$(PHM09_RECORD).zip" --rpm $(PHM09_RPM) --gain curve \
+	    --max-steps 6 --force --history build/phm09_loop.sqlite
 
 clean:
 	rm -rf build
