@@ -24,7 +24,7 @@ next step. compare's validation and discover apply these rules, :func:`settle`.
 from __future__ import annotations
 
 import math
-from collections.abc import Collection
+from collections.abc import Collection, Iterable
 
 from pydiag.loop.held_out import FALSE_ALARM_RATE, threshold
 from pydiag.loop.results import MIN_EXPLAINED, HeldOut, Status
@@ -51,6 +51,16 @@ def settle(held: dict[str, HeldOut], competing: dict[str, list[str]],
     waiting = deferred({k: z for k, z in confident.items() if k not in beaten}, bending)
     return ({k: (Status.OUTCOMPETED, why) for k, why in beaten.items()}
             | {k: (Status.DEFERRED, why) for k, why in waiting.items()})
+
+
+def mark_settled(rows: Iterable, verdicts: dict[str, tuple[Status, str]]) -> None:
+    """Mark each of ``rows`` (compare's suggestions or discover's rows: ``effect``,
+    ``confident``, ``status``, ``message``) that ``verdicts`` (:func:`settle`'s) names as
+    not confident, with its status and the sentence that says why."""
+    for row in rows:
+        if row.effect in verdicts:
+            row.confident = False
+            row.status, row.message = verdicts[row.effect]
 
 
 def deferred(confident_z: dict[str, float], bending: Collection[str]) -> dict[str, str]:

@@ -49,7 +49,7 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, Effect, model_file
 from pydiag.loop.compare import compare
-from pydiag.loop.competition import settle
+from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
 from pydiag.loop.held_out import envelope_band, halves, held_out
 from pydiag.loop.results import Comparison, Discovery, Status
@@ -225,13 +225,9 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     found += side_by_side(lambda key, estimator: (_try_effect, (
         problem, base, key, fmus[key], estimator, memo)), keys, effect_estimator, progress)
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
-    beaten = settle({d.effect: d.held_out for d in found if d.held_out is not None},
-                    {s.effect: s.competing for s in base.suggested_effects},
-                    {key for key in keys if EFFECTS[key].reshapes_base})
-    for d in found:
-        if d.effect in beaten:
-            d.confident = False
-            d.status, d.message = beaten[d.effect]
+    mark_settled(found, settle({d.effect: d.held_out for d in found if d.held_out is not None},
+                               {s.effect: s.competing for s in base.suggested_effects},
+                               {key for key in keys if EFFECTS[key].reshapes_base}))
     return base, found
 
 

@@ -33,7 +33,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.machine import Machine, StageEffect
 from pydiag.loop.compare import compare
-from pydiag.loop.competition import settle
+from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.discover import (discovery_cost, failed_row, held_out_row, shared_halves,
                                   side_by_side)
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
@@ -129,13 +129,10 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         estimator, progress)
     for k, stage in stages.items():
         mine = [d for d in found if d.stage == name[k]]
-        beaten = settle({d.effect: d.held_out for d in mine if d.held_out is not None},
-                        {s.effect: s.competing for s in stage.seen.suggested_effects},
-                        {d.effect for d in mine if catalogues[k][d.effect].reshapes_base})
-        for d in mine:
-            if d.effect in beaten:
-                d.confident = False
-                d.status, d.message = beaten[d.effect]
+        mark_settled(mine, settle(
+            {d.effect: d.held_out for d in mine if d.held_out is not None},
+            {s.effect: s.competing for s in stage.seen.suggested_effects},
+            {d.effect for d in mine if catalogues[k][d.effect].reshapes_base}))
     found.sort(key=lambda d: math.inf if math.isnan(d.z) else -d.z)  # those not tried last
     return found
 

@@ -26,7 +26,7 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
 from pydiag.gear.effects import EFFECTS, Effect
-from pydiag.loop.competition import settle
+from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.effect_fit import in_model
 from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out, threshold
 from pydiag.loop.results import Comparison, HeldOut, Status
@@ -108,12 +108,9 @@ def validate(problem: FitProblem, comparison: Comparison,
         fits[s.effect] = h
         s.held_out = h if h.tried else None
         s.status, s.message, s.confident = h.status, h.message, h.confident
-    beaten = settle(fits, {s.effect: s.competing for s in suggestions},
-                    {key for key in fits if catalogue[key].reshapes_base}, false_alarm_rate)
-    for s in suggestions:
-        if s.effect in beaten:
-            s.confident = False
-            s.status, s.message = beaten[s.effect]
+    mark_settled(suggestions, settle(fits, {s.effect: s.competing for s in suggestions},
+                                     {key for key in fits if catalogue[key].reshapes_base},
+                                     false_alarm_rate))
     return dataclasses.replace(comparison, suggested_effects=suggestions)
 
 
