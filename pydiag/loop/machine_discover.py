@@ -93,7 +93,8 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     check_effects(effects)
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     catalogues = [lacking(machine, model, k) for k in range(len(machine.stages))]
-    views = [stage_view(problem, machine, k) for k in range(len(machine.stages))]
+    views = [stage_view(problem, machine, model, k, base.parameters)
+             for k in range(len(machine.stages))]
     tasks = [(k, key) for k, catalogue in enumerate(catalogues) for key, effect in
              catalogue.items() if (not effects or key in effects)
              and not in_model(views[k], effect)]
@@ -152,7 +153,8 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     stages, tasks, fmus = {}, [], {}
     for k in range(len(machine.stages)):
-        view, effects = stage_view(problem, machine, k), lacking(machine, model, k)
+        view = stage_view(problem, machine, model, k, comparison.parameters)
+        effects = lacking(machine, model, k)
         seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
                        parameters=comparison.parameters, effects=effects)
         keys = []

@@ -135,6 +135,17 @@ class MachineModel:
                 for level in o.levels.values()]
         return tuple(out)
 
+    def stage_parameters(self, stage: int) -> frozenset[str]:
+        """The names of stage ``stage``'s own parameters: its fault parameters and its
+        effects' (``<stage>.<name>``), its mesh phase and its level at each sensor: what
+        shapes its lines and nothing else's."""
+        inst = self.stages[stage]
+        own = {f"{inst}.{p.name}" for p in GEAR_FAULT_PARAMETERS + (HEALTHY_TOOTH,)}
+        own |= {p.name for p in self.effect_parameters if p.name.startswith(f"{inst}.")}
+        if stage > 0:  # the phases first, one a stage after the first (machine_model)
+            own.add(self.effect_parameters[stage - 1].name)
+        return frozenset(own | {o.levels[stage] for o in self.outputs if stage in o.levels})
+
     def adapter(self, channels: list[str]) -> Adapter:
         """The model described to a fit of ``channels``: each mapped to its sensor's output
         (every channel to the one output of a machine file without sensors), the first
@@ -525,9 +536,20 @@ def stage_effects(model: MachineModel, stage: int) -> dict[str, Effect]:
             for key, e in EFFECTS.items() if on_a_stage(e)}
 
 
-def stage_view(problem: FitProblem, machine: Machine, stage: int) -> FitProblem:
+def stage_view(problem: FitProblem, machine: Machine, model: MachineModel, stage: int,
+               values: dict[str, float]) -> FitProblem:
     """The machine model's ``problem`` seen from stage ``stage``: the same record, model and
     features, the kinematics (which name the lines, and say which are an effect's) the
-    stage's, over the machine's period."""
+    stage's, over the machine's period; its parameters the stage's own
+    (:meth:`MachineModel.stage_parameters`), every other held at ``values`` (the machine's
+    fit). An effect tried on the stage that frees the base (``Effect.reshapes_base``) then
+    frees only the stage's: the other stages' lines are not its, and what they fit is the
+    machine's fit, not the try's (half the parameters, half the simulations of its
+    polish)."""
     input_hz = problem.kinematics.f_pinion_hz  # the first stage's pinion: the input shaft
-    return dataclasses.replace(problem, kinematics=machine.model_kinematics(input_hz, stage))
+    own = model.stage_parameters(stage)
+    held = tuple(p for p in problem.parameters if p.name not in own)
+    return dataclasses.replace(
+        problem.derive(parameters=tuple(p for p in problem.parameters if p.name in own),
+                       fixed_values=fmu_values(held, values)),
+        kinematics=machine.model_kinematics(input_hz, stage))

@@ -214,6 +214,23 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     assert held.affine_parameters == {f"input_stage.A_s{k}" for k in (1, 2, 3, 4, 7, 8, 9, 10)}
 
 
+def test_each_parameter_of_the_machines_model_is_one_stages_own():
+    """What a stage's try frees (stage_view): its fault parameters, its effects', its mesh
+    phase and its level at the sensors it is not near; every parameter a fit of both
+    sensors estimates is exactly one stage's."""
+    import dataclasses
+
+    from pydiag.gear.machine import StageEffect
+    phm = load_machine(ROOT / "examples" / "phm09_spur.toml")
+    model = machine_model(dataclasses.replace(phm, effects=(
+        StageEffect("mesh_modulation", 1),)), MODELICA)
+    own = [model.stage_parameters(k) for k in (0, 1)]
+    assert {"input_stage.a_f", "input_stage.a0", "acc_ch2_input_stage_dB"} <= own[0]
+    assert {"output_stage.m_p", "output_stage_mesh_phase", "acc_ch1_output_stage_dB"} <= own[1]
+    fitted = {p.name for p in model.parameters(True, {"acc_ch1", "acc_ch2"})}
+    assert not own[0] & own[1] and fitted <= own[0] | own[1]
+
+
 def test_the_loop_accepts_an_effect_with_what_its_try_did_not_fit_held_off(tmp_path):
     """The orders a try left unfitted (their lines another shaft's) go into the machine
     file's ``off`` with the effect, the file reads back with them, and the effect is not
