@@ -91,6 +91,13 @@ def _machine_problem(args, m: Measurement, build: Callable[[Machine], tuple[Mach
     return problem, (model, built)
 
 
+def _start_warnings(machine: Machine, model: MachineModel) -> list[str]:
+    """The warning that the machine file's [start] names parameters its model lacks."""
+    unknown = model.unknown(dict(machine.start))
+    return [f"{machine.source}: [start] names what its model does not fit, not used: "
+            f"{', '.join(unknown)}"] if unknown else []
+
+
 def _model_fact(args, built: BuiltModel) -> str:
     """The machine's own model, as the commands name it: its source, whose it is."""
     return (f"{built.source} (every stage of {args.machine}, "
@@ -169,6 +176,8 @@ def cmd_compare(args) -> int:
         facts["model"] = _model_fact(args, machine_model[1])
     warnings = (fit_warnings(problem, c.fit_error, c.gains, c.parameters)
                 if c.fit_error is not None else [])
+    if machine_model is not None:
+        warnings += _start_warnings(args.machine_description, machine_model[0])
     # the run is recorded when its outputs are written (history.recording)
     with history.recording(args.history, c, args.measurement, md.modelName,
                            args.source) as (run_id, runs):
@@ -216,6 +225,8 @@ def cmd_discover(args) -> int:
                                  lambda machine: str(machines(machine)[1].fmu),
                                  _effect_estimator(args), args.effects, progress)
         facts["model"] = _model_fact(args, built)
+        for warning in _start_warnings(args.machine_description, model):
+            print(f"pydiag discover: warning: {warning}", file=sys.stderr)
     print("\n".join(filter(None, [format_facts(facts), format_discovery(base, found)])))
     if args.json:
         write_text(args.json, json.dumps(as_dict(base, found), indent=2) + "\n", args.force)
@@ -281,6 +292,9 @@ def _machine_loop(args) -> tuple[list, str]:
     found, settings, drop = _machine_record(args, m)
     write_text(str(copy), source.read_text(encoding="utf-8"), True)
     print(f"machine    : {copy} (a copy of {source}; every effect accepted goes into it)")
+    for warning in _start_warnings(args.machine_description,
+                                   machines(args.machine_description)[0]):
+        print(f"pydiag loop: warning: {warning}", file=sys.stderr)
     steps = machine_loop(copy, m, found, machines,
                          args.max_steps, FaultEstimator(**estimator_settings(args)),
                          _effect_estimator(args), settings["fit_gain"],

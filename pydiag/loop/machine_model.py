@@ -51,7 +51,7 @@ import json
 import math
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -145,6 +145,13 @@ class MachineModel:
         if stage > 0:  # the phases first, one a stage after the first (machine_model)
             own.add(self.effect_parameters[stage - 1].name)
         return frozenset(own | {o.levels[stage] for o in self.outputs if stage in o.levels})
+
+    def unknown(self, names: Iterable[str]) -> list[str]:
+        """Those of ``names`` (a ``[start]`` table's) that are no parameter of the model:
+        an effect taken out of the machine file, a stage renamed, a name misspelt. A fit
+        starts from the others; these it cannot use."""
+        known = {p.name for p in self.parameters(True, {o.name for o in self.outputs})}
+        return sorted(set(names) - known)
 
     def adapter(self, channels: list[str]) -> Adapter:
         """The model described to a fit of ``channels``: each mapped to its sensor's output

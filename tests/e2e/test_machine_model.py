@@ -285,7 +285,16 @@ def test_a_fit_written_as_the_machine_files_start_is_where_compare_starts(tmp_pa
     r = run_cli(*common, "--particles", "4", "--iterations", "1", "--json",
                 str(tmp_path / "again.json"))
     assert r.returncode == 0, r.stderr
-    assert json.loads((tmp_path / "again.json").read_text())["fit_error"] <= fit["fit_error"]
+    again = json.loads((tmp_path / "again.json").read_text())
+    assert again["fit_error"] <= fit["fit_error"] and again["warnings"] == []
+    # a name the model does not fit (an effect taken out of the file) is said, not used
+    record_start(machine, {**fit["parameters"], "stage_1.m_p": 0.2})
+    r = run_cli(*common, "--particles", "4", "--iterations", "1", "--json",
+                str(tmp_path / "again.json"))
+    assert r.returncode == 0, r.stderr
+    said = "[start] names what its model does not fit, not used: stage_1.m_p"
+    assert said in r.stderr and said in json.loads((tmp_path / "again.json").read_text())[
+        "warnings"][-1]
     machine.write_text(text + '[start]\n"stage_1.a0" = "high"\n')
     assert "start: a table of parameter names and finite numbers" in refused(
         capsys, *common[2:])
