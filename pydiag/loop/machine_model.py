@@ -331,8 +331,9 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
     name = _identifier(f"Machine_{machine.name}{effects}", "Machine", set())
     source = ("within GearDiag;\n"
               f"model {name} \"{machine.name}: every stage, as each sensor sees them\"\n"
-              f"  // Written by pydiag from {Path(machine.source).name} "
-              "(pydiag/loop/machine_model.py).\n"
+              # not the file's name: a copy of the file (the loop's) is the same model,
+              # built once
+              "  // Written by pydiag from a machine file (pydiag/loop/machine_model.py).\n"
               + "".join(f"{text}\n" for text in nested.values())
               + "\n".join(lines) + "\nequation\n" + "\n".join(connects) + f"\nend {name};\n")
     first = machine.stages[0]

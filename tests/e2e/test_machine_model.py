@@ -150,10 +150,14 @@ def test_an_effect_the_box_has_lowers_the_error_more_than_one_it_lacks(tmp_path)
     assert errors["gear_eccentricity"] > 0.95 * errors[None], errors
 
 
-def test_the_model_source_names_each_sensors_view_of_each_stage():
+def test_the_model_source_names_each_sensors_view_of_each_stage(tmp_path):
     """A sensor near a stage sees it as its own, every other stage through a level of its
-    own (a parameter only a fit of that sensor estimates)."""
+    own (a parameter only a fit of that sensor estimates). A copy of the file under another
+    name (the loop's) is the same model, built once."""
     model = machine_model(load_machine(ROOT / "examples" / "phm09_spur.toml"))
+    copy = tmp_path / "phm09_spur.loop.toml"
+    copy.write_text((ROOT / "examples" / "phm09_spur.toml").read_text())
+    assert machine_model(load_machine(copy)) == model
     assert model.stages == ("input_stage", "output_stage")
     assert [(o.name, o.near, tuple(o.levels.values())) for o in model.outputs] == [
         ("acc_ch1", 0, ("acc_ch1_output_stage_dB",)), ("acc_ch2", 1, ("acc_ch2_input_stage_dB",))]
