@@ -122,8 +122,10 @@ def outcompeted(confident_z: dict[str, float], competing: dict[str, list[str]],
                            f"better held out (z {confident_z[rival]:.1f} > "
                            f"{confident_z[key]:.1f}){_on_shared_lines(key, rival, fits)}")
         elif close is not None:
+            how = ("about as well" if near[close] < confident_z[key] + margin else
+                   "at least as well")
             beaten[key] = (f"competes with {close} for the same lines, which explains them "
-                           f"about as well held out (z {near[close]:.1f} against "
+                           f"{how} held out (z {near[close]:.1f} against "
                            f"{confident_z[key]:.1f}{_on_shared_lines(key, close, fits)}): "
                            "this record does not tell them apart")
         else:

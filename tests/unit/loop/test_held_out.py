@@ -175,6 +175,10 @@ def test_competing_effects_the_record_does_not_tell_apart_are_neither_confident(
     assert "does not tell them apart" in beaten["second_tooth"] and "36.5" in beaten["second_tooth"]
     assert outcompeted({"second_tooth": 37.7}, competing, {**significant, "softening": 20.0}) == {}
     assert outcompeted({"second_tooth": 37.7}, competing) == {}  # no others known
+    # one with a far larger z (not confident: its own lines' form wrong) is not "about as well"
+    said = outcompeted({"second_tooth": 37.7}, competing, {**significant, "softening": 90.0})
+    assert "explains them at least as well held out (z 90.0 against 37.7" in \
+        said["second_tooth"]
 
 
 def test_competitors_are_set_side_by_side_on_the_lines_both_claim():
