@@ -2,8 +2,9 @@
 a stage can have and does not have yet, ranked) and compare's validation (the effects
 each stage's residual points to).
 
-For each stage, the model's problem is seen from that stage's shafts
-(:func:`~pydiag.loop.machine_model.stage_view`) with the catalogue named for it
+For each stage, the model's problem is seen from that stage's shafts, its own parameters
+free and the other stages' held at the machine's fit
+(:func:`~pydiag.loop.machine_model.stage_view`), with the catalogue named for it
 (:func:`~pydiag.loop.machine_model.stage_effects`); each effect the stage lacks is fitted
 on half of the periods on the model with it on that stage and scored on the other half
 (:func:`pydiag.loop.held_out.held_out`), whatever its score on the residual (compare

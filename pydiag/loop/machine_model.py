@@ -552,8 +552,7 @@ def stage_view(problem: FitProblem, machine: Machine, model: MachineModel, stage
     (:meth:`MachineModel.stage_parameters`), every other held at ``values`` (the machine's
     fit). An effect tried on the stage that frees the base (``Effect.reshapes_base``) then
     frees only the stage's: the other stages' lines are not its, and what they fit is the
-    machine's fit, not the try's (half the parameters, half the simulations of its
-    polish)."""
+    machine's fit, not the try's."""
     input_hz = problem.kinematics.f_pinion_hz  # the first stage's pinion: the input shaft
     own = model.stage_parameters(stage)
     held = tuple(p for p in problem.parameters if p.name not in own)
