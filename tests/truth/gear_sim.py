@@ -5,7 +5,8 @@ is not an inverse crime.
 Where it differs from GearDiag.GearPair (same kinematics and physical defaults):
 
 - two rotating bodies (pinion and gear inertias, the load a dynamometer holding the gear
-  speed) instead of one equivalent mass: the speed itself moves when the torque does;
+  speed; optionally a motor's rotor driving the pinion through a flexible coupling)
+  instead of one equivalent mass: the speed itself moves when the torque does;
 - the mesh stiffness is a sum over the tooth pairs in contact, with a contact ratio of
   1.6 (one pair 40 % of the mesh cycle, two pairs 60 %), each pair's stiffness a parabola
   along its path of contact with tip relief at both ends, in series with the constant
@@ -91,6 +92,12 @@ class TruthGear:
     pinion_runout_m: float = 5e-6
     pitch_error_m: float = 0.7e-6  # at the assembly-phase order
     load_time_constant_s: float = 0.05  # of the dynamometer holding the speed
+    # a motor's rotor driving the pinion through a flexible coupling (0: the input torque
+    # acts on the pinion itself): a drive train's inertia, many times the gears', turns a
+    # torque ripple into a small swing of the speed
+    rotor_inertia_kg_m2: float = 0.0
+    coupling_stiffness_n_m_rad: float = 2000.0
+    coupling_damping_n_m_s_rad: float = 0.2
     # the geometry of the pinion's bearing (the test's 6205-type bearing)
     n_balls: int = 9
     ball_to_pitch: float = 7.94 / 39.04
@@ -163,8 +170,10 @@ class _Mesh:
 
 def _dynamics(y, t, g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
               omega_g0: float, load_damping: float) -> tuple[list[float], float]:
-    """(the state's derivatives, the mesh force)"""
-    theta_p, omega_p, d, dv = y
+    """(the state's derivatives, the mesh force); the state: the pinion's angle and speed,
+    the mesh deflection and its rate, and with a rotor the coupling's twist and the
+    rotor's speed"""
+    theta_p, omega_p, d, dv = y[:4]
     e = g.effects
     r_p, r_g = g.r_pinion_m, g.r_gear_m
     theta_g = (r_p * theta_p - d) / r_g
@@ -185,9 +194,16 @@ def _dynamics(y, t, g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: floa
     t_in = g.torque_n_m * (1.0 + e.torque_ripple * math.sin(TWO_PI * e.ripple_hz * t))
     t_load = (g.torque_n_m * g.n_gear / g.n_pinion * (1.0 + e.load_swing * math.cos(theta_g + 2.6))
               + load_damping * (omega_g - omega_g0))
+    rotor = []
+    if g.rotor_inertia_kg_m2 > 0.0:  # the ripple drives the rotor, the coupling the pinion
+        twist, omega_r = y[4], y[5]
+        t_coupling = (g.coupling_stiffness_n_m_rad * twist
+                      + g.coupling_damping_n_m_s_rad * (omega_r - omega_p))
+        rotor = [omega_r - omega_p, (t_in - t_coupling) / g.rotor_inertia_kg_m2]
+        t_in = t_coupling
     acc_p = (t_in - r_p * force) / inertia_p
     acc_g = (r_g * force - t_load) / inertia_g
-    return [omega_p, acc_p, dv, r_p * acc_p - r_g * acc_g], force
+    return [omega_p, acc_p, dv, r_p * acc_p - r_g * acc_g] + rotor, force
 
 
 def _rhs(y, t, *args):
@@ -258,16 +274,27 @@ def _integrate(g: TruthGear, duration_s: float, sample_rate_hz: float, warmup_s:
     inertia_g = 2 * g.mass_kg * r_g ** 2
     omega_p0 = TWO_PI * g.f_pinion_hz
     omega_g0 = omega_p0 * g.n_pinion / g.n_gear
-    j_gear = inertia_g + inertia_p * (g.n_gear / g.n_pinion) ** 2  # both, seen at the gear
+    # every body, seen at the gear
+    j_gear = inertia_g + (inertia_p + g.rotor_inertia_kg_m2) * (g.n_gear / g.n_pinion) ** 2
     load_damping = j_gear / g.load_time_constant_s
     d0 = g.torque_n_m / r_p / mesh.stiffness(0.0)
     n = int(round((warmup_s + duration_s) * sample_rate_hz))
     t = np.arange(n + 1) / sample_rate_hz
     args = (g, mesh, inertia_p, inertia_g, omega_g0, load_damping)
-    y = integrate.odeint(_rhs, [0.0, omega_p0, d0, 0.0], t, args=args, rtol=1e-9,
-                         atol=[1e-9, 1e-6, 1e-13, 1e-9], hmax=0.25 / sample_rate_hz,
-                         mxstep=100_000)
+    y0, atol = [0.0, omega_p0, d0, 0.0], [1e-9, 1e-6, 1e-13, 1e-9]
+    if g.rotor_inertia_kg_m2 > 0.0:  # the coupling twisted by the mean torque
+        y0, atol = y0 + [g.torque_n_m / g.coupling_stiffness_n_m_rad, omega_p0], atol + [1e-9, 1e-6]
+    y = integrate.odeint(_rhs, y0, t, args=args, rtol=1e-9, atol=atol,
+                         hmax=0.25 / sample_rate_hz, mxstep=100_000)
     return t, y, [_dynamics(yk, tk, *args) for yk, tk in zip(y, t)]
+
+
+def pinion_speed_hz(g: TruthGear, duration_s: float, sample_rate_hz: float,
+                    warmup_s: float = 0.3) -> np.ndarray:
+    """The pinion's speed, Hz, at each sample :func:`simulate` keeps."""
+    t, y, _ = _integrate(g, duration_s, sample_rate_hz, warmup_s)
+    keep = t >= warmup_s - 1e-12
+    return y[keep, 1][:int(round(duration_s * sample_rate_hz))] / TWO_PI
 
 
 def _observe(g: TruthGear, t: np.ndarray, y: np.ndarray, out: list, duration_s: float,
