@@ -9,7 +9,8 @@ from conftest import NAMES, noisy_measurement
 
 from pydiag.core.errors import UsageError
 from pydiag.core.parameters import Parameter
-from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit import estimator as estimator_module
+from pydiag.fit.estimator import DISCRETE_FINALISTS, FaultEstimator
 from pydiag.fit.problem import ProblemObjective, build_problem
 from pydiag.fmu.isolation import IsolatedPool
 from pydiag.gear.paper_cases import case
@@ -127,9 +128,10 @@ def test_a_stepped_parameter_is_fitted_on_its_multiples(gear_fmu, monkeypatch):
 
 def test_a_discrete_parameter_is_searched_exhaustively(gear_fmu, monkeypatch):
     """Each value of a stepped parameter keeps its own particles (the swarm never moves
-    them off it) and is polished over the continuous parameters, so the value found does
-    not depend on where the swarm's random start put the continuous ones: the same tooth
-    (here f_ate in steps of 0.1) for every seed, with a_f fitted beside it."""
+    them off it) and takes a least-squares step over the continuous parameters, and the
+    best few after it are polished on, so the value found does not depend on where the
+    swarm's random start put the continuous ones: the same tooth (here f_ate in steps of
+    0.1) for every seed, with a_f fitted beside it."""
     problem = build_problem(gear_fmu, noisy_measurement(gear_fmu, 8, 0, periods=2),
                             parameters=(Parameter("f_ate", 0.0, 1.0, step=0.1),
                                         Parameter("a_f", 0.0, 1.0)),
@@ -142,6 +144,14 @@ def test_a_discrete_parameter_is_searched_exhaustively(gear_fmu, monkeypatch):
         return pool_map(self, xs)
 
     monkeypatch.setattr(IsolatedPool, "map", spy)
+    rounds = []
+    side_by_side = estimator_module.run_in_lockstep
+
+    def counted(evaluate, tasks):
+        rounds.append(len(tasks))
+        return side_by_side(evaluate, tasks)
+
+    monkeypatch.setattr(estimator_module, "run_in_lockstep", counted)
     found = set()
     for seed in (0, 1, 2):
         batches.clear()
@@ -149,9 +159,12 @@ def test_a_discrete_parameter_is_searched_exhaustively(gear_fmu, monkeypatch):
                            n_workers=2, seed=seed).fit(problem)
         swarm = batches[:3]  # the 11 values' particles, 3 iterations
         assert all(len(b) == 11 and np.array_equal(b[:, 0], swarm[0][:, 0]) for b in swarm)
-        # every value's best position polished: some simulations at each value after the swarm
+        # every value's best position stepped: some simulations at each value after the
+        # swarm; the best few after that step polished on (DISCRETE_FINALISTS)
         polished = np.concatenate(batches[3:])[:, 0]
         assert set(np.round(polished, 6)) == {round(k / 10, 6) for k in range(11)}
+        assert rounds == [11, DISCRETE_FINALISTS]  # searches run side by side, each round
+        rounds.clear()
         assert r.parameters["a_f"] == pytest.approx(0.3, abs=0.05)
         found.add(round(r.parameters["f_ate"], 9))
     assert found == {0.2}
@@ -173,7 +186,8 @@ def test_fit_writes_no_files_and_leaves_logging_alone(gear_fmu, tmp_path):
     script = f"""
 import logging, numpy as np
 from pydiag.core.measurement import Measurement
-from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit import estimator as estimator_module
+from pydiag.fit.estimator import DISCRETE_FINALISTS, FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.fmu.plant import FmuPlant
 with FmuPlant({str(gear_fmu)!r}, ("acc",)) as p:
