@@ -1,5 +1,9 @@
 """Estimate fault parameters by particle swarm optimisation of the spectral error.
 
+One concern: one fit's search, from the swarm's start to the polish's stop, with the
+simulations it asks for (a discrete parameter's rounds among them); what it fits is
+:mod:`pydiag.fit.problem`'s, the swarm's arithmetic :mod:`pydiag.fit.pso`'s.
+
 Each evaluation simulates the FMU for a start-up ``warmup_s`` plus the analysed window
 (one fundamental period for gear models: the model is periodic, so one period holds all
 its lines exactly) and compares its features with the measurement's, channel by
