@@ -224,9 +224,8 @@ class FaultEstimator:
                      seen: dict) -> list:
         """The :data:`DISCRETE_FINALISTS` best of ``kept`` (each value of the discrete
         parameters' best start) after one least-squares step of each, to be polished to
-        the end: the swarm's few steps per value rank the values poorly (a tooth that won
-        after its polish ranked 8th of 24 before it), one step each ranks them well,
-        at a fraction of polishing every one."""
+        the end: the swarm's few steps per value rank the values poorly, one step each
+        ranks them well, at a fraction of polishing every one (docs/method.md)."""
         one_step = self.replace(polish_evaluations=2 * (int((~discrete).sum()) + 1))
         polishes = [functools.partial(one_step._polish, x0=x0, cost0=c0, lows=lows,
                                       highs=highs, held=discrete,

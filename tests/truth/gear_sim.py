@@ -283,7 +283,8 @@ def _integrate(g: TruthGear, duration_s: float, sample_rate_hz: float, warmup_s:
     args = (g, mesh, inertia_p, inertia_g, omega_g0, load_damping)
     y0, atol = [0.0, omega_p0, d0, 0.0], [1e-9, 1e-6, 1e-13, 1e-9]
     if g.rotor_inertia_kg_m2 > 0.0:  # the coupling twisted by the mean torque
-        y0, atol = y0 + [g.torque_n_m / g.coupling_stiffness_n_m_rad, omega_p0], atol + [1e-9, 1e-6]
+        y0 = y0 + [g.torque_n_m / g.coupling_stiffness_n_m_rad, omega_p0]
+        atol = atol + [1e-9, 1e-6]
     y = integrate.odeint(_rhs, y0, t, args=args, rtol=1e-9, atol=atol,
                          hmax=0.25 / sample_rate_hz, mxstep=100_000)
     return t, y, [_dynamics(yk, tk, *args) for yk, tk in zip(y, t)]
@@ -293,8 +294,16 @@ def pinion_speed_hz(g: TruthGear, duration_s: float, sample_rate_hz: float,
                     warmup_s: float = 0.3) -> np.ndarray:
     """The pinion's speed, Hz, at each sample :func:`simulate` keeps."""
     t, y, _ = _integrate(g, duration_s, sample_rate_hz, warmup_s)
+    return y[_kept(t, duration_s, sample_rate_hz, warmup_s), 1] / TWO_PI
+
+
+def _kept(t: np.ndarray, duration_s: float, sample_rate_hz: float, warmup_s: float
+          ) -> np.ndarray:
+    """Which samples of the integration's times ``t`` a record keeps: ``duration_s`` after
+    the warm-up."""
     keep = t >= warmup_s - 1e-12
-    return y[keep, 1][:int(round(duration_s * sample_rate_hz))] / TWO_PI
+    keep[np.flatnonzero(keep)[int(round(duration_s * sample_rate_hz)):]] = False
+    return keep
 
 
 def _observe(g: TruthGear, t: np.ndarray, y: np.ndarray, out: list, duration_s: float,
@@ -323,8 +332,7 @@ def _observe(g: TruthGear, t: np.ndarray, y: np.ndarray, out: list, duration_s: 
         zone = 0.5 * (1 + np.cos(y[:, 0]))  # the defect passes the load zone once a turn
         acc = acc + e.inner_race_acc * _unit_peak(
             _resonance(pulses * zone, sample_rate_hz, g.bearing_resonance_hz, 0.05, True))
-    keep = t >= warmup_s - 1e-12
-    keep[np.flatnonzero(keep)[int(round(duration_s * sample_rate_hz)):]] = False
+    keep = _kept(t, duration_s, sample_rate_hz, warmup_s)
     return {"acc": acc[keep], "disp": y[keep, 2]}
 
 

@@ -186,8 +186,7 @@ def test_fit_writes_no_files_and_leaves_logging_alone(gear_fmu, tmp_path):
     script = f"""
 import logging, numpy as np
 from pydiag.core.measurement import Measurement
-from pydiag.fit import estimator as estimator_module
-from pydiag.fit.estimator import DISCRETE_FINALISTS, FaultEstimator
+from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import build_problem
 from pydiag.fmu.plant import FmuPlant
 with FmuPlant({str(gear_fmu)!r}, ("acc",)) as p:
