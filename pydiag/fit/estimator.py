@@ -53,6 +53,9 @@ DEFAULT_MAX_CONSECUTIVE_FAILURES = 20
 #: Values of a discrete parameter (which tooth) polished to the end, the best after one
 #: least-squares step each (:meth:`FaultEstimator._first_steps`).
 DISCRETE_FINALISTS = 4
+#: A value whose cost after that step is within this share of the last finalist's is a
+#: finalist too: a tie at the cut is polished, not settled by rounding.
+FINALIST_TIE = 1e-3
 #: The native engine's tolerance in the swarm's simulations (``swarm_tolerance``): the
 #: swarm only ranks positions; the polish and the reported error keep the problem's
 #: tolerance (its accuracy and speed: bench/speed.py, bench/RESULTS.md sections 1 and 12).
@@ -232,8 +235,7 @@ class FaultEstimator:
                                       r0=seen.get(np.clip(x0, lows, highs).tobytes()))
                     for x0, c0 in kept]
         stepped = run_in_lockstep(run.residuals, polishes)
-        order = sorted(range(len(stepped)), key=lambda i: (stepped[i][1], i))
-        return [stepped[i] for i in order[:DISCRETE_FINALISTS]]
+        return [stepped[i] for i in finalists([c for _, c in stepped])]
 
     def _ranking_problem(self, problem: FitProblem) -> FitProblem:
         """``problem`` as the swarm simulates it: at ``swarm_tolerance`` with the native
@@ -378,6 +380,19 @@ class FaultEstimator:
         if cost < cost0:
             return lows + np.asarray(res.x, dtype=float) * span, cost
         return x0, cost0
+
+
+def finalists(costs: list[float]) -> list[int]:
+    """The indices of the :data:`DISCRETE_FINALISTS` lowest ``costs``, best first, and of
+    any other within :data:`FINALIST_TIE` of the last of them (a near tie at the cut is
+    kept whole, so that which values go on does not hang on rounding)."""
+    order = sorted(range(len(costs)), key=lambda i: (costs[i], i))
+    if len(order) <= DISCRETE_FINALISTS:
+        return order
+    cut = costs[order[DISCRETE_FINALISTS - 1]] * (1.0 + FINALIST_TIE)
+    if not np.isfinite(cut):
+        return order[:DISCRETE_FINALISTS]
+    return [i for k, i in enumerate(order) if k < DISCRETE_FINALISTS or costs[i] <= cut]
 
 
 def _best_of_each(positions: np.ndarray, costs: np.ndarray, discrete: np.ndarray

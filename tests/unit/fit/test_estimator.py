@@ -204,3 +204,21 @@ print(len(logging.getLogger().handlers))
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "0"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_finalists_keep_a_near_tie_at_the_cut_whole():
+    """Which tooth values are polished on must not hang on rounding: a value within
+    FINALIST_TIE of the last finalist goes on too, one clearly behind does not."""
+    from pydiag.fit.estimator import FINALIST_TIE, finalists
+
+    last = 4.0
+    costs = [3.0, 1.0, 2.0, last, last * (1 + FINALIST_TIE / 10), 9.0, np.inf]
+    assert DISCRETE_FINALISTS == 4  # the cases below are written for four
+    assert finalists(costs) == [1, 2, 0, 3, 4]
+    # the tie's two members in either order, each a rounding away from the other
+    swapped = [3.0, 1.0, 2.0, last * (1 + FINALIST_TIE / 10), last, 9.0]
+    assert sorted(finalists(swapped)) == sorted(finalists(costs[:6]))
+    clear = [3.0, 1.0, 2.0, last, last * (1 + 10 * FINALIST_TIE), 9.0]
+    assert finalists(clear) == [1, 2, 0, 3]
+    assert finalists([np.inf] * 6) == [0, 1, 2, 3]
+    assert finalists([2.0, 1.0]) == [1, 0]
