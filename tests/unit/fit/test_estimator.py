@@ -10,7 +10,7 @@ from conftest import NAMES, noisy_measurement
 from pydiag.core.errors import UsageError
 from pydiag.core.parameters import Parameter
 from pydiag.fit import estimator as estimator_module
-from pydiag.fit.estimator import DISCRETE_FINALISTS, FaultEstimator
+from pydiag.fit.estimator import DISCRETE_FINALISTS, FINALIST_TIE, FaultEstimator, finalists
 from pydiag.fit.problem import ProblemObjective, build_problem
 from pydiag.fmu.isolation import IsolatedPool
 from pydiag.gear.paper_cases import case
@@ -209,16 +209,15 @@ print(len(logging.getLogger().handlers))
 def test_the_finalists_keep_a_near_tie_at_the_cut_whole():
     """Which tooth values are polished on must not hang on rounding: a value within
     FINALIST_TIE of the last finalist goes on too, one clearly behind does not."""
-    from pydiag.fit.estimator import FINALIST_TIE, finalists
-
-    last = 4.0
-    costs = [3.0, 1.0, 2.0, last, last * (1 + FINALIST_TIE / 10), 9.0, np.inf]
-    assert DISCRETE_FINALISTS == 4  # the cases below are written for four
-    assert finalists(costs) == [1, 2, 0, 3, 4]
+    n = DISCRETE_FINALISTS
+    best = [float(k) for k in range(n, 0, -1)]  # n finalists, listed worst first
+    last = float(n)
+    tied = best + [last * (1 + FINALIST_TIE / 10), 9.0 * n, np.inf]
+    assert finalists(tied) == list(range(n - 1, -1, -1)) + [n]
     # the tie's two members in either order, each a rounding away from the other
-    swapped = [3.0, 1.0, 2.0, last * (1 + FINALIST_TIE / 10), last, 9.0]
-    assert sorted(finalists(swapped)) == sorted(finalists(costs[:6]))
-    clear = [3.0, 1.0, 2.0, last, last * (1 + 10 * FINALIST_TIE), 9.0]
-    assert finalists(clear) == [1, 2, 0, 3]
-    assert finalists([np.inf] * 6) == [0, 1, 2, 3]
-    assert finalists([2.0, 1.0]) == [1, 0]
+    swapped = best[1:] + [last * (1 + FINALIST_TIE / 10), last, 9.0 * n]
+    assert sorted(finalists(swapped)) == list(range(n + 1))
+    clear = best + [last * (1 + 10 * FINALIST_TIE), 9.0 * n]
+    assert finalists(clear) == list(range(n - 1, -1, -1))
+    assert finalists([np.inf] * (n + 2)) == list(range(n))
+    assert finalists(best[:-1]) == list(range(n - 2, -1, -1))  # fewer: every one
