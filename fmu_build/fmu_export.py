@@ -111,7 +111,11 @@ def to_dae_builder(system: OdeSystem) -> ca.DaeBuilder:
 
 
 def model_identifier(system: OdeSystem) -> str:
-    return re.sub(r"\W", "_", system.name.split(".")[-1])
+    """The FMU's model identifier, from the model's class name: a name CasADi takes for its
+    functions (a letter, then letters, digits and single underscores), whatever the class
+    is called (``My__Model_`` -> ``My_Model``)."""
+    name = re.sub(r"[^A-Za-z0-9]+", "_", system.name.split(".")[-1]).strip("_")
+    return name if name[:1].isalpha() else f"Model_{name}".rstrip("_")
 
 
 def _compile(model_id: str, sources: list[str]) -> str:

@@ -87,9 +87,9 @@ def teeth(text: str) -> tuple[int, int]:
         values = [int(p) for p in parts]
     except ValueError:
         values = []
-    if len(values) != 2 or min(values) < 1:
-        raise argparse.ArgumentTypeError(f"takes NP,NG (pinion and gear teeth, positive "
-                                         f"integers), got '{text}'")
+    if len(values) != 2 or min(values) < 2:
+        raise argparse.ArgumentTypeError(f"takes NP,NG (pinion and gear teeth, whole "
+                                         f"numbers of at least 2), got '{text}'")
     return values[0], values[1]
 
 

@@ -54,6 +54,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from fractions import Fraction
@@ -183,7 +184,7 @@ class Machine:
         names = [s.name for s in self.stages]
         if text in names:
             return names.index(text)
-        if text.strip().isdigit() and 1 <= int(text) <= len(names):
+        if re.fullmatch(r"\s*[0-9]+\s*", text) and 1 <= int(text) <= len(names):
             return int(text) - 1
         raise MachineError(f"{self.source}: no stage {text!r}; the stages are "
                            + ", ".join(f"{k} ({n})" for k, n in enumerate(names, 1)))
@@ -277,11 +278,14 @@ def _require(table: dict, key: str, source: str, where: str) -> None:
         raise MachineError(f"{_where(source, where, key)}: missing")
 
 
-def _teeth(value, source: str, table: str, key: str) -> int:
+def _teeth(value, source: str, table: str, key: str, least: int = 1) -> int:
+    """A count (teeth, balls, pulses) of at least ``least``: a whole number, not inf or
+    nan."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
-            or value != int(value) or value < 1:
-        raise MachineError(f"{_where(source, table, key)}: a number of teeth is a positive "
-                           f"whole number, got {value!r}")
+            or not math.isfinite(value) or value != int(value) or value < least:
+        what = ("a whole number of at least 2 (a gear of one tooth meshes once a turn: "
+                "no mesh to tell from its shaft)" if least == 2 else "a positive whole number")
+        raise MachineError(f"{_where(source, table, key)}: {what}, got {value!r}")
     return int(value)
 
 
@@ -327,8 +331,8 @@ def _stage(table: dict, k: int, source: str) -> Stage:
                            f"(known: {', '.join(PARALLEL_TYPES + LATER_TYPES)})")
     for key in ("pinion_teeth", "gear_teeth"):
         _require(table, key, source, where)
-    return Stage(_teeth(table["pinion_teeth"], source, where, "pinion_teeth"),
-                 _teeth(table["gear_teeth"], source, where, "gear_teeth"),
+    return Stage(_teeth(table["pinion_teeth"], source, where, "pinion_teeth", 2),
+                 _teeth(table["gear_teeth"], source, where, "gear_teeth", 2),
                  _text(table.get("name", f"stage {k + 1}"), source, where, "name"), kind)
 
 
@@ -458,12 +462,15 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
 def load_machine(path: str | Path) -> Machine:
     """The machine described by the TOML file ``path`` (module docstring)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    try:  # utf-8-sig: a byte-order mark, as some editors write, is no statement
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except FileNotFoundError as err:
         raise MachineError(f"machine file {path} not found") from err
     except (OSError, UnicodeDecodeError) as err:
         raise MachineError(f"machine file {path} cannot be read: {err}") from err
     except tomllib.TOMLDecodeError as err:
         raise MachineError(f"{path}: not valid TOML: {err}") from err
+    except RecursionError as err:
+        raise MachineError(f"{path}: arrays or tables nested too deeply to be a machine "
+                           "file") from err
     return machine_from_dict(data, str(path))

@@ -66,7 +66,7 @@ from pydiag.gear.effects import EFFECTS, Effect
 from pydiag.gear.machine import Machine, load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
-from pydiag.io.outputs import write_text
+from pydiag.io.outputs import edit_in_place
 from pydiag.loop.compare import compare
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
 from pydiag.loop.results import Comparison
@@ -85,14 +85,23 @@ _UNITS = {"acc": "m/s2", "disp": "m"}
 
 
 def _identifier(text: str, fallback: str, taken: set[str]) -> str:
-    """``text`` as a Modelica identifier not in ``taken`` (``fallback`` when it makes none)."""
-    name = re.sub(r"\W+", "_", text).strip("_")
+    """``text`` as a Modelica identifier not in ``taken`` (``fallback`` when it makes none):
+    ASCII letters and digits joined by single underscores, which every tool on the way to
+    an FMU takes; a second of the same name gets a number."""
+    name = re.sub(r"[^A-Za-z0-9]+", "_", text).strip("_")
     if not name or not name[0].isalpha():
         name = fallback
-    while name in taken:
-        name += "_"
-    taken.add(name)
-    return name
+    unique, n = name, 1
+    while unique in taken:
+        n += 1
+        unique = f"{name}_{n}"
+    taken.add(unique)
+    return unique
+
+
+def _said(text: str) -> str:
+    """``text`` (a name from the machine file) as it may stand in a Modelica string."""
+    return text.replace("\\", "/").replace('"', "'")
 
 
 @dataclass(frozen=True)
@@ -254,12 +263,12 @@ def _drive_train(machine: Machine, k: int, mesh: str, taken: set[str]
     wheel = _identifier(f"{mesh}_gear", f"stage{k + 1}_gear", taken)
     load = _identifier(f"{mesh}_load", f"stage{k + 1}_load", taken)
     declarations = [
-        f"  GearDiag.Components.SteadySpeed {drive} \"The {pinion} shaft at its steady "
-        "speed\";",
-        f"  GearDiag.Components.Inertia {wheel}(J={mesh}.m_s*{mesh}.r_g^2) \"{stage.name}'s "
-        f"gear, on the {gear} shaft\";",
+        f"  GearDiag.Components.SteadySpeed {drive} \"The {_said(pinion)} shaft at its "
+        "steady speed\";",
+        f"  GearDiag.Components.Inertia {wheel}(J={mesh}.m_s*{mesh}.r_g^2) "
+        f"\"{_said(stage.name)}'s gear, on the {_said(gear)} shaft\";",
         f"  GearDiag.Components.LoadTorque {load}(T={mesh}.T*{mesh}.r_g/{mesh}.r_p) \"The "
-        f"{gear} shaft's load\";"]
+        f"{_said(gear)} shaft's load\";"]
     connects = [f"  connect({drive}.flange, {mesh}.flange_a);",
                 f"  connect({mesh}.flange_b, {wheel}.flange_a);",
                 f"  connect({wheel}.flange_b, {load}.flange);"]
@@ -292,14 +301,14 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
         phase = ""
         if k > 0:  # its meshing relative to the first stage's: a fraction of its mesh cycle
             name = _identifier(f"{inst}_mesh_phase", f"stage{k + 1}_mesh_phase", taken)
-            lines.append(f"  parameter Real {name} = 0 \"{s.name}'s mesh relative to "
-                         f"{machine.stages[0].name}'s, a share of its mesh cycle\";")
+            lines.append(f"  parameter Real {name} = 0 \"{_said(s.name)}'s mesh relative to "
+                         f"{_said(machine.stages[0].name)}'s, a share of its mesh cycle\";")
             phase = f", t_phase={name}/({s.pinion_teeth}*{speed})"
             phases.append(Parameter(name, 0.0, 1.0, periodic=True))
         lines.append(f"  {cls} {inst}(Np={s.pinion_teeth}, Ng={s.gear_teeth}, "
-                     f"f_pinion={speed}{phase}) \"{s.name}: {s.pinion_teeth}/"
-                     f"{s.gear_teeth} teeth, shafts {machine.shafts[k]} and "
-                     f"{machine.shafts[k + 1]}\";")
+                     f"f_pinion={speed}{phase}) \"{_said(s.name)}: {s.pinion_teeth}/"
+                     f"{s.gear_teeth} teeth, shafts {_said(machine.shafts[k])} and "
+                     f"{_said(machine.shafts[k + 1])}\";")
         declarations, equations = _drive_train(machine, k, inst, taken)
         lines += declarations
         connects += equations
@@ -316,26 +325,25 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
                   for k, inst in enumerate(stages) if k != near}
         for k, level in levels.items():
             lines.append(f"  parameter Real {level}(unit=\"dB\") = 0 \"Level of "
-                         f"{machine.stages[k].name} at {channel or 'the sensor'} relative "
-                         f"to {machine.stages[near].name}'s\";")
+                         f"{_said(machine.stages[k].name)} at {_said(channel or 'the sensor')} relative "
+                         f"to {_said(machine.stages[near].name)}'s\";")
         terms = [f"{stages[near]}.{quantity}"] + [
             f"exp({level}*log(10)/20)*{stages[k]}.{quantity}" for k, level in levels.items()]
         lines.append(f"  output Real {name}(unit=\"{_UNITS[quantity]}\") = "
-                     + " + ".join(terms) + f" \"{channel or 'the sensor'}: every stage, "
-                     f"{machine.stages[near].name} its own\";")
+                     + " + ".join(terms) + f" \"{_said(channel or 'the sensor')}: every stage, "
+                     f"{_said(machine.stages[near].name)} its own\";")
         outputs.append(SensorOutput(name, channel, quantity, near, levels))
-    # a name for each set of effects, so that each model's source has a file of its own
-    effects = "" if not machine.effects else "_{}effects_{}".format(
-        len(machine.effects), hashlib.sha256(repr(sorted((e.stage, e.key) for e in
-                                                         machine.effects)).encode()).hexdigest()[:6])
-    name = _identifier(f"Machine_{machine.name}{effects}", "Machine", set())
+    body = ("".join(f"{text}\n" for text in nested.values())
+            + "\n".join(lines) + "\nequation\n" + "\n".join(connects))
+    # the name carries a hash of what the model is, so that each model has a source file of
+    # its own (two machine files of one name, a machine and itself with an effect more),
+    # and not the file's name: a copy of the file (the loop's) is the same model, built once
+    name = _identifier(f"Machine_{machine.name}", "Machine", set()) + \
+        "_" + hashlib.sha256(body.encode()).hexdigest()[:8]
     source = ("within GearDiag;\n"
-              f"model {name} \"{machine.name}: every stage, as each sensor sees them\"\n"
-              # not the file's name: a copy of the file (the loop's) is the same model,
-              # built once
+              f"model {name} \"{_said(machine.name)}: every stage, as each sensor sees them\"\n"
               "  // Written by pydiag from a machine file (pydiag/loop/machine_model.py).\n"
-              + "".join(f"{text}\n" for text in nested.values())
-              + "\n".join(lines) + "\nequation\n" + "\n".join(connects) + f"\nend {name};\n")
+              + body + f"\nend {name};\n")
     first = machine.stages[0]
     return MachineModel(name, source, stages, tuple(outputs),
                         (first.pinion_teeth, first.gear_teeth),
@@ -451,10 +459,11 @@ def accept(path: str | Path, key: str, stage: str | None = None,
            off: tuple[str, ...] = ()) -> Machine:
     """Give the machine of the file ``path`` the effect ``key`` on ``stage`` (its name or
     number; may be left out for a machine of one stage), with its parameters ``off`` held
-    at their neutral value: an ``[[effects]]`` table added at the end of the file, the rest
-    of it (comments too) as it was. The file is checked as it would be read first and
-    replaced whole, so a refused or failed edit leaves it as it was. Returns the machine
-    it now describes."""
+    at their neutral value: an ``[[effects]]`` table appended to the file, in its own line
+    ends, the rest of it as it was. The file is checked as it would be read first, then
+    appended to where it is (:func:`~pydiag.io.outputs.edit_in_place`: a link still names
+    it, its mode stays, a read-only file is refused, another process's lines are kept), so
+    a refused edit leaves it as it was. Returns the machine it now describes."""
     path = Path(path)
     machine = load_machine(path)
     if key not in EFFECTS:
@@ -468,14 +477,34 @@ def accept(path: str | Path, key: str, stage: str | None = None,
     name = machine.stages[index].name
     if key in machine.effect_keys(index):
         raise UsageError(f"{path}: {key} is on {name} already")
-    text = path.read_text(encoding="utf-8")
-    text += ("" if text.endswith("\n") or not text else "\n") + \
-        f'\n[[effects]]\nkey = "{key}"\nstage = {json.dumps(name)}\n'
-    if off:
-        text += f"off = {json.dumps(list(off))}\n"
-    edited = machine_from_dict(tomllib.loads(text), str(path))
-    write_text(path, text, force=True)
-    return edited
+    edited: list[Machine] = []
+
+    def added(text: str) -> str:  # the table, in the file's own line ends
+        nl = "\r\n" if "\r\n" in text else "\n"
+        text += ("" if text.endswith("\n") or not text else nl) + \
+            f"{nl}[[effects]]{nl}key = \"{key}\"{nl}stage = {_toml_string(name)}{nl}"
+        if off:
+            text += f"off = [{', '.join(_toml_string(o) for o in off)}]{nl}"
+        edited.append(_read_back(text, path))
+        return text
+
+    edit_in_place(path, added)
+    return edited[0]
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string: any character as it is, but quotes, backslashes and
+    control characters escaped (JSON's escapes of those are TOML's)."""
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
+def _read_back(text: str, path: Path) -> Machine:
+    """The machine the edited ``text`` of ``path`` describes: an edit that would leave the
+    file unreadable is refused before it is written."""
+    try:
+        return machine_from_dict(tomllib.loads(text), str(path))
+    except tomllib.TOMLDecodeError as err:  # a bug of the edit, not the user's file
+        raise RuntimeError(f"the edit of {path} would not be valid TOML: {err}") from err
 
 
 #: The line the loop writes above a machine file's [start] table.
@@ -483,24 +512,36 @@ START_NOTE = ("# a fit of this machine's model (pydiag loop's last): every fit o
               "also polishes from here")
 
 
+#: A TOML table's header line: ``[name]`` with any spacing TOML allows and a comment.
+_HEADER = re.compile(r"^\s*\[\s*([^\[\]]*?)\s*\]\s*(#.*)?$")
+
+
 def record_start(path: str | Path, values: Mapping[str, float]) -> Machine:
     """Write ``values`` (a fit of the machine's model, by parameter name) as the file's
     ``[start]`` table, in place of the one it had, at its end; the rest of the file
-    (comments too) as it was. Checked as it would be read and replaced whole, as
-    :func:`accept` does. Returns the machine it now describes."""
+    (comments too, its line ends) as it was. Checked as it would be read, then written
+    where the file is (:func:`~pydiag.io.outputs.edit_in_place`). Returns the machine it
+    now describes."""
     path = Path(path)
-    kept, inside = [], False
-    for line in path.read_text(encoding="utf-8").splitlines():
-        if line.lstrip().startswith("["):
-            inside = line.split("#", 1)[0].strip() == "[start]"
-        if not inside and line != START_NOTE:
-            kept.append(line)
-    rows = "".join(f"{json.dumps(name)} = {float(value)!r}\n"
-                   for name, value in sorted(values.items()) if math.isfinite(value))
-    text = "\n".join(kept).rstrip("\n") + f"\n\n{START_NOTE}\n[start]\n{rows}"
-    edited = machine_from_dict(tomllib.loads(text), str(path))
-    write_text(path, text, force=True)
-    return edited
+    edited: list[Machine] = []
+
+    def rewritten(text: str) -> str:
+        nl = "\r\n" if "\r\n" in text else "\n"
+        kept, inside = [], False
+        for line in text.splitlines():
+            header = _HEADER.match(line)
+            if header:
+                inside = header.group(1) == "start"
+            if not inside and line != START_NOTE:
+                kept.append(line)
+        rows = "".join(f"{_toml_string(name)} = {float(value)!r}{nl}"
+                       for name, value in sorted(values.items()) if math.isfinite(value))
+        text = nl.join(kept).rstrip("\r\n") + f"{nl}{nl}{START_NOTE}{nl}[start]{nl}{rows}"
+        edited.append(_read_back(text, path))
+        return text
+
+    edit_in_place(path, rewritten)
+    return edited[0]
 
 
 def _prefixed(instance: str, values: dict) -> dict:

@@ -84,7 +84,9 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
               "--speed", "mesh", "--force", "--no-validate")
     r = run_cli(*common, "--json", str(tmp_path / "0.json"))
     assert r.returncode == 0, r.stderr
-    source = tmp_path / "build" / "machines" / "Machine_short_box.mo"
+    sources = list((tmp_path / "build" / "machines").glob("Machine_short_box_*.mo"))
+    assert len(sources) == 1, sources  # named by the machine and a hash of its model
+    source = sources[0]
     assert f"model      : {source} (every stage of {machine}, written by pydiag" in r.stdout
     written = source.read_text()
     assert "GearDiag.Components.GearMesh stage_1(Np=18, Ng=36, f_pinion=f_input)" in written
@@ -441,3 +443,24 @@ def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
     assert machine.read_text() == text
     copy = load_machine(tmp_path / "box.loop.toml")
     assert [f"{e.key} on stage {e.stage + 1}" for e in copy.effects] == accepted
+
+
+def test_any_machine_name_builds_and_two_machines_of_one_name_are_two_models(tmp_path):
+    """A machine named as people name things (spaces, parentheses, quotes, a backslash,
+    an accent) with an effect accepted builds an FMU (CasADi takes a letter, then letters,
+    digits and single underscores); its name is kept for people in the model's
+    description. Two machine files of one name with other teeth are two models, each
+    with a source of its own: an edit of one's is never fitted for the other."""
+    import dataclasses
+
+    from pydiag.gear.machine import StageEffect
+    one = load_machine(ROOT / "examples" / "gfd_spectraquest.toml")
+    named = dataclasses.replace(one, name='SpectraQuest GFD (inferred teeth) "b\\ox" né',
+                                effects=(StageEffect("gear_tooth_fault", 0),))
+    model, built = machine_fmu(named, MODELICA, tmp_path)
+    assert "__" not in model.name and model.name[0].isalpha()
+    assert "SpectraQuest GFD (inferred teeth) 'b/ox' né: every stage" in model.source
+    assert inspected(built.fmu)
+    other = dataclasses.replace(named, stages=(dataclasses.replace(one.stages[0],
+                                                                    gear_teeth=81),))
+    assert machine_model(other, MODELICA).name != model.name
