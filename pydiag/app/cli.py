@@ -108,9 +108,15 @@ def _loop_args(p: argparse.ArgumentParser) -> None:
                    "the stage whose pair model is fitted (its name, or its number from 1 at "
                    "the input); every stage's lines are named. compare without it and "
                    "without --fmu fits the machine's own model of every stage")
+    _library_args(p)
+
+
+def _library_args(p: argparse.ArgumentParser) -> None:
+    """Where the models pydiag writes come from and are built."""
     p.add_argument("--modelica", help="Modelica library root holding GearDiag/Effects")
-    p.add_argument("--build-dir", help="where effect FMUs are built (default: a per-user "
-                   "cache, ~/.cache/pydiag/effects, or under $XDG_CACHE_HOME)")
+    p.add_argument("--build-dir", help="where the models pydiag writes (a machine's, an "
+                   "effect's) are built (default: a per-user cache, ~/.cache/pydiag/effects, "
+                   "or under $XDG_CACHE_HOME)")
 
 
 def _record_args(p: argparse.ArgumentParser) -> None:
@@ -168,8 +174,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("diagnose", help="estimate fault parameters from a measurement")
-    p.add_argument("--fmu", required=True)
+    p.add_argument("--fmu", help="a model of your own (or a vendor's, with --adapter); "
+                   "without it, --machine's own model is written and built")
     _measurement_args(p)
+    _library_args(p)
     p.add_argument("--baseline", metavar="FILE|kept", action="append",
                    help="with --machine: a record of the machine in a known healthy state, "
                    "every stage judged against it (repeat for more)" + KEPT_HELP)

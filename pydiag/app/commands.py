@@ -11,6 +11,7 @@ from pathlib import Path
 
 from pydiag.app import batch
 from pydiag.app.baselines import baseline_records
+from pydiag.app.models import machine_models
 from pydiag.app.formatting import (format_facts, format_indicators,
                                    format_machine_diagnosis, format_machine_report,
                                    format_regression, format_result)
@@ -33,7 +34,8 @@ from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import regress
 from pydiag.loop.diagnosis import Diagnosis, diagnose
-from pydiag.loop.stages import diagnose_machine, machine_speed, pair_json, stage_problem
+from pydiag.loop.stages import (diagnose_machine, diagnose_machine_model, machine_speed,
+                                pair_json, stage_problem)
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement
 
@@ -162,8 +164,11 @@ def cmd_simulate(args) -> int:
 
 def cmd_diagnose(args) -> int:
     check_outputs(args, "json")
-    m = read_input(args)
     machine = args.machine_description
+    if args.fmu is None and machine is None:
+        raise UsageError("give --machine FILE (its own model is written and built), or "
+                         "--fmu FILE (a model of your own)")
+    m = read_input(args)
     if _staged(args):
         return _diagnose_stages(args, machine, m)
     problem = problem_of(args, m)
@@ -188,7 +193,8 @@ def _staged(args) -> bool:
     if args.baseline and machine is None:
         raise UsageError("--baseline judges the stages of a machine against it: give "
                          "--machine FILE (a machine of one stage will do)")
-    return machine is not None and (len(machine.stages) > 1 or bool(args.baseline))
+    return machine is not None and (len(machine.stages) > 1 or bool(args.baseline)
+                                    or args.fmu is None)
 
 
 def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
@@ -196,12 +202,20 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     against the baselines when there are some."""
     settings = problem_settings(args)
     baselines = baseline_records(args, machine, settings["speed"])
+    model = None if args.fmu else machine_models(args)(machine)
     update, close = progress_bar(args.quiet)
     try:
-        result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
-                                  FaultEstimator(**estimator_settings(args), progress=update),
-                                  baselines, adapter_of(args), settings["feature_mode"],
-                                  settings["fit_gain"], settings["gain_curve"])
+        estimator = FaultEstimator(**estimator_settings(args), progress=update)
+        if model is None:
+            result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
+                                      estimator, baselines, adapter_of(args),
+                                      settings["feature_mode"], settings["fit_gain"],
+                                      settings["gain_curve"])
+        else:  # the machine's own model, every stage at once
+            result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
+                                            args.rpm / 60.0, settings["speed"], estimator,
+                                            baselines, settings["feature_mode"],
+                                            settings["fit_gain"], settings["gain_curve"])
     finally:
         close()
     print(format_machine_diagnosis(result))

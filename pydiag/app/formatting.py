@@ -230,7 +230,8 @@ def format_machine_diagnosis(result: MachineDiagnosis) -> str:
         contrast = st.fit.tooth_contrast
         lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"
                      f"{contrast if contrast is not None else float('nan'):>10.3f}"
-                     f"{p.get('f_ate', float('nan')):>7.3f}{p.get('f_dte', float('nan')):>7.3f}"
+                     f"{p.get(st.prefix + 'f_ate', float('nan')):>7.3f}"
+                     f"{p.get(st.prefix + 'f_dte', float('nan')):>7.3f}"
                      f"{st.fit.error:>8.3f}  {st.fault_mode:<20}{st.severity:<10}"
                      f"{st.suspect or '-'}")
     for st in result.stages:

@@ -11,13 +11,14 @@ from pydiag.app.commands import (check_outputs, estimator_settings, problem_of,
                                  problem_settings, progress_bar)
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
                                    format_history, format_loop_step)
+from pydiag.app.models import effect_models, machine_models
 from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
-from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.io.outputs import check_output, write_text
@@ -26,14 +27,13 @@ from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
-from pydiag.loop.compose import BuiltModel, composed_fmu
+from pydiag.loop.compose import BuiltModel
 from pydiag.loop.machine_discover import check_effects, discover_machine, validate_machine
 from pydiag.loop.machine_loop import machine_loop
-from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_fmu,
-                                       machine_problem)
+from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem)
 from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
-                                  default_build_dir, discover, effect_fmu)
+                                  discover)
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
 
@@ -41,27 +41,6 @@ from pydiag.loop.report import write_report
 def _effect_estimator(args) -> FaultEstimator:
     """The refit of an effect: EFFECT_REFIT's budget, overridden by the options given."""
     return FaultEstimator(**{**EFFECT_REFIT, **estimator_settings(args)})
-
-
-def _library(args) -> tuple[Path, Path]:
-    """(the Modelica library root, --modelica, checked here; the build folder, --build-dir,
-    default the per-user cache)."""
-    root = Path(args.modelica) if args.modelica else MODELICA_ROOT
-    check_modelica_root(root)
-    return root, Path(args.build_dir) if args.build_dir else default_build_dir(root)
-
-
-def _effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, ...]], str]]:
-    """(an effect's FMU, the FMU of several effects), built on first use (:func:`_library`)."""
-    root, build = _library(args)
-    return (lambda e: str(effect_fmu(e.key, root, build)),
-            lambda keys: str(composed_fmu(keys, root, build)))
-
-
-def _machine_models(args) -> Callable[[Machine], tuple[MachineModel, BuiltModel]]:
-    """A machine's own model, as written and as built (:func:`_library`)."""
-    root, build = _library(args)
-    return lambda machine: machine_fmu(machine, root, build)
 
 
 def _machine(args) -> Machine:
@@ -136,11 +115,11 @@ def cmd_compare(args) -> int:
     m = read_input(args)
     machine_model = None  # (as written, as built) when compare fits the machine's own
     if args.fmu:
-        models = None if args.no_validate else _effect_models(args)
+        models = None if args.no_validate else effect_models(args)
         # with an effect model, the base fit runs with the effect switched off (lower bounds)
         problem = problem_of(args, m, fixed_values=effect.neutral_values() if effect else None)
     else:  # the machine's own model, its effects tried stage by stage (below)
-        machines = _machine_models(args)
+        machines = machine_models(args)
         (problem, machine_model), models = _machine_problem(args, m, machines), None
     update, close = progress_bar(args.quiet, "compare")
     try:
@@ -211,7 +190,7 @@ def cmd_discover(args) -> int:
                                Path(args.build_dir) if args.build_dir else None, progress,
                                _effect_estimator(args))
     else:  # the machine's own model: every effect its stages lack, on every stage
-        machines = _machine_models(args)
+        machines = machine_models(args)
         problem, (model, built) = _machine_problem(args, m, machines)
         update, close = progress_bar(args.quiet, "compare")
         try:
@@ -242,7 +221,7 @@ def cmd_loop(args) -> int:
     if not args.fmu:
         steps, model = _machine_loop(args)
     else:
-        effect_model, composed_model = _effect_models(args)
+        effect_model, composed_model = effect_models(args)
         problem = problem_of(args, read_input(args))
         facts = format_facts(_stage_fact(args))
         if facts:
@@ -288,7 +267,7 @@ def _machine_loop(args) -> tuple[list, str]:
     copy = source.with_name(f"{source.stem}.loop.toml")
     check_output(str(copy), args.force)
     m = read_input(args)
-    machines = _machine_models(args)
+    machines = machine_models(args)
     found, settings, drop = _machine_record(args, m)
     write_text(str(copy), source.read_text(encoding="utf-8"), True)
     print(f"machine    : {copy} (a copy of {source}; every effect accepted goes into it)")

@@ -13,7 +13,7 @@ from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.classify import GROUPS, classify, group_level, healthy, tooth_contrast
 from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
-from pydiag.loop.support import GroupSupport, fault_support
+from pydiag.loop.support import GroupSupport, fault_support, unprefixed
 
 #: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
 #: not a diagnosis: a model with no lines at all scores about 1.
@@ -82,26 +82,29 @@ class Diagnosis:
 
 
 def classified(problem: FitProblem, fit: FitResult, facts: dict | None = None,
-               speed_warning: bool = True) -> Diagnosis:
+               speed_warning: bool = True, prefix: str = "") -> Diagnosis:
     """The diagnosis of ``fit``, a fit of ``problem``; ``facts`` as :func:`diagnose` finds
     them (default: the record's alone, no gains); ``speed_warning``: :func:`fit_warnings`'s
-    ``speed``."""
-    values = {**problem.fixed_values, **fit.parameters}
+    ``speed``; ``prefix``: what the names of the classified parameters begin with (a stage
+    of a machine's model: ``"<stage>."``; the pair's own: none)."""
+    values = unprefixed({**problem.fixed_values, **fit.parameters}, prefix)
+    fitted = {p.name for p in problem.parameters} & set(fit.parameters)
+    fitted = {n[len(prefix):] for n in fitted if n.startswith(prefix)}
     facts = problem.record_facts() if facts is None else facts
     support: list[GroupSupport] = []
     if unexplained(problem, fit.error):
         labels, contrast = (NO_DIAGNOSIS,) + ("unknown",) * 3, None
-    elif any(name in fit.parameters for name in CLASSIFIED_PARAMETERS):
+    elif any(name in fitted for name in CLASSIFIED_PARAMETERS):
         found = classify(values)
         support = fault_support(problem, fit.parameters,
-                                [g for g in GROUPS if group_level(found, g) != "none"])
+                                [g for g in GROUPS if group_level(found, g) != "none"], prefix)
         supported = values
         for test in support:
             if not test.supported:
                 supported = healthy(supported, test.group)
         cls = classify(supported)
         labels = (cls.fault_mode, cls.severity, cls.tooth_severity, cls.te_severity)
-        contrast = tooth_contrast(values) if "a_f" in fit.parameters else None
+        contrast = tooth_contrast(values) if "a_f" in fitted else None
     else:
         labels, contrast = ("not_classified",) + ("unknown",) * 3, None
     return Diagnosis(fit, *labels, contrast, facts,

@@ -39,7 +39,8 @@ from pydiag.gear.machine_indicators import MachineRecord, shaft_records
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.stage_judge import StageVerdict, judge_stages
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
-from pydiag.loop.diagnosis import Diagnosis, diagnose
+from pydiag.loop.diagnosis import Diagnosis, classified, diagnose
+from pydiag.loop.machine_model import MachineModel, fit_machine, machine_problem, stage_view
 from pydiag.model.adapter import Adapter
 
 #: Without baselines, a shaft is the suspect when its sidebands carry this many times the
@@ -65,6 +66,9 @@ class StageDiagnosis:
     fault_mode: str
     severity: str
     suspect: str | None
+    #: what the names of the stage's fault parameters begin with in ``fit`` (a machine's
+    #: model: ``"<stage>."``; a pair's: none)
+    prefix: str = ""
 
     def to_dict(self) -> dict:
         params = self.fit.parameters
@@ -72,7 +76,8 @@ class StageDiagnosis:
                 "gear_teeth": self.gear_teeth, "pinion_shaft_hz": self.pinion_shaft_hz,
                 "gear_shaft_hz": self.gear_shaft_hz, "mesh_hz": self.mesh_hz,
                 "tooth_contrast": self.fit.tooth_contrast,
-                "transmission_error": {k: params[k] for k in ("f_ate", "f_dte") if k in params},
+                "transmission_error": {k: params[self.prefix + k] for k in ("f_ate", "f_dte")
+                                       if self.prefix + k in params},
                 "fault_mode": self.fault_mode, "severity": self.severity,
                 "suspect": self.suspect, "model": self.fit.to_dict(),
                 "baseline": None if self.verdict is None else self.verdict.to_dict()}
@@ -216,13 +221,7 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
     upsampled = upsampled_record(measurement, found, drop)  # once for every shaft and stage
-    verdicts, spread, names = [None] * len(machine.stages), None, ()
-    if baselines:
-        record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop,
-                                                          upsampled)),
-                               str(measurement.metadata.get("file", "(in memory)")))
-        verdicts, spread = judge_stages(machine, record, list(baselines))
-        names = tuple(b.file for b in baselines)
+    verdicts, spread, names = _judged(measurement, machine, found, drop, upsampled, baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
@@ -233,11 +232,60 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     return MachineDiagnosis(machine, found, stages, names, spread)
 
 
+def _judged(measurement: Measurement, machine: Machine, found: SpeedEstimate,
+            drop: tuple[str, ...], upsampled: Upsampled | None,
+            baselines: Sequence[MachineRecord]
+            ) -> tuple[list[StageVerdict | None], float | None, tuple[str, ...]]:
+    """Each stage's verdict against ``baselines`` (None each without), the healthy
+    records' spread, the baselines' files."""
+    if not baselines:
+        return [None] * len(machine.stages), None, ()
+    record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop,
+                                                      upsampled)),
+                           str(measurement.metadata.get("file", "(in memory)")))
+    verdicts, spread = judge_stages(machine, record, list(baselines))
+    return list(verdicts), spread, tuple(b.file for b in baselines)
+
+
+def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Measurement,
+                           machine: Machine, input_hz: float,
+                           speed: SpeedSettings = SpeedSettings(),
+                           estimator: FaultEstimator | None = None,
+                           baselines: Sequence[MachineRecord] = (),
+                           feature_mode: str = "lines", fit_gain: bool | None = None,
+                           gain_curve: bool = False) -> MachineDiagnosis:
+    """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
+    built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
+    (:func:`~pydiag.loop.machine_model.fit_machine`, from the machine file's ``[start]``
+    too), each stage classified from its own fault parameters and tested on the lines
+    seen from its own shafts (:func:`~pydiag.loop.machine_model.stage_view`), and judged
+    against ``baselines`` as :func:`diagnose_machine` judges."""
+    estimator = estimator or FaultEstimator()
+    drop = (speed.tacho,) if speed.tacho else ()
+    found = machine_speed(measurement, machine, input_hz, speed)
+    verdicts, spread, names = _judged(measurement, machine, found, drop,
+                                      upsampled_record(measurement, found, drop), baselines)
+    problem = machine_problem(fmu_path, model, measurement, machine, found, fit_gain,
+                              feature_mode, drop, gain_curve)
+    fit = fit_machine(problem, model, estimator, start=machine.fit_start())
+    facts = problem.facts(fit.parameters)
+    stages = []
+    for k, stage in enumerate(machine.stages):
+        view = dataclasses.replace(stage_view(problem, machine, model, k, fit.parameters),
+                                   speed=stage_speed(found, machine, k))
+        prefix = f"{model.stages[k]}."
+        stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
+                                                                   prefix),
+                                      verdicts[k], prefix))
+    return MachineDiagnosis(machine, found, stages, names, spread)
+
+
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,
-                    verdict: StageVerdict | None = None) -> StageDiagnosis:
+                    verdict: StageVerdict | None = None, prefix: str = "") -> StageDiagnosis:
     """A stage called ``name``: ``fit``, the diagnosis of its pair's ``problem``, and what
     the baselines say of it (``verdict``; module docstring). A gear pair diagnosed alone
-    (``diagnose --teeth``) is a machine of this one stage."""
+    (``diagnose --teeth``) is a machine of this one stage. ``prefix``: what the stage's
+    parameters' names begin with in ``fit`` (:attr:`StageDiagnosis.prefix`)."""
     fault_mode, severity, suspect = fit.fault_mode, fit.severity, None
     if verdict is not None:
         suspect = verdict.suspect
@@ -251,4 +299,4 @@ def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,
     pinion_hz = problem.speed.speed_hz if problem.speed is not None else kin.f_pinion_hz
     return StageDiagnosis(name, kin.n_pinion, kin.n_gear, pinion_hz,
                           pinion_hz * kin.n_pinion / kin.n_gear, pinion_hz * kin.n_pinion, fit,
-                          verdict, fault_mode, severity, suspect)
+                          verdict, fault_mode, severity, suspect, prefix)

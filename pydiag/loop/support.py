@@ -62,22 +62,25 @@ def chi2_quantile(dof: int, false_alarm_rate: float = FALSE_ALARM_RATE) -> float
     return float(chi2.ppf(1.0 - false_alarm_rate, dof))
 
 
-def fault_support(problem: FitProblem, estimate: dict[str, float], groups: list[str]
-                  ) -> list[GroupSupport]:
+def fault_support(problem: FitProblem, estimate: dict[str, float], groups: list[str],
+                  prefix: str = "") -> list[GroupSupport]:
     """The test of each of ``groups`` at ``estimate`` (a fit of ``problem``, by parameter
-    name), one simulation of ``problem``'s model for the fit and one a group."""
+    name), one simulation of ``problem``'s model for the fit and one a group; ``prefix``:
+    what the fault parameters' names begin with (a machine's stage: ``"<stage>."``)."""
     if not groups:
         return []
     names = [p.name for p in problem.parameters]
     values = {**problem.fixed_values, **estimate}
+    own = unprefixed(values, prefix)
     out = []
     with problem.spec.open() as plant:
         fitted = problem.fitted_features(plant, np.array([estimate[n] for n in names]))
         for group in groups:
-            free = tuple(n for n in group_parameters(group, values) if n in names)
+            free = tuple(prefix + n for n in group_parameters(group, own)
+                         if prefix + n in names)
             if not free:
                 continue
-            null = healthy(values, group)
+            null = {**values, **{prefix + n: v for n, v in healthy(own, group).items()}}
             base = problem.fitted_features(plant, np.array([null[n] for n in names]))
             statistic = 0.0
             for c, model, healthy_model in zip(problem.channels, fitted, base):
@@ -87,3 +90,9 @@ def fault_support(problem: FitProblem, estimate: dict[str, float], groups: list[
                 statistic += float(np.sum(terms))
             out.append(GroupSupport(group, free, statistic, chi2_quantile(len(free))))
     return out
+
+
+def unprefixed(values: dict[str, float], prefix: str) -> dict[str, float]:
+    """The values whose names begin with ``prefix``, named without it (a machine's stage's
+    fault parameters as a pair's)."""
+    return {n[len(prefix):]: v for n, v in values.items() if n.startswith(prefix)}

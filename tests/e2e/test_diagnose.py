@@ -63,3 +63,45 @@ def test_paper_case_full_diagnosis(gear_fmu, number):
     assert (r.fault_mode, r.severity) == (c.fault_mode, c.severity)
 
 
+
+
+#: The paper's pair as a machine file of one stage: a sensor for each output it records.
+PAIR_MACHINE = """name = "the paper's pair (Table 1)"
+input_rpm = 1500
+[[stages]]
+name = "pair"
+pinion_teeth = 14
+gear_teeth = 21
+[[sensors]]
+channel = "acc"
+output = "acc"
+[[sensors]]
+channel = "disp"
+output = "disp"
+"""
+
+
+def test_cli_diagnose_a_machine_file_without_an_fmu(gear_fmu, tmp_path):
+    """Table 1 case 8 through a machine file of one stage and no --fmu: the machine's own
+    model is written, built and fitted; the stage is combined/medium with its parameters
+    near the truth; without --fmu and without --machine, one line says what to give."""
+    c = case(8)
+    meas, machine, out = tmp_path / "m.csv", tmp_path / "pair.toml", tmp_path / "r.json"
+    machine.write_text(PAIR_MACHINE)
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--snr", "10",
+                  *[a for n, v in c.parameters.items() for a in ("--set", f"{n}={v}")],
+                  "--out", str(meas))
+    assert res.returncode == 0, res.stderr
+    res = run_cli("-m", "pydiag", "diagnose", "--machine", str(machine), "--measurement",
+                  str(meas), "--json", str(out), "--quiet")
+    assert res.returncode == 0, res.stderr
+    stage = json.loads(out.read_text())["stages"][0]
+    assert (stage["fault_mode"], stage["severity"]) == (c.fault_mode, c.severity), stage
+    fitted = stage["model"]["parameters"]
+    errors = {n: abs(fitted[f"pair.{n}"] - c.parameters[n]) for n in NAMES}
+    assert max(errors.values()) <= 0.03, errors
+    assert stage["transmission_error"] == {n: fitted[f"pair.{n}"] for n in ("f_ate", "f_dte")}
+    assert "combined" in res.stdout and "medium" in res.stdout
+    res = run_cli("-m", "pydiag", "diagnose", "--measurement", str(meas), "--quiet")
+    assert res.returncode == 2
+    assert "give --machine FILE" in res.stderr and len(res.stderr.strip().splitlines()) == 1
