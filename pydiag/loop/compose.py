@@ -118,7 +118,7 @@ def read_effect(key: str, modelica_root: Path) -> EffectSource:
     closing = re.search(rf"^\s*end\s+{path.stem}\s*;", body, re.M)
     if closing is None:
         raise CompositionError(f"{path}: no 'end {path.stem};' closes the model")
-    body = body[:closing.start()]
+    body = _without_annotation(body[:closing.start()])
     parameters = {}
     for statement in _statements(body):
         name = _PARAMETER.match(statement)
@@ -126,6 +126,24 @@ def read_effect(key: str, modelica_root: Path) -> EffectSource:
             parameters[name.group(1)] = " ".join(statement.split())
     return EffectSource(key, hook, expression, body.rstrip(), parameters,
                         tuple(_COMPONENT.findall(body)))
+
+
+def _without_annotation(body: str) -> str:
+    """A model body without its class annotation (the documentation: the composed model
+    is documented by its own description, and a model takes one annotation)."""
+    found = re.search(r"^\s*annotation\s*\(", body, re.M)
+    if found is None:
+        return body
+    depth, quoted, end = 1, False, found.end()
+    while depth and end < len(body):
+        ch = body[end]
+        if ch == '"' and body[end - 1] != "\\":
+            quoted = not quoted
+        elif not quoted:
+            depth += {"(": 1, ")": -1}.get(ch, 0)
+        end += 1
+    rest = body[end:].lstrip()
+    return body[:found.start()] + (rest[1:] if rest.startswith(";") else rest)
 
 
 def _rename(text: str, old: str, new: str) -> str:

@@ -32,4 +32,22 @@ equation
   flange_b.tau = -r_g*mesh_force;
   acc = acc_sensor;
   disp = x;
+  annotation(Documentation(info="<html>
+<p>A gear stage's mesh between its pinion's and its gear's shafts, along the line of action.</p>
+<pre>
+The teeth deflect along the line of action by x = r_p*theta_p - r_g*theta_g (theta:
+each shaft's angle over its steady rotation, each in its own sense of turning) and push
+  F = k(t)*(x - e(t)) + c*x'
+against the pinion's turning (torque r_p*F) and with the gear's (r_g*F); k(t) and e(t)
+are the paper's (Interfaces.PartialMeshLaw), at the stage's own teeth and pinion speed.
+The mesh has no inertia: the wheels' are Inertia components on its flanges. An
+accelerometer on the housing sees the change of the mesh force through the housing
+far above its modes, (T/r_p - F)/m_s (acc). A pinion at its steady speed and a gear of
+inertia m_s*r_g^2 under a load T*r_g/r_p make GearPair of mass m_s: the same acc
+(tests/fmu_build hold them to it). k_mod, e_extra, t_angle (the law's), contact and
+acc_sensor are hooks with neutral declaration equations, as GearPair's; its t_angle
+starts t_phase ahead (a machine's stage meshing at a phase of its own relative to its
+first stage's), so that an effect's angle adds to the stage's phase.
+</pre>
+</html>"));
 end GearMesh;

@@ -9,4 +9,10 @@ equation
   flange_a.w = w;
   flange_b.w = w;
   J*der(w) = flange_a.tau + flange_b.tau;
+  annotation(Documentation(info="<html>
+<p>A rigid rotating body (a wheel, a hub, a rotor) between two flanges.</p>
+<pre>
+  J*w' = flange_a.tau + flange_b.tau,   w the body's speed over its steady speed
+</pre>
+</html>"));
 end Inertia;

@@ -4,4 +4,7 @@ model LoadTorque "A constant load torque on a shaft (a brake, a generator at ste
   GearDiag.Interfaces.Flange flange "The loaded shaft";
 equation
   flange.tau = T;
+  annotation(Documentation(info="<html>
+<p>A constant load torque on a shaft (a brake, a generator at steady load).</p>
+</html>"));
 end LoadTorque;

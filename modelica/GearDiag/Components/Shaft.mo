@@ -16,4 +16,13 @@ equation
   tau = -(k_t*phi + d_t*der(phi));
   flange_a.tau = tau;
   flange_b.tau = -tau;
+  annotation(Documentation(info="<html>
+<p>A shaft's torsional compliance between two bodies on it.</p>
+<pre>
+The twist phi of a shaft of torsional stiffness k_t and damping d_t under the torque
+it carries, tau_0 at steady running (its start: the shaft starts twisted by its load):
+  phi' = flange_b.w - flange_a.w,   tau = k_t*phi + d_t*phi'
+The shaft's own inertia belongs to the Inertia components on its ends.
+</pre>
+</html>"));
 end Shaft;

@@ -34,4 +34,17 @@ equation
     + A_8*cos(8*w)
     + A_9*cos(9*w)
     + A_10*cos(10*w);
+  annotation(Documentation(info="<html>
+<p>Vibration at the first ten orders of a shaft's speed, as a housing accelerometer sees it.</p>
+<pre>
+What a shaft itself does once or a few times a turn (an unbalance at 1x, a
+misalignment at 1x and 2x, a coupling, a bent shaft or a looseness up to about 10x)
+passes through its bearings into the housing. Those lines lie far below the mesh's
+resonance, where its own response is small, and the sensor sees them added to what
+it sees of the mesh:
+  a = sum_k A_k*cos(k*w),   w = 2*pi*f_shaft*t_angle
+Phases are not modelled: a spectrum shows amplitudes, and the mesh's own lines at
+these orders are far weaker.
+</pre>
+</html>"));
 end ShaftOrders;

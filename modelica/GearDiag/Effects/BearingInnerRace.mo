@@ -6,13 +6,20 @@ model BearingInnerRace "Inner-race defect of the pinion bearing: strikes at BPFI
     + A_b*(1 - m_shaft/2*(1 - cos(2*pi*f_pinion*t_angle - phi_zone)))
       *GearDiag.Functions.ringDown(t_angle, f_bpfi, f_mode, zeta_mode));
   parameter Real A_b(unit="m/s2", min=0, max=5000) = 60 "Peak acceleration of one strike's ring-down in the load zone";
-  parameter Real m_shaft(min=0, max=1) = 1 "Modulation depth by the load zone, once per turn (1: no strike opposite it)";
+  parameter Real m_shaft(unit="1", min=0, max=1) = 1 "Modulation depth by the load zone, once per turn (1: no strike opposite it)";
   parameter Real phi_zone(unit="rad") = 0 "Pinion angle of the load zone";
   parameter Real f_mode(unit="Hz") = 3000 "Natural frequency of the structural mode the strikes ring";
-  parameter Real zeta_mode(min=1e-3, max=0.5) = 0.05 "Damping ratio of that mode";
+  parameter Real zeta_mode(unit="1", min=1e-3, max=0.5) = 0.05 "Damping ratio of that mode";
   parameter Integer n_balls(min=1) = 9 "Number of rolling elements (6205-type bearing; pydiag sets the machine's)";
   parameter Real d_ball(unit="m", min=0) = 7.94e-3 "Ball diameter";
   parameter Real d_pitch(unit="m", min=0) = 39.04e-3 "Pitch diameter";
   parameter Real alpha_contact(unit="rad") = 0 "Contact angle";
   parameter Real f_bpfi(unit="Hz") = n_balls/2*f_pinion*(1 + d_ball/d_pitch*cos(alpha_contact)) "Ball pass frequency, inner race";
+  annotation(Documentation(info="<html>
+<p>Inner-race defect of the pinion bearing: strikes at BPFI ring a structural mode, stronger in the load zone.</p>
+<pre>
+As BearingOuterRace, but the spall turns with the shaft: its strikes are strongest when
+it passes the load zone, once a pinion turn (depth m_shaft, the zone at phase phi_zone).
+</pre>
+</html>"));
 end BearingInnerRace;

@@ -4,4 +4,7 @@ model GearEccentricity "Driven-gear runout: a transmission error once per gear t
   parameter Real ecc_gear(unit="m", min=0, max=50e-6) = 10e-6 "Gear runout amplitude";
   parameter Real phase_gear(unit="rad") = 0 "Phase of the runout";
   parameter Real f_gear(unit="Hz") = f_mesh/Ng "Gear shaft speed";
+  annotation(Documentation(info="<html>
+<p>Driven-gear runout: a transmission error once per gear turn.</p>
+</html>"));
 end GearEccentricity;

@@ -18,4 +18,12 @@ model PinionShaftOrders "The pinion shaft's own vibration at its first ten order
     A_1 = A_s1, A_2 = A_s2, A_3 = A_s3, A_4 = A_s4, A_5 = A_s5,
     A_6 = A_s6, A_7 = A_s7, A_8 = A_s8, A_9 = A_s9, A_10 = A_s10)
     "The pinion shaft, seen at the sensor";
+  annotation(Documentation(info="<html>
+<p>The pinion shaft's own vibration at its first ten orders reaches the sensor.</p>
+<pre>
+Unbalance, misalignment, a coupling or a looseness of the pinion's shaft make lines
+at its orders that the mesh does not (GearDiag.Components.ShaftOrders), added to what
+the acc sensor sees of the mesh. The mesh itself (disp) does not feel them.
+</pre>
+</html>"));
 end PinionShaftOrders;

@@ -17,4 +17,13 @@ equation
   connect(gear.flange_b, load.flange);
   acc = mesh.acc;
   disp = mesh.disp;
+  annotation(Documentation(info="<html>
+<p>GearPair built from the drive train's components: a steady pinion, the mesh, the gear's inertia, a load.</p>
+<pre>
+With the pinion at its steady speed, the teeth's deflection obeys
+  x'' = -r_g*w_g' = -(r_g^2/J_g)*F + r_g*T_load/J_g
+which is GearPair's m*x'' = T/r_p - F for J_g = m*r_g^2 and T_load = T*r_g/r_p: the
+mesh's acc, (T/r_p - F)/m, is GearPair's.
+</pre>
+</html>"));
 end PairOnShafts;

@@ -30,4 +30,13 @@ equation
   acc = mesh1.acc + mesh2.acc;
   disp_1 = mesh1.disp;
   disp_2 = mesh2.disp;
+  annotation(Documentation(info="<html>
+<p>Two stages on three shafts (the PHM 2009 spur gearbox's 32/96 and 48/80), one housing accelerometer.</p>
+<pre>
+drive -&gt; mesh1 -&gt; gear1 ... idler shaft ... pinion2 -&gt; mesh2 -&gt; gear2 -&gt; load.
+The idler shaft's twist couples the stages: each stage's mesh force moves the other's
+shafts. The accelerometer sees both mesh forces through the housing far above its
+modes (each mesh's acc).
+</pre>
+</html>"));
 end TwoStageGearbox;

@@ -12,4 +12,7 @@ algorithm
   // the steepest slope, at the zero crossings, is 1/sqrt(1 - f_f).
   c := cos(theta);
   s := c/sqrt((1 - f_f) + f_f*c*c);
+  annotation(Documentation(info="<html>
+<p>Unit-amplitude periodic wave between a cosine (f_f = 0) and a square wave (f_f -&gt; 1).</p>
+</html>"));
 end formWave;

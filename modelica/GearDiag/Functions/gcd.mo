@@ -20,4 +20,7 @@ algorithm
     end if;
   end for;
   g := x;
+  annotation(Documentation(info="<html>
+<p>Greatest common divisor of two positive integers (Euclid, bounded loop).</p>
+</html>"));
 end gcd;

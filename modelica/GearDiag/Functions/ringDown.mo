@@ -21,4 +21,7 @@ algorithm
   beta := 2*GearDiag.pi*f_n*sqrt(1 - zeta^2);
   a := exp(-alpha*tau)*((beta^2 - alpha^2)*sin(beta*tau) + 2*alpha*beta*cos(beta*tau))
        /(alpha^2 + beta^2);
+  annotation(Documentation(info="<html>
+<p>Acceleration of a structural mode struck once per period.</p>
+</html>"));
 end ringDown;

@@ -20,4 +20,7 @@ algorithm
   x1 := min(max((width/2 + ramp/2 - s)/ramp, 0), 1);
   x2 := min(max((1 - width/2 + ramp/2 - s)/ramp, 0), 1);
   w := (x1*x1*(3 - 2*x1) + (depth - 1)*x2*x2*(3 - 2*x2))/depth;
+  annotation(Documentation(info="<html>
+<p>Stiffness loss of a weaker tooth over its contact: deeper while it carries the load alone.</p>
+</html>"));
 end toothWindow;

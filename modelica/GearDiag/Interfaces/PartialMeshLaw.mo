@@ -8,18 +8,18 @@ partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness 
   // GearPair (the paper's SDOF pair) and Components.GearMesh (a stage between two shafts)
   // extend it; k_mod, e_extra and t_angle are hooks with neutral declaration equations.
   // ---- fault parameters (normalised, estimated by pydiag) ----
-  parameter Real a0(min=0, max=0.9) = 0.1 "Stiffness variation amplitude of the healthy teeth, relative to K";
-  parameter Real a_f(min=0, max=0.9) = 0.1 "Stiffness variation amplitude of the faulty pinion tooth, relative to K";
-  parameter Real f_f(min=0, max=0.99) = 0.1 "Form factor of the stiffness wave: 0 cosine, towards 1 square";
-  parameter Real f_ate(min=0, max=1) = 0 "Assembly transmission error level, 0..1 of xi_max";
-  parameter Real f_dte(min=0, max=1) = 0 "Geometric transmission error level, 0..1 of gamma_max";
+  parameter Real a0(unit="1", min=0, max=0.9) = 0.1 "Stiffness variation amplitude of the healthy teeth, relative to K";
+  parameter Real a_f(unit="1", min=0, max=0.9) = 0.1 "Stiffness variation amplitude of the faulty pinion tooth, relative to K";
+  parameter Real f_f(unit="1", min=0, max=0.99) = 0.1 "Form factor of the stiffness wave: 0 cosine, towards 1 square";
+  parameter Real f_ate(unit="1", min=0, max=1) = 0 "Assembly transmission error level, 0..1 of xi_max";
+  parameter Real f_dte(unit="1", min=0, max=1) = 0 "Geometric transmission error level, 0..1 of gamma_max";
 
   // ---- shape of the mesh stiffness wave beyond the paper's ----
   // A contact ratio other than 1.5 (or tip relief) gives the healthy mesh's stiffness even
   // harmonics that no form factor can: 0 is the paper's wave.
-  parameter Real k2(min=0, max=0.3) = 0 "Second mesh harmonic of the stiffness, relative to K";
+  parameter Real k2(unit="1", min=0, max=0.3) = 0 "Second mesh harmonic of the stiffness, relative to K";
   parameter Real phi2(unit="rad") = 0 "Phase of the second mesh harmonic of the stiffness";
-  parameter Real k4(min=0, max=0.1) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
+  parameter Real k4(unit="1", min=0, max=0.1) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
   parameter Real phi4(unit="rad") = 0 "Phase of the fourth mesh harmonic of the stiffness";
   // A cracked or chipped tooth is also softer over its whole contact, which the paper's
   // amplitude a_f cannot say: the mesh stiffness drops by d_f of K while the faulty tooth
@@ -27,10 +27,10 @@ partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness 
   // is 2 for two equal pairs on rigid shafts; shafts and bearings in series make it
   // larger); w0 is that two-level loss over eps_c mesh cycles, its steps eased over r_c
   // cycles (GearDiag.Functions.toothWindow). 0 is the paper's tooth.
-  parameter Real d_f(min=0, max=0.6) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is alone in contact";
-  parameter Real eps_c(min=1.1, max=1.9) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
-  parameter Real q_c(min=1, max=5) = 2 "Loss while the faulty tooth is alone in contact over its loss in double contact";
-  parameter Real r_c(min=0.02, max=0.5) = 0.1 "Mesh cycles over which the load passes between tooth pairs";
+  parameter Real d_f(unit="1", min=0, max=0.6) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is alone in contact";
+  parameter Real eps_c(unit="1", min=1.1, max=1.9) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
+  parameter Real q_c(unit="1", min=1, max=5) = 2 "Loss while the faulty tooth is alone in contact over its loss in double contact";
+  parameter Real r_c(unit="1", min=0.02, max=0.5) = 0.1 "Mesh cycles over which the load passes between tooth pairs";
 
   // ---- kinematics ----
   parameter Integer Np = 14 "Number of pinion teeth";
@@ -46,7 +46,7 @@ partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness 
   parameter Real gamma_max(unit="m") = 7e-6 "Geometric TE amplitude at f_dte = 1 (precision class)";
 
   // ---- derived parameters ----
-  parameter Real N_ap = GearDiag.Functions.lcm(Np, Ng)/Np "Number of assembly phases, lcm(Np, Ng)/Np";
+  parameter Real N_ap(unit="1") = GearDiag.Functions.lcm(Np, Ng)/Np "Number of assembly phases, lcm(Np, Ng)/Np";
   parameter Real f_mesh(unit="Hz") = Np*f_pinion "Mesh frequency";
   parameter Real f_fe(unit="Hz") = f_mesh/N_ap "Geometric TE (assembly-phase) frequency";
   parameter Real x_static(unit="m") = T/r_p/(K*(1 + a_f*GearDiag.Functions.formWave(0, f_f)
@@ -75,4 +75,17 @@ equation
     - d_f*GearDiag.Functions.toothWindow(f_mesh*t_angle, Np, 0, eps_c, q_c, r_c) + k_mod);
   e_ate = f_ate*xi_max*sin(2*GearDiag.pi*f_pinion*t_angle);
   e_dte = f_dte*gamma_max*sin(2*GearDiag.pi*f_fe*t_angle);
+  annotation(Documentation(info="<html>
+<p>The law of a gear mesh: its parameters, stiffness and transmission errors, on the pinion's angle.</p>
+<pre>
+k(t) = K*(1 + a(tooth)*sigma(theta_mesh, f_f) + k2*cos(2*theta_mesh + phi2)
+           + k4*cos(4*theta_mesh + phi4) - d_f*w0(theta_mesh) + k_mod)   Eq. (3) and beyond
+e_ate = f_ate*xi_max*sin(w_pinion*t)                         assembly TE, Eq. (4)
+e_dte = f_dte*gamma_max*sin(w_fe*t)                          geometric TE, Eq. (5), w_fe = w_mesh/N_ap
+The kinematics run on t_angle, the pinion angle over its mean speed (= time).
+GearPair (the paper's SDOF pair) and Components.GearMesh (a stage between two shafts)
+extend it; k_mod, e_extra and t_angle are hooks with neutral declaration equations.
+---- fault parameters (normalised, estimated by pydiag) ----
+</pre>
+</html>"));
 end PartialMeshLaw;
