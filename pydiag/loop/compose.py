@@ -274,14 +274,16 @@ class BuiltModel:
 def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> BuiltModel:
     """The FMU of the model ``GearDiag.<name>`` written as ``source`` (it uses the library
     at ``modelica_root``), built unless one of the same source and library exists in
-    ``folder``. The source is kept there as ``<name>.mo``, readable and editable: an edit
-    of it is the user's and wins (the FMU is built from it; ``edited``), told from pydiag's
-    own earlier text by the hash of what pydiag last wrote (``.<name>.mo.written``), so a
+    ``folder``. The source is kept as ``<name>/<name>.mo`` there (a folder a model, so
+    that a model is built from its own file and the library alone), readable and
+    editable: an edit of it is the user's and wins (the FMU is built from it; ``edited``;
+    one that does not build is the user's error, naming the file), told from pydiag's own
+    earlier text by the hash of what pydiag last wrote (``.<name>.mo.written``), so a
     source pydiag writes differently replaces only its own (and one without that record,
     from before edits were kept)."""
-    from fmu_build import build_fmu
+    from fmu_build import ModelicaBuildError, build_fmu
 
-    folder = Path(folder)
+    folder = Path(folder) / name  # a source root of its own: no other file is read with it
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{name}.mo"
     written = folder / f".{name}.mo.written"
@@ -302,6 +304,11 @@ def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Buil
         try:
             build_fmu(path, f"GearDiag.{name}", partial, library_roots=(Path(modelica_root),))
             os.replace(partial, out)
+        except ModelicaBuildError as err:
+            if not edited:  # pydiag's own source: a bug of pydiag's
+                raise
+            raise UsageError(f"{path} (your edit of the model pydiag wrote) does not build: "
+                             f"{err}; mend it, or delete it for pydiag's own") from err
         finally:
             partial.unlink(missing_ok=True)
     return BuiltModel(out, path, edited)

@@ -35,7 +35,7 @@ def test_a_composed_model_adds_what_each_effect_adds(gear_fmu, effects_dir, tmp_
     assert "other_shaft_orders_shaft(f_shaft = r_other*f_pinion" in model.source
     assert '"The other shaft, seen at the sensor"' in model.source  # names in text kept
     fmu = composed_fmu(keys, MODELICA, tmp_path)
-    assert (tmp_path / "composed" / f"{model.name}.mo").read_text() == model.source
+    assert (tmp_path / "composed" / model.name / f"{model.name}.mo").read_text() == model.source
     assert composed_fmu(tuple(reversed(keys)), MODELICA, tmp_path) == fmu  # cached
     base = acc(gear_fmu, {})
     each = [acc(effect_fmu(k, MODELICA, effects_dir), values) - base
@@ -104,3 +104,23 @@ def test_an_edit_of_a_written_model_is_the_users_and_is_built(tmp_path):
     first.source.unlink()
     third = built_fmu("Tiny", source, MODELICA, tmp_path)
     assert not third.edited and third.fmu == first.fmu and third.source.read_text() == source
+
+
+def test_an_edit_that_does_not_build_is_the_users_error_and_breaks_no_other_model(tmp_path):
+    """A syntax error in an edited source is one line naming that file (the user's to
+    mend), not an internal error; a stray file beside it (a backup copy of a broken edit)
+    breaks no other model's build: each model is built from a folder of its own."""
+    from pydiag.core.errors import UsageError
+    from pydiag.loop.compose import built_fmu
+    source = ("within GearDiag;\nmodel Tiny \"a pair at 30 Hz\"\n"
+              "  GearDiag.GearPair pair(f_pinion=30);\n"
+              "  output Real acc(unit=\"m/s2\") = pair.acc \"the mesh\";\nend Tiny;\n")
+    first = built_fmu("Tiny", source, MODELICA, tmp_path)
+    broken = source.replace("pair.acc", "pair.acc +")
+    first.source.write_text(broken)
+    (tmp_path / "Tiny.orig.mo").write_text(broken)  # beside every model's folder
+    with pytest.raises(UsageError, match=r"Tiny\.mo \(your edit of the model pydiag "
+                                         r"wrote\) does not build"):
+        built_fmu("Tiny", source.replace("30 Hz", "31 Hz"), MODELICA, tmp_path)
+    other = built_fmu("Other", source.replace("Tiny", "Other"), MODELICA, tmp_path)
+    assert other.fmu.exists() and not other.edited

@@ -84,7 +84,7 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
               "--speed", "mesh", "--force", "--no-validate")
     r = run_cli(*common, "--json", str(tmp_path / "0.json"))
     assert r.returncode == 0, r.stderr
-    sources = list((tmp_path / "build" / "machines").glob("Machine_short_box_*.mo"))
+    sources = list((tmp_path / "build" / "machines").glob("Machine_short_box_*/*.mo"))
     assert len(sources) == 1, sources  # named by the machine and a hash of its model
     source = sources[0]
     assert f"model      : {source} (every stage of {machine}, written by pydiag" in r.stdout
