@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+from pathlib import Path
 
 from pydiag.app.formatting import format_kept_baselines
 from pydiag.app.reading import read_input
@@ -25,14 +26,31 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
     read and made once; ``kept``: those kept for the machine in the history at the
     record's operating point (:func:`~pydiag.gear.stage_judge.at_speed`)."""
     out: list[MachineRecord] = []
+    seen: set[str] = set()  # each baseline counts once: a second would narrow the spread
+    record = _same_file(getattr(args, "measurement", None))
     for path in args.baseline or []:
         nominal_hz = args.rpm / 60.0  # the machine file's when --rpm is not given
         if path != KEPT:
+            if _same_file(path) in seen:
+                _warn(args, f"--baseline {path} is given twice; it counts once")
+                continue
+            seen.add(_same_file(path))
+            if _same_file(path) == record:
+                _warn(args, f"--baseline {path} is the record itself: it is judged against "
+                      "itself there")
             out.append(machine_record(read_input(args, path), machine, speed, nominal_hz))
             continue
+        if KEPT in seen:
+            _warn(args, "--baseline kept is given twice; the kept baselines count once")
+            continue
+        seen.add(KEPT)
         db = str(args.history or history.default_path())
+        if args.history and not Path(db).exists():
+            raise UsageError(f"--baseline kept: no history {db} (nothing is kept there)")
+        found = history.kept_baselines(db, machine)
+        given = {b.id for b in found if _same_file(b.measurement) in seen}
         kept = [dataclasses.replace(b.record, file=f"kept {b.id}: {b.record.file}")
-                for b in history.kept_baselines(db, machine)]
+                for b in found]
         near = at_speed(kept, nominal_hz)
         if not near:
             speeds = ", ".join(f"{b.speed.speed_hz:.4g} Hz ({b.file.partition(':')[0]})"
@@ -41,8 +59,22 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
                              f"{db} within {100 * BASELINE_SPEED_SHARE:g} % of "
                              f"{nominal_hz:.4g} Hz (kept: {speeds or 'none'}); keep one with "
                              "pydiag baseline")
-        out += near
+        chosen = {id(r) for r in near}  # at_speed returns the records it was given
+        twice = {b.id for b, r in zip(found, kept) if id(r) in chosen and b.id in given}
+        if twice:
+            _warn(args, "a --baseline given is kept too; it counts once")
+        out += [r for b, r in zip(found, kept) if id(r) in chosen and b.id not in twice]
     return out
+
+
+def _same_file(path: str | None) -> str | None:
+    """``path`` as one name for one file (a baseline given twice, a record that is its own
+    baseline), or None for no path."""
+    return None if path is None else str(Path(path).resolve())
+
+
+def _warn(args, text: str) -> None:
+    print(f"pydiag {args.command}: warning: {text}", file=sys.stderr)
 
 
 def cmd_baseline(args) -> int:
@@ -56,6 +88,9 @@ def cmd_baseline(args) -> int:
     if len(chosen) != 1:
         raise UsageError("give one of --measurement (keep it), --list or --forget ID")
     db = str(history.resolve(args.history))
+    if (args.list or args.forget is not None) and not Path(db).exists():
+        if args.history:  # the one the user named: a typo is not "none kept"
+            raise UsageError(f"--history {db}: no such file (nothing is kept there)")
     if args.list:
         print(format_kept_baselines(machine.name, history.kept_baselines(db, machine), db))
         return 0
@@ -66,7 +101,7 @@ def cmd_baseline(args) -> int:
     history.check(db)
     speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
     record = machine_record(read_input(args), machine, speed, args.rpm / 60.0)
-    kept = history.keep_baseline(db, machine, record, args.measurement)
+    kept = history.keep_baseline(db, machine, record, str(Path(args.measurement).resolve()))
     warning = record.speed.warning()
     if warning:
         print(f"pydiag baseline: warning: {warning}", file=sys.stderr)

@@ -163,12 +163,15 @@ class MachineRecord:
     speed: SpeedEstimate
     shafts: tuple[ShaftRecord, ...]
     file: str
+    #: each channel's level as read (:func:`channel_levels`); None: not known (a baseline
+    #: kept before pydiag kept it)
+    units: dict[str, str] | None = None
 
     def to_dict(self) -> dict:
         """Plain data that :meth:`from_dict` reads back (a baseline kept in the history):
         the speed without its angle at every sample, every shaft's TSA facts."""
         speed = self.speed
-        return {"file": self.file,
+        return {"file": self.file, "units": self.units,
                 "speed": {"speed_hz": speed.speed_hz, "variation_pct": speed.variation_pct,
                           "method": speed.method, "nominal_hz": speed.nominal_hz,
                           "source": speed.source.value, "confidence_db": finite_or_none(
@@ -200,7 +203,17 @@ class MachineRecord:
             s.get("swing_deg"))
             for s in data["shafts"])
         return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
-                   data["file"])
+                   data["file"], data.get("units"))
+
+
+def channel_levels(measurement: Measurement) -> dict[str, str]:
+    """Each channel's level as it was read: its SI unit (converted from g, or from volts at
+    a sensitivity), ``V (level unknown)``, or ``as recorded`` (no unit said): records
+    compared by level must agree on it."""
+    meta = measurement.metadata
+    si, volts = meta.get("si_units", {}), meta.get("unknown_level", [])
+    return {c: si.get(c) or ("V (level unknown)" if c in volts else "as recorded")
+            for c in measurement.channels}
 
 
 def finite_or_none(value: float | None) -> float | None:
@@ -214,13 +227,19 @@ def _number(value: float | None) -> float:
 
 
 def machine_record(measurement: Measurement, machine: Machine, speed: SpeedSettings,
-                   input_hz: float) -> MachineRecord:
-    """``measurement``'s speed (from every mesh, or the tacho) around the nominal
-    ``input_hz`` and the TSA of every shaft."""
-    kin = machine.stage_kinematics(0, input_hz)
-    slowest = min(float(machine.shaft_ratio(k)) for k in range(len(machine.shafts)))
-    tracked_s = 8 / (input_hz * slowest)  # a few turns of the slowest shaft beyond the edges
-    estimate = estimate_speed(measurement, kin, speed, tracked_s, machine=machine)
+                   input_hz: float, found: SpeedEstimate | None = None,
+                   upsampled: Upsampled | None = None) -> MachineRecord:
+    """``measurement`` seen through the machine: its speed (from every mesh, or the tacho)
+    around the nominal ``input_hz``, or ``found`` when already found, and the TSA of every
+    shaft (from ``upsampled``, the record upsampled once for every shaft, when given). The
+    one route for a record, a baseline and a kept baseline alike."""
+    if found is None:
+        kin = machine.stage_kinematics(0, input_hz)
+        slowest = min(float(machine.shaft_ratio(k)) for k in range(len(machine.shafts)))
+        tracked_s = 8 / (input_hz * slowest)  # a few turns of the slowest shaft beyond the edges
+        found = estimate_speed(measurement, kin, speed, tracked_s, machine=machine)
     drop = (speed.tacho,) if speed.tacho else ()
-    return MachineRecord(estimate, tuple(shaft_records(measurement, machine, estimate, drop)),
-                         str(measurement.metadata.get("file", "(in memory)")))
+    return MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop,
+                                                    upsampled)),
+                         str(measurement.metadata.get("file", "(in memory)")),
+                         channel_levels(measurement))

@@ -190,12 +190,39 @@ def _suspect(pinion: ShaftChange, gear: ShaftChange, threshold_db: float,
     return None, None
 
 
+def check_comparable(record: MachineRecord, baselines: Sequence[MachineRecord]) -> None:
+    """MeasurementError unless each baseline can judge ``record``: its input speed within
+    :data:`BASELINE_SPEED_SHARE` of the record's (a residual's energy grows with the
+    speed: another operating point is a change by itself), its channels read at the same
+    levels (volts at a sensitivity against volts without one differ by the sensitivity)."""
+    for b in baselines:
+        share = abs(b.speed.speed_hz / record.speed.speed_hz - 1)
+        if share > BASELINE_SPEED_SHARE:
+            raise MeasurementError(
+                f"the baseline {b.file} runs at {b.speed.speed_hz:.4g} Hz, {100 * share:.0f} % "
+                f"from the record's {record.speed.speed_hz:.4g} Hz: a baseline judges records "
+                f"within {100 * BASELINE_SPEED_SHARE:g} % of its speed (give one of the "
+                "record's operating point)")
+        if record.units is None:
+            continue
+        if b.units is None:
+            raise MeasurementError(f"the baseline {b.file} was kept without its channels' "
+                                   "units: keep it again (pydiag baseline)")
+        for channel, level in record.units.items():
+            if channel in b.units and b.units[channel] != level:
+                raise MeasurementError(
+                    f"channel {channel} is read as {level} in the record and as "
+                    f"{b.units[channel]} in the baseline {b.file}: give both the same unit "
+                    "and sensitivity")
+
+
 def judge_stages(machine: Machine, record: MachineRecord,
                  baselines: list[MachineRecord]) -> tuple[list[StageVerdict], float]:
     """Each stage of ``record`` against the ``baselines`` (same channels, a similar
     operating point), and the healthy spread (dB) it was judged by."""
     if not baselines:
         raise MeasurementError("judging a stage needs a baseline record of the machine")
+    check_comparable(record, baselines)
     spread = healthy_spread_db(baselines)
     threshold = K_SPREAD * spread
     fm4_spread = healthy_fm4_spread(baselines)

@@ -35,7 +35,7 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem, build_problem
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_indicators import MachineRecord, shaft_records
+from pydiag.gear.machine_indicators import MachineRecord, machine_record
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.stage_judge import StageVerdict, judge_stages
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
@@ -221,7 +221,8 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
     upsampled = upsampled_record(measurement, found, drop)  # once for every shaft and stage
-    verdicts, spread, names = _judged(measurement, machine, found, drop, upsampled, baselines)
+    verdicts, spread, names = _judged(measurement, machine, found, speed, upsampled,
+                                      baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
@@ -233,16 +234,14 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
 
 
 def _judged(measurement: Measurement, machine: Machine, found: SpeedEstimate,
-            drop: tuple[str, ...], upsampled: Upsampled | None,
+            speed: SpeedSettings, upsampled: Upsampled | None,
             baselines: Sequence[MachineRecord]
             ) -> tuple[list[StageVerdict | None], float | None, tuple[str, ...]]:
     """Each stage's verdict against ``baselines`` (None each without), the healthy
     records' spread, the baselines' files."""
     if not baselines:
         return [None] * len(machine.stages), None, ()
-    record = MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop,
-                                                      upsampled)),
-                           str(measurement.metadata.get("file", "(in memory)")))
+    record = machine_record(measurement, machine, speed, found.nominal_hz, found, upsampled)
     verdicts, spread = judge_stages(machine, record, list(baselines))
     return list(verdicts), spread, tuple(b.file for b in baselines)
 
@@ -253,7 +252,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            estimator: FaultEstimator | None = None,
                            baselines: Sequence[MachineRecord] = (),
                            feature_mode: str = "lines", fit_gain: bool | None = None,
-                           gain_curve: bool = False) -> MachineDiagnosis:
+                           gain_curve: bool | None = None) -> MachineDiagnosis:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_model.fit_machine`, from the machine file's ``[start]``
@@ -263,7 +262,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
-    verdicts, spread, names = _judged(measurement, machine, found, drop,
+    verdicts, spread, names = _judged(measurement, machine, found, speed,
                                       upsampled_record(measurement, found, drop), baselines)
     problem = machine_problem(fmu_path, model, measurement, machine, found, fit_gain,
                               feature_mode, drop, gain_curve)

@@ -117,3 +117,23 @@ def test_a_drive_that_swings_once_a_turn_of_a_shaft_is_seen_by_the_tacho_at_that
     along_mesh = machine_record(swinging, MACHINE, SpeedSettings("mesh", tacho="tacho"),
                                 INPUT_HZ)
     assert all(s.swing_deg is None for s in along_mesh.shafts)
+
+
+def test_a_baseline_of_another_speed_or_other_units_is_refused_not_judged(baseline):
+    """A healthy record 8 % faster (the same samples at a higher rate) is no change to
+    judge: the baseline is refused, naming both speeds; a record read at a sensitivity
+    (m/s2) against a baseline whose level is unknown (volts) is refused too; a baseline
+    kept before units were kept is asked to be kept again."""
+    import dataclasses
+
+    fast = record(2)
+    fast = dataclasses.replace(fast, sample_rate_hz=fast.sample_rate_hz * 1.08)
+    faster = machine_record(fast, MACHINE, SpeedSettings("mesh"), INPUT_HZ * 1.08)
+    with pytest.raises(MeasurementError, match=r"runs at 24\.7\d Hz, 7 % from the record's 26\.7"):
+        judge_stages(MACHINE, faster, [baseline])
+    volts = dataclasses.replace(baseline, units={c: "V (level unknown)" for c in baseline.units})
+    healthy = machine_record(record(2), MACHINE, SpeedSettings("mesh"), INPUT_HZ)
+    with pytest.raises(MeasurementError, match="read as as recorded in the record and as V"):
+        judge_stages(MACHINE, healthy, [volts])
+    with pytest.raises(MeasurementError, match="kept without its channels' units"):
+        judge_stages(MACHINE, healthy, [dataclasses.replace(baseline, units=None)])
