@@ -78,7 +78,7 @@ PHM09_RPM ?= 1800
 loop-phm09: fmu
 	cp examples/phm09_spur.toml build/phm09.toml
 	$(PY) -m pydiag loop --machine build/phm09.toml --channel ch1 --sample-rate 66666.67 \
-	    --measurement "$(PHM09_DATA)/$(PHM09_RECORD).zip" --rpm $(PHM09_RPM) --gain curve \
+	    --measurement "$(PHM09_DATA)/$(PHM09_RECORD).zip" --rpm $(PHM09_RPM) \
 	    --max-steps 6 --force --history build/phm09_loop.sqlite
 
 clean:

@@ -126,10 +126,12 @@ def _record_args(p: argparse.ArgumentParser) -> None:
     _operating_args(p)
     p.add_argument("--gain", choices=("auto", "fit", "curve", "fixed"), default="auto",
                    help="fit a gain per channel in closed form, or take the model's level as "
-                   "it is; auto (default): fit, except on records pydiag simulate made; "
-                   "curve: fit a gain curve over frequency, a node at every mesh harmonic "
-                   "(a housing between the gears and the sensor: the model is judged on "
-                   "the lines around each harmonic, not on the spectrum's shape)")
+                   "it is; curve: fit a gain curve over frequency, a node at every mesh "
+                   "harmonic (a housing between the gears and the sensor: the model is "
+                   "judged on the lines around each harmonic, not on the spectrum's shape); "
+                   "auto (default): the model's level on records pydiag simulate made; on "
+                   "others, with --machine and no --fmu (the machine's own model, its "
+                   "sensors on its housing) curve, else fit")
 
 
 def _measurement_args(p: argparse.ArgumentParser) -> None:

@@ -120,7 +120,7 @@ def problem_settings(args) -> dict:
         op["bearing"] = args.bearing
     gain = {"auto": None, "fit": True, "curve": True, "fixed": False}[args.gain]
     return {**settings, "operating_point": op or None, "fit_gain": gain,
-            "gain_curve": args.gain == "curve",
+            "gain_curve": {"auto": None, "curve": True}.get(args.gain, False),
             "speed": SpeedSettings(args.speed, tacho=args.tacho,
                                    pulses_per_rev=args.pulses_per_rev)}
 

@@ -375,7 +375,7 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
                   engine: str | None = None, fit_gain: bool | None = False,
                   speed: SpeedSettings | None = None,
                   speed_estimate: SpeedEstimate | None = None,
-                  gain_curve: bool = False) -> FitProblem:
+                  gain_curve: bool | None = False) -> FitProblem:
     """The fit problem of ``measurement`` on ``fmu_path``.
 
     Args:
@@ -399,10 +399,12 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
             the record at the nominal speed as it is
         speed_estimate: a speed already found for this (already tracked) measurement
         gain_curve: with the gain fitted, a curve over frequency (a node at every mesh
-            harmonic, :mod:`pydiag.fit.gain`) rather than one number a channel
+            harmonic, :mod:`pydiag.fit.gain`) rather than one number a channel (None: one
+            number)
     """
     if fit_gain is None:
         fit_gain = measurement.metadata.get("source") != SIMULATED_SOURCE
+    gain_curve = bool(gain_curve)
     given = adapter
     tacho = speed.tacho if speed is not None else None
     # the built-in adapter: every channel but the tacho is a sensor of the same name

@@ -39,7 +39,7 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
                  refit: FaultEstimator | None = None, fit_gain: bool | None = None,
                  feature_mode: str = "lines", drop: tuple[str, ...] = (),
                  progress: Callable[[LoopStep], None] | None = None,
-                 gain_curve: bool = False) -> list[LoopStep]:
+                 gain_curve: bool | None = None) -> list[LoopStep]:
     """The loop (module docstring) on the machine file ``path``, which gets every accepted
     effect: its steps, the last the comparison nothing more was accepted after (or the
     ``max_steps``-th). ``speed``: the input shaft's in ``measurement``; ``build``: a

@@ -353,18 +353,23 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
                     machine: Machine, speed: SpeedEstimate, fit_gain: bool | None = None,
                     feature_mode: str = "lines", drop: tuple[str, ...] = (),
-                    gain_curve: bool = False) -> FitProblem:
+                    gain_curve: bool | None = None) -> FitProblem:
     """The fit problem of ``measurement`` on the machine model ``model`` (its FMU at
     ``fmu_path``): the record order-tracked at the input shaft (``speed``, found from every
     mesh or the tacho; the channels ``drop`` left out), every stage's lines analysed over
     the machine's fundamental period
     (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
-    gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`)."""
+    gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`);
+    None (the default): curves wherever the gain is fitted, for a machine's sensors sit on
+    its housing, which passes each band of the meshes differently (the gain of a record
+    ``pydiag simulate`` made is the model's: not fitted)."""
     tracked = order_track(measurement, speed, drop=drop)
     channels = [c for c in tracked.channels if c not in drop]
     adapter = model.adapter(channels)
     if fit_gain is None:
         fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
+    if gain_curve is None:
+        gain_curve = fit_gain
     parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
     return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
                          fixed_values=model.fixed_values,
@@ -512,8 +517,9 @@ START_NOTE = ("# a fit of this machine's model (pydiag loop's last): every fit o
               "also polishes from here")
 
 
-#: A TOML table's header line: ``[name]`` with any spacing TOML allows and a comment.
-_HEADER = re.compile(r"^\s*\[\s*([^\[\]]*?)\s*\]\s*(#.*)?$")
+#: A TOML table's header line, ``[name]`` or ``[[name]]``, with any spacing TOML allows
+#: and a comment.
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\[\]]*?)\s*\]\]?\s*(#.*)?$")
 
 
 def record_start(path: str | Path, values: Mapping[str, float]) -> Machine:
@@ -531,7 +537,7 @@ def record_start(path: str | Path, values: Mapping[str, float]) -> Machine:
         for line in text.splitlines():
             header = _HEADER.match(line)
             if header:
-                inside = header.group(1) == "start"
+                inside = header.group(1) == "[" and header.group(2) == "start"
             if not inside and line != START_NOTE:
                 kept.append(line)
         rows = "".join(f"{_toml_string(name)} = {float(value)!r}{nl}"

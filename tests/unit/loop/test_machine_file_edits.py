@@ -99,6 +99,12 @@ def test_the_start_table_is_found_under_any_spacing(box):
     text = box.read_text()
     assert "[ start ]" not in text and text.count("[start]") == 1
     assert load_machine(box).fit_start() == {"first.a_f": 0.3}
+    # the loop's order: an effect accepted after the table, then the table again
+    accept(box, "gear_tooth_fault", "first")
+    record_start(box, {"first.a_f": 0.4})
+    machine = load_machine(box)
+    assert [e.key for e in machine.effects] == ["gear_tooth_fault"]
+    assert machine.fit_start() == {"first.a_f": 0.4}
 
 
 @pytest.mark.parametrize("teeth, said", [
