@@ -3,42 +3,8 @@ gearbox, read from a TOML file (one file a machine).
 
 Stages are listed from the input; stage k+1's pinion sits on stage k's gear shaft, so a
 machine of n stages has n + 1 shafts, shaft 0 the input. Every speed follows from the
-input shaft's: shaft k turns at ``Machine.shaft_ratio(k)`` times it. Example::
-
-    name = "PHM09 spur gearbox"
-    input_rpm = 1800                  # nominal input-shaft speed (--rpm overrides)
-    shafts = ["input", "idler", "output"]   # optional names, input first
-    [[stages]]
-    name = "first"                    # optional
-    type = "spur"                     # optional: spur | helical (parallel axes)
-    pinion_teeth = 32
-    gear_teeth = 96
-    [[stages]]
-    pinion_teeth = 48
-    gear_teeth = 80
-    [[bearings]]                      # optional, any number
-    shaft = "input"                   # a shaft's name
-    n_balls = 9
-    ball_diameter_mm = 7.94
-    pitch_diameter_mm = 39.04
-    contact_angle_deg = 0             # optional
-    [[sensors]]                       # optional: what a record's channel is
-    channel = "ch1"
-    unit = "V"                        # V, g, m/s2, mm/s, um, ...
-    sensitivity = "100 mV/g"          # optional: makes a channel in volts an acceleration
-    near_stage = "first"              # optional: the stage it sits closest to
-    [tacho]                           # optional
-    channel = "ch3"
-    pulses_per_rev = 10
-    shaft = "input"                   # optional, default the input
-    [[effects]]                       # optional: what the machine's own model adds to a
-    key = "gear_tooth_fault"          #   stage, a catalogue effect (pydiag accept writes
-    stage = "first"                   #   these; the stage may be left out of one stage's)
-    off = ["A_s5"]                    # optional: its parameters held at their neutral
-                                      #   value (pydiag loop: those its try did not fit)
-    [start]                           # optional: a fit of the machine's model before, by
-    "first.a0" = 0.12                 #   parameter name (pydiag loop writes its last);
-                                      #   every fit also polishes from there
+input shaft's: shaft k turns at ``Machine.shaft_ratio(k)`` times it. The format, every
+table and key with an example, is documented once, in ``docs/machine-file.md``.
 
 Planetary stages (``type = "planetary"``) are recognised and refused: their kinematics
 are not built yet. Every mistake is a :class:`~pydiag.core.errors.MachineError` naming the

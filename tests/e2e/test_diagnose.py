@@ -1,6 +1,7 @@
 """Diagnosis end to end on noisy Table 1 measurements (SNR 10, acc + disp channels)."""
 
 import json
+from pathlib import Path
 
 import pytest
 from conftest import NAMES, noisy_measurement, run_cli
@@ -66,19 +67,7 @@ def test_paper_case_full_diagnosis(gear_fmu, number):
 
 
 #: The paper's pair as a machine file of one stage: a sensor for each output it records.
-PAIR_MACHINE = """name = "the paper's pair (Table 1)"
-input_rpm = 1500
-[[stages]]
-name = "pair"
-pinion_teeth = 14
-gear_teeth = 21
-[[sensors]]
-channel = "acc"
-output = "acc"
-[[sensors]]
-channel = "disp"
-output = "disp"
-"""
+PAIR_MACHINE = Path(__file__).resolve().parents[2] / "examples" / "paper_pair.toml"
 
 
 def test_cli_diagnose_a_machine_file_without_an_fmu(gear_fmu, tmp_path):
@@ -86,8 +75,7 @@ def test_cli_diagnose_a_machine_file_without_an_fmu(gear_fmu, tmp_path):
     model is written, built and fitted; the stage is combined/medium with its parameters
     near the truth; without --fmu and without --machine, one line says what to give."""
     c = case(8)
-    meas, machine, out = tmp_path / "m.csv", tmp_path / "pair.toml", tmp_path / "r.json"
-    machine.write_text(PAIR_MACHINE)
+    meas, machine, out = tmp_path / "m.csv", PAIR_MACHINE, tmp_path / "r.json"
     res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--snr", "10",
                   *[a for n, v in c.parameters.items() for a in ("--set", f"{n}={v}")],
                   "--out", str(meas))
