@@ -7,7 +7,7 @@ import argparse
 import math
 
 from pydiag.gear.effects import EFFECTS
-from pydiag.gear.kinematics import Bearing
+from pydiag.gear.kinematics import Bearing, crowded
 
 
 def number(kind, low=None, high=None, low_open=False, high_open=False):
@@ -53,6 +53,8 @@ def bearing(text: str) -> Bearing:
     if not 0 < d_mm < pitch_mm:
         raise argparse.ArgumentTypeError(f"need 0 < ball diameter < pitch diameter, got {d_mm:g} "
                                          f"and {pitch_mm:g} mm")
+    if why := crowded(int(n), d_mm, pitch_mm):
+        raise argparse.ArgumentTypeError(why)
     if not 0 <= angle < 90:
         raise argparse.ArgumentTypeError(f"the contact angle must lie in [0, 90) degrees, got {angle:g}")
     return Bearing(int(n), d_mm * 1e-3, pitch_mm * 1e-3, math.radians(angle))

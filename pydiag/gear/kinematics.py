@@ -31,6 +31,21 @@ class Bearing:
                 "ftf": f_shaft_hz / 2 * (1 - r)}
 
 
+def crowded(n_balls: int, ball_diameter_mm: float, pitch_diameter_mm: float) -> str:
+    """Why ``n_balls`` balls of ``ball_diameter_mm`` cannot sit on a pitch circle of
+    ``pitch_diameter_mm``: neighbours' centres, a chord ``pitch * sin(pi / n_balls)``
+    apart, closer than a ball; "" when they fit."""
+    if n_balls < 2:
+        return ""
+    room = pitch_diameter_mm * math.sin(math.pi / n_balls)
+    if room > ball_diameter_mm:
+        return ""
+    most = int(math.pi / math.asin(min(1.0, ball_diameter_mm / pitch_diameter_mm)))
+    return (f"{n_balls} balls of {ball_diameter_mm:g} mm do not fit on a pitch circle of "
+            f"{pitch_diameter_mm:g} mm: neighbours' centres are {room:.3g} mm apart, less "
+            f"than a ball (at most {max(most, 1)} balls of that size)")
+
+
 @dataclass(frozen=True)
 class OtherStage:
     """Another stage of the pair's gearbox: its teeth, its shafts' names, and its pinion

@@ -29,7 +29,7 @@ from pathlib import Path
 from pydiag.core.errors import MachineError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematics import (Bearing, GearKinematics, MachineContext, OtherBearing,
-                                    OtherShaft, OtherStage)
+                                    OtherShaft, OtherStage, crowded)
 
 #: Stage types whose kinematics are those of a parallel-axis pair.
 PARALLEL_TYPES = ("spur", "helical")
@@ -349,6 +349,8 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
         if d >= pitch:
             raise MachineError(f"{_where(source, where, 'ball_diameter_mm')}: must be below "
                                f"pitch_diameter_mm ({d:g} >= {pitch:g})")
+        if why := crowded(n, d, pitch):
+            raise MachineError(f"{_where(source, where, 'n_balls')}: {why}")
         angle = t.get("contact_angle_deg", 0.0)
         if isinstance(angle, bool) or not isinstance(angle, (int, float)) \
                 or not 0 <= angle < 90:

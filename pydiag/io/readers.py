@@ -41,6 +41,7 @@ import csv
 import gzip
 import io
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -275,15 +276,26 @@ def _hdf5_datasets(path: Path) -> dict[str, np.ndarray]:
 
 
 def _read_mat(path: Path) -> _Table:
+    import warnings
+
     import scipy.io
 
     variables: dict[str, np.ndarray] = {}
+    notes = []
     try:
         longest = max((max(shape, default=1) for _, shape, _ in scipy.io.whosmat(path)),
                       default=0)
         if longest > MAX_SAMPLES:
             raise _too_long(path, longest)
-        raw = scipy.io.loadmat(path)
+        with warnings.catch_warnings(record=True) as caught:  # said once, in our words
+            warnings.simplefilter("always", scipy.io.matlab.MatReadWarning)
+            raw = scipy.io.loadmat(path)
+        twice = sorted({m.group(1) for w in caught
+                        if (m := re.search(r"Duplicate variable name \"([^\"]*)\"",
+                                           str(w.message)))})
+        if twice:
+            notes.append(f"variable(s) {', '.join(twice)} appear more than once in the file; "
+                         "the last of each is read")
         items = {k: v for k, v in raw.items() if not k.startswith("__")}
     except NotImplementedError:  # v7.3 is HDF5
         items = _hdf5_datasets(path)
@@ -298,7 +310,8 @@ def _read_mat(path: Path) -> _Table:
             break
     for key, value in items.items():
         _matrix_columns(key, value, variables)
-    return _Table(variables, {}, rate, "the file's rate variable" if rate else None)
+    return _Table(variables, {"read_notes": notes} if notes else {}, rate,
+                  "the file's rate variable" if rate else None)
 
 
 def _read_wav(path: Path) -> _Table:

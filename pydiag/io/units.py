@@ -80,6 +80,9 @@ def sensitivity_factor(unit: str, sensitivity: str) -> tuple[float, str]:
     if not is_voltage(unit):
         raise UsageError(f"a sensitivity converts volts; the channel's unit '{unit}' is not a "
                          "voltage")
+    if "=" in sensitivity:
+        raise UsageError(f"cannot read the sensitivity '{sensitivity}': one value, as "
+                         "100 mV/g or 10.2 mV/(m/s2)")
     try:
         quantity = _registry().parse_expression(f"({_expression(unit)}) / "
                                                 f"({_expression(sensitivity)})")

@@ -1,0 +1,62 @@
+"""Hardening, third pass (issue 59): what a careful but unlucky user gives pydiag, one clear
+line each, and nothing the reader would rather say itself left to scipy. Each fails on the
+code before the fix."""
+
+import io
+
+import numpy as np
+import pytest
+from conftest import run_cli, write_csv
+
+from pydiag.core.errors import MachineError, UsageError
+from pydiag.gear.machine import machine_from_dict
+from pydiag.io.readers import read_measurement
+from pydiag.io.units import sensitivity_factor
+
+BOX = {"name": "box", "input_rpm": 1800,
+       "stages": [{"pinion_teeth": 32, "gear_teeth": 96}]}
+
+
+def test_bearings_whose_balls_cannot_sit_on_their_pitch_circle_are_refused():
+    crowded = {**BOX, "bearings": [{"shaft": "input", "n_balls": 40,
+                                    "ball_diameter_mm": 7.94, "pitch_diameter_mm": 39}]}
+    with pytest.raises(MachineError, match=r"bearings\[0\]\.n_balls: 40 balls of 7\.94 "
+                                           r"mm do not fit .*at most 15 balls"):
+        machine_from_dict(crowded, "box.toml")
+    fits = {**BOX, "bearings": [{"shaft": "input", "n_balls": 8, "ball_diameter_mm": 7.9375,
+                                 "pitch_diameter_mm": 33.5026}]}  # PHM09's ER-10K
+    assert machine_from_dict(fits, "box.toml").bearings[0].bearing.n_balls == 8
+    res = run_cli("-m", "pydiag", "compare", "--measurement", "m.csv", "--bearing",
+                  "40,7.94,39", "--fmu", "x.fmu")
+    assert res.returncode == 2 and "do not fit on a pitch circle" in res.stderr
+
+
+def test_a_sensitivity_of_two_values_or_for_the_tacho_is_refused(tmp_path):
+    with pytest.raises(UsageError, match="one value"):
+        sensitivity_factor("V", "100mV/g=3")
+    path = tmp_path / "r.csv"
+    t = np.arange(2000) / 1000.0
+    write_csv(path, ["time_s", "ch1", "tacho"],
+              np.column_stack([t, np.sin(2 * np.pi * 50 * t), (t * 30 % 1 < 0.1) * 5.0]))
+    res = run_cli("-m", "pydiag", "indicators", "--measurement", str(path), "--teeth", "32,96",
+                  "--rpm", "1800", "--tacho", "tacho", "--unit", "V",
+                  "--sensitivity", "tacho=100mV/g")
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert "the tacho's channel" in res.stderr
+
+
+def test_a_mat_file_with_a_variable_twice_is_read_with_one_note_in_pydiags_words(tmp_path):
+    import scipy.io
+    buffer = io.BytesIO()
+    scipy.io.savemat(buffer, {"x": np.sin(np.arange(4000.0)), "fs": 1000.0})
+    data = buffer.getvalue()
+    path = tmp_path / "twice.mat"
+    path.write_bytes(data + data[128:])  # every variable written again after the header
+    m = read_measurement(path)
+    assert m.metadata["read_notes"] == ["variable(s) fs, x appear more than once in the "
+                                        "file; the last of each is read"]
+    res = run_cli("-m", "pydiag", "indicators", "--measurement", str(path), "--teeth",
+                  "32,96", "--rpm", "1800", "--speed", "nominal")
+    said = [line for line in res.stderr.splitlines() if "more than once" in line]
+    assert len(said) == 1 and said[0].startswith("pydiag indicators: warning:"), res.stderr
+    assert "MatReadWarning" not in res.stderr and "Duplicate variable" not in res.stderr
