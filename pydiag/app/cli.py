@@ -291,6 +291,9 @@ def build_parser() -> argparse.ArgumentParser:
     _loop_args(p)
     p.add_argument("--max-steps", type=number(int, 1), default=4,
                    help="comparisons at most (default 4)")
+    p.add_argument("--out", metavar="FILE", help="with --machine and no --fmu: the copy of "
+                   "the machine file that gets the accepted effects (default <name>.loop.toml "
+                   "beside it)")
     p.add_argument("--json", help="write the steps as JSON here")
     p.add_argument("--history", help="SQLite run history every step is recorded in "
                    "(default: as for compare)")

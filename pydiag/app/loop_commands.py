@@ -13,7 +13,7 @@ from pydiag.app.formatting import (format_comparison, format_discovery, format_f
                                    format_history, format_loop_step)
 from pydiag.app.models import effect_models, machine_models
 from pydiag.app.reading import read_input
-from pydiag.core.errors import UsageError
+from pydiag.core.errors import OutputError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
@@ -215,9 +215,12 @@ def cmd_discover(args) -> int:
 def cmd_loop(args) -> int:
     """compare, accept the one confident effect, compare again, until nothing is
     confident (:mod:`pydiag.loop.accumulate`), printing each step as it is made."""
-    check_outputs(args, "json")
+    check_outputs(args, "json", "out")
     args.history = str(history.resolve(args.history))
     history.check(args.history)
+    if args.out and args.fmu:
+        raise UsageError("--out names the machine file the loop writes: it goes with "
+                         "--machine and no --fmu")
     if not args.fmu:
         steps, model = _machine_loop(args)
     else:
@@ -259,13 +262,16 @@ def cmd_accept(args) -> int:
 
 def _machine_loop(args) -> tuple[list, str]:
     """pydiag loop --machine FILE without --fmu: the loop on the machine's own model
-    (:mod:`pydiag.loop.machine_loop`), on a copy of FILE (``<stem>.loop.toml`` beside it,
-    refused if it exists, unless --force) that gets every accepted effect. Returns the
+    (:mod:`pydiag.loop.machine_loop`), on a copy of FILE (--out, default ``<stem>.loop.toml``
+    beside it; refused if it exists, unless --force) that gets every accepted effect. Returns the
     steps and the copy's path."""
     _machine(args)
     source = Path(args.machine)
-    copy = source.with_name(f"{source.stem}.loop.toml")
-    check_output(str(copy), args.force)
+    copy = Path(args.out) if args.out else source.with_name(f"{source.stem}.loop.toml")
+    try:
+        check_output(str(copy), args.force)
+    except OutputError as err:
+        raise OutputError(f"{err} (--out names another)") from err
     m = read_input(args)
     machines = machine_models(args)
     found, settings, drop = _machine_record(args, m)

@@ -60,3 +60,33 @@ def test_a_mat_file_with_a_variable_twice_is_read_with_one_note_in_pydiags_words
     said = [line for line in res.stderr.splitlines() if "more than once" in line]
     assert len(said) == 1 and said[0].startswith("pydiag indicators: warning:"), res.stderr
     assert "MatReadWarning" not in res.stderr and "Duplicate variable" not in res.stderr
+
+
+@pytest.mark.parametrize("slow", [False, pytest.param(True, marks=pytest.mark.slow)])
+def test_the_loop_writes_its_copy_where_out_says_and_never_over_the_machine_file(tmp_path,
+                                                                                   slow):
+    """An existing <name>.loop.toml is refused with the option that chooses another
+    (--out); --out the machine file itself is refused as an input; --out elsewhere runs."""
+    from truth.gearbox import SHORT_MACHINE, gearbox_record
+
+    from pydiag.io.measurements import write_measurement
+    rec = tmp_path / "box.csv"
+    write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
+    machine = tmp_path / "box.toml"
+    machine.write_text('name = "short box"\ninput_rpm = 1500\n'
+                       '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
+                       '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
+    (tmp_path / "box.loop.toml").write_text("# an earlier loop's\n")
+    common = ("-m", "pydiag", "loop", "--machine", str(machine), "--measurement", str(rec),
+              "--speed", "mesh", "--history", str(tmp_path / "h.sqlite"), "--quiet",
+              "--particles", "4", "--iterations", "1", "--polish", "5", "--max-steps", "1",
+              "--build-dir", str(tmp_path / "build"))
+    res = run_cli(*common)
+    assert res.returncode == 2 and "--out names another" in res.stderr, res.stderr
+    assert (tmp_path / "box.loop.toml").read_text() == "# an earlier loop's\n"
+    res = run_cli(*common, "--out", str(machine))
+    assert res.returncode == 2 and "would overwrite an input file" in res.stderr
+    if slow:  # the loop itself, a minute on 2 cores
+        res = run_cli(*common, "--out", str(tmp_path / "again.toml"))
+        assert res.returncode == 0, res.stderr
+        assert (tmp_path / "again.toml").read_text().startswith(machine.read_text())
