@@ -11,7 +11,7 @@ from pydiag.app.commands import (check_outputs, estimator_settings, problem_of,
                                  problem_settings, progress_bar)
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
                                    format_history, format_loop_step)
-from pydiag.app.models import effect_models, machine_models
+from pydiag.app.models import effect_models, library, machine_models
 from pydiag.app.reading import read_input
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.core.measurement import Measurement
@@ -32,8 +32,7 @@ from pydiag.loop.machine_discover import check_effects, discover_machine, valida
 from pydiag.loop.machine_loop import machine_loop
 from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem)
 from pydiag.loop.stages import machine_speed
-from pydiag.loop.discover import (MODELICA_ROOT, as_dict, check_modelica_root,
-                                  discover)
+from pydiag.loop.discover import (as_dict, discover)
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report
 
@@ -176,7 +175,7 @@ def cmd_compare(args) -> int:
 
 def cmd_discover(args) -> int:
     check_outputs(args, "json")
-    check_modelica_root(Path(args.modelica) if args.modelica else MODELICA_ROOT)
+    root, build = library(args)  # checked before any work
     if not args.fmu:
         check_effects(args.effects)
     m = read_input(args)
@@ -186,8 +185,7 @@ def cmd_discover(args) -> int:
     if args.fmu:
         base, found = discover(problem_of(args, m), FaultEstimator(**estimator_settings(args)),
                                args.effects,
-                               Path(args.modelica) if args.modelica else MODELICA_ROOT,
-                               Path(args.build_dir) if args.build_dir else None, progress,
+                               root, build, progress,
                                _effect_estimator(args))
     else:  # the machine's own model: every effect its stages lack, on every stage
         machines = machine_models(args)

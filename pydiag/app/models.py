@@ -3,9 +3,11 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Callable
 
+from pydiag.core.errors import UsageError
 from pydiag.gear.effects import Effect
 from pydiag.gear.machine import Machine
 from pydiag.loop.compose import BuiltModel, composed_fmu
@@ -19,8 +21,20 @@ def library(args) -> tuple[Path, Path]:
     default the per-user cache)."""
     root = Path(args.modelica) if getattr(args, "modelica", None) else MODELICA_ROOT
     check_modelica_root(root)
-    build = getattr(args, "build_dir", None)
-    return root, Path(build) if build else default_build_dir(root)
+    given = getattr(args, "build_dir", None)
+    build = Path(given) if given else default_build_dir(root)
+    try:
+        build.mkdir(parents=True, exist_ok=True)
+        writable = os.access(build, os.W_OK | os.X_OK)
+    except OSError as err:
+        writable, why = False, err.strerror or str(err)
+    else:
+        why = "not writable"
+    if not writable:
+        where = "--build-dir" if given else "the cache (under $XDG_CACHE_HOME or ~/.cache)"
+        raise UsageError(f"cannot build models in {build} ({why}): {where} must be a "
+                         "writable folder" + ("" if given else "; give --build-dir FOLDER"))
+    return root, build
 
 
 def effect_models(args) -> tuple[Callable[[Effect], str], Callable[[tuple[str, ...]], str]]:

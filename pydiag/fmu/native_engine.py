@@ -6,7 +6,8 @@ integration and the output sampling run in ``native/me_driver.c`` through the FM
 function pointers, with DOP853 (8th order with 7th-order dense output, the default) or
 Dormand-Prince 5(4) (steps landing on the output grid). The driver is compiled with the
 system C compiler on first use and cached under ``$XDG_CACHE_HOME/pydiag``
-(``~/.cache/pydiag``) by source hash.
+(``~/.cache/pydiag``) by source hash; where that cache cannot be written, compiled for the
+process alone.
 
 Only FMUs without event indicators qualify (:func:`supports`). An FMU that schedules a
 time event at initialisation or asks for an event at a completed step raises
@@ -79,19 +80,18 @@ def load_driver() -> ctypes.CDLL:
         return _LIBRARY
     source = SOURCE.read_bytes() + HEADER.read_bytes()
     lib_path = _cache_dir() / f"me_driver-{hashlib.sha256(source).hexdigest()[:16]}.so"
-    if not lib_path.exists():
-        cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
-        if cc is None:
-            raise NativeUnavailable("no C compiler found")
-        lib_path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=lib_path.parent) as tmp:
-            tmp_lib = Path(tmp) / lib_path.name
-            res = subprocess.run([cc, "-O2", "-shared", "-fPIC", "-I", str(SOURCE.parent), "-o",
-                                  str(tmp_lib), str(SOURCE), "-lm"], capture_output=True, text=True)
-            if res.returncode != 0:
-                raise NativeUnavailable(f"compiling the driver failed: {res.stderr.strip()[:300]}")
-            os.replace(tmp_lib, lib_path)  # atomic: parallel workers may race here
-    lib = ctypes.CDLL(str(lib_path))
+    if lib_path.exists():
+        lib = ctypes.CDLL(str(lib_path))
+    else:
+        try:
+            lib_path.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryDirectory(dir=lib_path.parent) as tmp:
+                tmp_lib = _compiled(Path(tmp) / lib_path.name)
+                os.replace(tmp_lib, lib_path)  # atomic: parallel workers may race here
+            lib = ctypes.CDLL(str(lib_path))
+        except OSError:  # a cache that cannot be written (read-only, a file): built for
+            with tempfile.TemporaryDirectory() as tmp:  # this process alone, then loaded
+                lib = ctypes.CDLL(str(_compiled(Path(tmp) / lib_path.name)))
     f = lib.pd_integrate
     vp, dp = ctypes.c_void_p, ctypes.POINTER(ctypes.c_double)
     f.argtypes = [vp, ctypes.c_int, vp, vp, vp, vp, vp, ctypes.c_int, dp, ctypes.c_double,
@@ -103,6 +103,18 @@ def load_driver() -> ctypes.CDLL:
     f.restype = ctypes.c_int
     _LIBRARY = lib
     return lib
+
+
+def _compiled(lib_path: Path) -> Path:
+    """The driver compiled to ``lib_path``."""
+    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    if cc is None:
+        raise NativeUnavailable("no C compiler found")
+    res = subprocess.run([cc, "-O2", "-shared", "-fPIC", "-I", str(SOURCE.parent), "-o",
+                          str(lib_path), str(SOURCE), "-lm"], capture_output=True, text=True)
+    if res.returncode != 0:
+        raise NativeUnavailable(f"compiling the driver failed: {res.stderr.strip()[:300]}")
+    return lib_path
 
 
 class NativeMeRunner:

@@ -90,3 +90,35 @@ def test_the_loop_writes_its_copy_where_out_says_and_never_over_the_machine_file
         res = run_cli(*common, "--out", str(tmp_path / "again.toml"))
         assert res.returncode == 0, res.stderr
         assert (tmp_path / "again.toml").read_text().startswith(machine.read_text())
+
+
+def test_a_cache_that_is_a_file_is_said_for_builds_and_worked_around_for_the_engine(
+        gear_fmu, tmp_path):
+    """XDG_CACHE_HOME a regular file: a command that builds models says so in one line
+    (give --build-dir); one that only runs an FMU compiles its engine for itself."""
+    import os
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+    record = tmp_path / "m.csv"
+    res = run_cli("-m", "pydiag", "simulate", "--fmu", str(gear_fmu), "--set", "a_f=0.3",
+                  "--duration", "0.48", "--out", str(record), "--quiet")
+    assert res.returncode == 0, res.stderr
+    cache = tmp_path / "cache"
+    cache.write_text("not a folder")
+    env = {**os.environ, "XDG_CACHE_HOME": str(cache)}
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "pydiag", *args], cwd=ROOT, env=env,
+                              capture_output=True, text=True)
+
+    res = run("compare", "--machine", str(ROOT / "examples" / "paper_pair.toml"),
+              "--measurement", str(record), "--history", str(tmp_path / "h.sqlite"),
+              "--quiet")
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert "cannot build models in" in res.stderr and "--build-dir" in res.stderr
+    res = run("diagnose", "--fmu", str(gear_fmu), "--measurement", str(record), "--quiet",
+              "--particles", "4", "--iterations", "2", "--polish", "10")
+    assert res.returncode in (0, 1) and "internal error" not in res.stderr, res.stderr
+    assert "fault mode" in res.stdout
