@@ -110,3 +110,16 @@ def check_binary(unzipdir: str | Path, model_description, fmu_name: str) -> None
     raise UnsafeArchive(f"{fmu_name} has no binary for this platform ({needed}); it has: "
                         f"{', '.join(have) or 'no binaries'}"
                         + ("; it ships sources, which pydiag does not compile" if has_source else ""))
+
+
+def usable_cache(fmu_path: str | Path) -> bool:
+    """Whether a cached FMU pydiag built (``fmu_path``) is whole: a zip archive that holds
+    its model description. A file left by a build cut short, or damaged since, is not: it
+    is built again, not read."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(fmu_path) as z:
+            return "modelDescription.xml" in z.namelist() and z.testzip() is None
+    except (OSError, zipfile.BadZipFile):
+        return False

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pydiag.core.errors import UsageError
+from pydiag.fmu.archive import usable_cache
 from pydiag.gear.effects import EFFECTS, model_file
 
 #: Hooks whose contributions add.
@@ -299,7 +300,7 @@ def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Buil
         written.write_text(_digest(source))
     tag = _digest(source + library_hash(modelica_root))[:12]
     out = folder / f"{name}_{tag}.fmu"
-    if not out.exists():  # built beside, then renamed: a failed build leaves no FMU
+    if not usable_cache(out):  # built beside, then renamed: a failed build leaves no FMU
         partial = folder / f".{out.stem}.{os.getpid()}.fmu"
         try:
             build_fmu(path, f"GearDiag.{name}", partial, library_roots=(Path(modelica_root),))

@@ -47,6 +47,7 @@ from fmu_build import build_fmu
 from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
+from pydiag.fmu.archive import usable_cache
 from pydiag.gear.effects import EFFECTS, Effect, model_file
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import mark_settled, settle
@@ -89,8 +90,14 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> 
     if not sources:
         raise UsageError(f"no Modelica library at {modelica_root}; give --modelica")
     newest = max(p.stat().st_mtime for p in sources)
-    if not out.exists() or out.stat().st_mtime < newest:
-        build_fmu(model_file(effect, modelica_root), effect.model, out)
+    if not out.exists() or out.stat().st_mtime < newest or not usable_cache(out):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        partial = out.with_name(f".{out.stem}.{os.getpid()}.fmu")  # renamed when whole
+        try:
+            build_fmu(model_file(effect, modelica_root), effect.model, partial)
+            os.replace(partial, out)
+        finally:
+            partial.unlink(missing_ok=True)
     return out
 
 

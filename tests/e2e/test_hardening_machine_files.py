@@ -122,3 +122,25 @@ def test_a_cache_that_is_a_file_is_said_for_builds_and_worked_around_for_the_eng
               "--particles", "4", "--iterations", "2", "--polish", "10")
     assert res.returncode in (0, 1) and "internal error" not in res.stderr, res.stderr
     assert "fault mode" in res.stdout
+
+
+def test_a_damaged_cached_fmu_is_built_again_not_read(tmp_path):
+    """A cached FMU cut short (a build killed, a disk that filled) is no zip: the next use
+    builds it again, for an effect's FMU and a model pydiag wrote alike."""
+    from conftest import ROOT
+
+    from pydiag.fmu.archive import usable_cache
+    from pydiag.gear.machine import load_machine
+    from pydiag.loop.discover import effect_fmu
+    from pydiag.loop.machine_model import machine_fmu
+    modelica = ROOT / "modelica"
+    effect = effect_fmu("gear_eccentricity", modelica, tmp_path / "effects")
+    _, built = machine_fmu(load_machine(ROOT / "examples" / "paper_pair.toml"), modelica,
+                           tmp_path / "build")
+    for fmu in (effect, built.fmu):
+        fmu.write_bytes(fmu.read_bytes()[:1000])
+        assert not usable_cache(fmu)
+    assert usable_cache(effect_fmu("gear_eccentricity", modelica, tmp_path / "effects"))
+    _, again = machine_fmu(load_machine(ROOT / "examples" / "paper_pair.toml"), modelica,
+                           tmp_path / "build")
+    assert again.fmu == built.fmu and usable_cache(again.fmu)
