@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pydiag.core.errors import MeasurementError, UsageError
+from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.io.units import is_voltage, sensitivity_factor, si_factor
 
@@ -401,7 +401,12 @@ def _read_zipped(path: Path, sample_rate_hz: float | None, channels: list[str] |
                 inner = Path(tmp) / name
                 with archive.open(member) as src, open(inner, "wb") as dst:
                     shutil.copyfileobj(src, dst, 1 << 20)
-                m = read_measurement(inner, sample_rate_hz, channels, units, sensitivities)
+                try:
+                    m = read_measurement(inner, sample_rate_hz, channels, units,
+                                         sensitivities)
+                except PydiagError as err:  # named as the user knows it, not our copy
+                    raise type(err)(str(err).replace(str(inner),
+                                                     f"{path}:{member.filename}")) from err
     except (zipfile.BadZipFile, OSError) as err:
         raise _fail(path, f"cannot read the zip: {err}") from err
     return Measurement(m.channels, m.sample_rate_hz,

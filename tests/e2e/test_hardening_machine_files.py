@@ -144,3 +144,18 @@ def test_a_damaged_cached_fmu_is_built_again_not_read(tmp_path):
     _, again = machine_fmu(load_machine(ROOT / "examples" / "paper_pair.toml"), modelica,
                            tmp_path / "build")
     assert again.fmu == built.fmu and usable_cache(again.fmu)
+
+
+def test_a_bad_record_inside_a_zip_is_named_by_the_zip_not_a_temporary_copy(tmp_path):
+    import zipfile
+
+    from pydiag.core.errors import MeasurementError
+    inner = tmp_path / "inner.csv"
+    write_csv(inner, ["time_s", "a1"], np.column_stack([np.arange(100) / 1e3,
+                                                        np.ones(100)]))
+    with zipfile.ZipFile(tmp_path / "rec.zip", "w") as z:
+        z.write(inner, "rec.csv")
+    with pytest.raises(MeasurementError) as err:
+        read_measurement(tmp_path / "rec.zip")
+    assert f"{tmp_path / 'rec.zip'}:rec.csv" in str(err.value), err.value
+    assert "pydiag_zip_" not in str(err.value) and "constant" in str(err.value)
