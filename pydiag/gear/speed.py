@@ -136,6 +136,8 @@ class SpeedEstimate:
             when the mesh was not searched or not found
         band_pct: the half-width of the band the mesh line's phase was followed in, % of
             the line's frequency; None when no mesh line was followed
+        tacho_speed_hz: from the mesh with a tacho in the record, the tacho's speed, to
+            check the mesh's with; None otherwise
     """
 
     speed_hz: float
@@ -148,6 +150,7 @@ class SpeedEstimate:
     confidence_db: float | None = None
     mesh_speed_hz: float | None = None
     band_pct: float | None = None
+    tacho_speed_hz: float | None = None
 
     @property
     def tacho_disagreement_pct(self) -> float | None:
@@ -172,6 +175,12 @@ class SpeedEstimate:
                  if self.beyond_band else "")
         if self.source is SpeedSource.MESH and swing:
             return f"{swing}: the speed may be off; a tacho channel (--tacho) measures it"
+        if self.source is SpeedSource.MESH and self.tacho_speed_hz is not None:
+            off = 100 * (self.speed_hz / self.tacho_speed_hz - 1)
+            if abs(off) > TACHO_TOLERANCE_PCT:
+                return (f"the mesh lines give {self.speed_hz:.5f} Hz, {off:+.3f} % from the "
+                        f"tacho's {self.tacho_speed_hz:.5f} Hz: the mesh search may have taken "
+                        "another candidate; --speed tacho follows the tacho")
         off = self.tacho_disagreement_pct
         if off is None or abs(off) <= TACHO_TOLERANCE_PCT or swing:
             return None
@@ -410,11 +419,15 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
         revs = tacho_revolutions(measurement.channels[tacho], pulses_per_rev)
         mean = _mean_speed(revs, fs)
         mesh = None
-        if not short and searched:
-            try:
-                mesh = from_mesh()
-            except MeasurementError:
-                mesh = None  # no mesh line stands out: nothing to check the tacho with
+        if not short and searched:  # the mesh at the nominal, else at the tacho's speed
+            for around in (nominal, mean):
+                try:
+                    mesh = comb_speed([measurement.channels[c] for c in searched], fs, comb,
+                                      around)
+                    break
+                except MeasurementError:
+                    mesh = None  # no mesh line stands out: nothing to check the tacho with
+            _check_pulses(mean, mesh, nominal, pulses_per_rev)
         return SpeedEstimate(mean, _variation_pct(revs, fs, mean), "tacho", nominal, revs,
                              source=SpeedSource.TACHO,
                              mesh_speed_hz=None if mesh is None else mesh.speed_hz,
@@ -427,4 +440,32 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
                              source=SpeedSource.NOMINAL)
     if not searched:
         raise MeasurementError("the record has no channel but the tacho to find the mesh in")
-    return from_mesh()
+    found = from_mesh()
+    if tacho and tacho in measurement.channels:  # there: a check, though not the method
+        checked = _mean_speed(tacho_revolutions(measurement.channels[tacho], pulses_per_rev),
+                              fs)
+        found = dataclasses.replace(found, tacho_speed_hz=checked)
+    return found
+
+
+#: The tacho's speed over the nominal beyond which (or below its inverse) the tacho is
+#: checked against a mesh found near the nominal: a wrong count of pulses a turn.
+PULSE_CHECK_RATIO = 1.5
+
+
+def _check_pulses(tacho_hz: float, mesh: SpeedEstimate | None, nominal_hz: float,
+                  pulses_per_rev: int) -> None:
+    """MeasurementError when the tacho's speed is far from the nominal and the mesh lines
+    put the speed near the nominal instead: the tacho gives more (or fewer) pulses a turn
+    than ``pulses_per_rev`` says, and every line would be read at the wrong speed."""
+    ratio = tacho_hz / nominal_hz
+    if mesh is None or 1 / PULSE_CHECK_RATIO <= ratio <= PULSE_CHECK_RATIO:
+        return
+    if abs(mesh.speed_hz / nominal_hz - 1) > abs(mesh.speed_hz / tacho_hz - 1):
+        return  # the mesh is the tacho's: the nominal is what is off
+    pulses = pulses_per_rev * tacho_hz / mesh.speed_hz
+    raise MeasurementError(
+        f"the tacho's pulses give {tacho_hz:.5g} Hz at {pulses_per_rev} a turn, but the mesh "
+        f"lines put the input at {mesh.speed_hz:.5g} Hz, near its nominal {nominal_hz:.5g} Hz: "
+        f"the tacho gives about {pulses:.3g} pulses a turn (pulses_per_rev in the machine "
+        "file, or --pulses-per-rev)")

@@ -168,14 +168,20 @@ def test_one_speed_for_every_mesh_finds_a_slipping_machine_within_a_hundredth_pe
 
 def test_a_tacho_estimate_carries_the_mesh_speed_to_check_it_by():
     record, revs = two_stage_record(29.5)
-    # the tacho gives 2 pulses a turn and the user says 1: it reads twice the speed
-    tacho = (np.mod(revs * 2, 1.0) < 0.2).astype(float)
-    record.channels["tacho"] = tacho
+    # the tacho gives 11 pulses a turn and the user says 10: it reads 1.1 times the speed
+    record.channels["tacho"] = (np.mod(revs * 11, 1.0) < 0.2).astype(float)
     kin = MACHINE.stage_kinematics(0, 30.0)
-    found = estimate_speed(record, kin, SpeedSettings("tacho", tacho="tacho"), machine=MACHINE)
-    assert found.speed_hz == pytest.approx(2 * mean_hz(revs), rel=1e-3)
+    found = estimate_speed(record, kin, SpeedSettings("tacho", tacho="tacho",
+                                                      pulses_per_rev=10), machine=MACHINE)
+    assert found.speed_hz == pytest.approx(1.1 * mean_hz(revs), rel=1e-3)
     assert found.mesh_speed_hz == pytest.approx(mean_hz(revs), rel=1e-3)
-    assert found.tacho_disagreement_pct == pytest.approx(-50, abs=0.1)
+    assert found.tacho_disagreement_pct == pytest.approx(-100 / 11, abs=0.1)
+    assert "--pulses-per-rev" in found.warning()
+    # 2 pulses a turn read as 1: twice the nominal, the meshes at the nominal: refused,
+    # with the count the tacho gives
+    record.channels["tacho"] = (np.mod(revs * 2, 1.0) < 0.2).astype(float)
+    with pytest.raises(MeasurementError, match="about 2 pulses a turn"):
+        estimate_speed(record, kin, SpeedSettings("tacho", tacho="tacho"), machine=MACHINE)
 
 
 def test_a_stage_is_found_by_name_or_number_and_a_wrong_one_is_named():

@@ -137,3 +137,24 @@ def test_a_baseline_of_another_speed_or_other_units_is_refused_not_judged(baseli
         judge_stages(MACHINE, healthy, [volts])
     with pytest.raises(MeasurementError, match="kept without its channels' units"):
         judge_stages(MACHINE, healthy, [dataclasses.replace(baseline, units=None)])
+
+
+def test_a_tacho_of_other_pulses_than_said_is_caught_by_the_meshes():
+    """Ten pulses a turn read as one: the tacho says ten times the speed, the meshes say
+    the nominal; one line says how many pulses the tacho gives (issue 59.6). With the
+    mesh chosen as the method, a tacho that is there checks it (issue 59.5)."""
+    from pydiag.gear.speed import estimate_speed
+    m = record(2, tacho_pulses=10)
+    kin = MACHINE.stage_kinematics(0, INPUT_HZ)
+    with pytest.raises(MeasurementError, match=r"about 10 pulses a turn"):
+        estimate_speed(m, kin, SpeedSettings("auto", tacho="tacho", pulses_per_rev=1),
+                       machine=MACHINE)
+    right = estimate_speed(m, kin, SpeedSettings("auto", tacho="tacho", pulses_per_rev=10),
+                           machine=MACHINE)
+    assert right.warning() is None and right.speed_hz == pytest.approx(0.99 * INPUT_HZ, 1e-3)
+    mesh = estimate_speed(m, kin, SpeedSettings("mesh", tacho="tacho", pulses_per_rev=10),
+                          machine=MACHINE)
+    assert mesh.tacho_speed_hz == pytest.approx(mesh.speed_hz, 1e-4) and mesh.warning() is None
+    off = estimate_speed(m, kin, SpeedSettings("mesh", tacho="tacho", pulses_per_rev=11),
+                         machine=MACHINE)
+    assert "from the tacho's" in off.warning()
