@@ -26,7 +26,6 @@ import os
 import re
 import shutil
 import subprocess
-import tempfile
 from pathlib import Path
 
 import casadi as ca
@@ -36,9 +35,10 @@ from fmu_build import parameter_stage
 from fmu_build.errors import ModelicaBuildError
 from fmu_build.model_description import add_unit_definitions, complete_for_fmi
 from fmu_build.ode_system import OdeSystem
+from fmu_build.scratch import scratch_folder
 
 MX = ca.MX
-COMPILER_FLAGS = ["-O2"]
+COMPILER_FLAGS = ["-O2", "-pipe"]  # -pipe: no temporary files of gcc's own to leave
 
 
 def fmi_headers_dir() -> str:
@@ -118,14 +118,26 @@ def model_identifier(system: OdeSystem) -> str:
     return name if name[:1].isalpha() else f"Model_{name}".rstrip("_")
 
 
+@contextlib.contextmanager
+def _removed_unless_moved(path: Path):
+    """``path`` (the FMU packed beside its target) removed if the block leaves it there."""
+    try:
+        yield
+    finally:
+        path.unlink(missing_ok=True)
+
+
 def _compile(model_id: str, sources: list[str]) -> str:
     """Build the FMU's shared library from ``sources``; returns its file name."""
     cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if cc is None:
         raise ModelicaBuildError("no C compiler found (set CC or install gcc)")
     lib = model_id + sharedLibraryExtension
+    # the compiler's own temporary files in the build's scratch folder (the current one),
+    # removed with it even when the compiler is killed
     res = subprocess.run([cc, *COMPILER_FLAGS, "-shared", "-fPIC", "-I", fmi_headers_dir(), "-I",
-                          ".", "-o", lib, *sources, "-lm"], capture_output=True, text=True)
+                          ".", "-o", lib, *sources, "-lm"], capture_output=True, text=True,
+                         env={**os.environ, "TMPDIR": os.getcwd()})
     if res.returncode != 0:
         raise ModelicaBuildError(f"compiling the FMU failed: {res.stderr.strip()[:500]}")
     return lib
@@ -137,7 +149,9 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
     out_path.parent.mkdir(parents=True, exist_ok=True)
     dae = to_dae_builder(system)
     model_id = model_identifier(system)
-    with tempfile.TemporaryDirectory(prefix="fmu_build_") as work, contextlib.chdir(work):
+    tmp_out = out_path.with_suffix(".fmu.tmp")
+    with scratch_folder("fmu_build_") as work, contextlib.chdir(work), \
+            _removed_unless_moved(tmp_out):
         try:
             files = dae.export_fmu({"no_warning": True, "with_serialization": False})
         except RuntimeError as err:
@@ -156,7 +170,6 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
         except RuntimeError as err:
             raise ModelicaBuildError(f"CasADi could not pack the FMU: "
                                      f"{str(err).strip().splitlines()[-1]}") from err
-        tmp_out = out_path.with_suffix(".fmu.tmp")
         shutil.move(packed, tmp_out)
         os.replace(tmp_out, out_path)
     return out_path

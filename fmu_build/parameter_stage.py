@@ -26,12 +26,12 @@ FMI importers do not ask for them.
 from __future__ import annotations
 
 import re
-import tempfile
 from pathlib import Path
 
 import casadi as ca
 
 from fmu_build.errors import ModelicaBuildError
+from fmu_build.scratch import scratch_folder
 from fmu_build.ode_system import OdeSystem
 
 _STRUCT_ANCHOR = "  // Has any variable been set since last call\n  int up_to_date;\n"
@@ -69,11 +69,11 @@ def stage_source(model_id: str, free: list[ca.SX], derived: list[ca.SX]) -> str:
     """C source of ``<id>_parameters_eval(const double* p, double* d)``, CasADi-generated."""
     name = stage_function_name(model_id)
     f = ca.Function(name, [ca.vertcat(*free)], [ca.vertcat(*derived)])
-    with tempfile.TemporaryDirectory(prefix="fmu_build_stage_") as tmp:
-        path = Path(tmp) / f"{name}.c"
+    with scratch_folder("fmu_build_stage_") as tmp:
+        path = tmp / f"{name}.c"
         gen = ca.CodeGenerator(path.name, {"with_header": False})
         gen.add(f)
-        gen.generate(tmp + "/")
+        gen.generate(f"{tmp}/")
         code = path.read_text()
     sizes = {k: max(1, int(getattr(f, f"sz_{k}")())) for k in ("arg", "res", "iw", "w")}
     return code + f"""

@@ -9,7 +9,7 @@ import casadi as ca
 import fmpy
 import numpy as np
 import pytest
-from conftest import inspected, run_cli
+from conftest import ROOT, inspected, run_cli
 
 from fmu_build import ModelicaBuildError, build_fmu
 from fmu_build.build import ode_system
@@ -312,3 +312,32 @@ def test_build_writes_only_the_requested_file(tmp_path, modelica_copy):
     assert "modelDescription.xml" in names and any(n.startswith("binaries/") for n in names)
     res = fmpy.simulate_fmu(str(out), stop_time=1.0, output_interval=1e-4, output=["acc"])
     assert len(res) == 10001 and np.all(np.isfinite(res["acc"]))
+
+
+@pytest.mark.parametrize("delay_s", [0.6, 1.2, 1.8])
+def test_two_ctrl_c_during_a_build_leave_nothing_behind(tmp_path, delay_s):
+    """A build interrupted twice, the second during the first one's cleanup, leaves no
+    scratch folder, no compiler temporary file and no partial FMU (issue 59.15)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    out = tmp_path / "out" / "Eccentricity.fmu"
+    out.parent.mkdir()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fmu_build", str(ROOT / "modelica" / "GearDiag" / "Effects"
+                                               / "GearEccentricity.mo"),
+         "--model", "GearDiag.Effects.GearEccentricity", "-o", str(out)],
+        cwd=ROOT, env={**os.environ, "TMPDIR": str(scratch)},
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(delay_s)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    proc.wait(60)
+    assert list(scratch.iterdir()) == []
+    assert [p.name for p in out.parent.iterdir()] in ([], [out.name])
