@@ -440,12 +440,17 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
                              source=SpeedSource.NOMINAL)
     if not searched:
         raise MeasurementError("the record has no channel but the tacho to find the mesh in")
-    found = from_mesh()
-    if tacho and tacho in measurement.channels:  # there: a check, though not the method
-        checked = _mean_speed(tacho_revolutions(measurement.channels[tacho], pulses_per_rev),
-                              fs)
-        found = dataclasses.replace(found, tacho_speed_hz=checked)
-    return found
+    if not (tacho and tacho in measurement.channels):
+        return from_mesh()
+    # a tacho that is there checks the mesh's speed, and stands in when no mesh stands out
+    revs = tacho_revolutions(measurement.channels[tacho], pulses_per_rev)
+    mean = _mean_speed(revs, fs)
+    try:
+        return dataclasses.replace(from_mesh(), tacho_speed_hz=mean)
+    except MeasurementError:
+        return SpeedEstimate(mean, _variation_pct(revs, fs, mean),
+                             "tacho (no mesh line stood out from chance)", nominal, revs,
+                             source=SpeedSource.TACHO)
 
 
 #: The tacho's speed over the nominal beyond which (or below its inverse) the tacho is

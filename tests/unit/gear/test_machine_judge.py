@@ -158,3 +158,24 @@ def test_a_tacho_of_other_pulses_than_said_is_caught_by_the_meshes():
     off = estimate_speed(m, kin, SpeedSettings("mesh", tacho="tacho", pulses_per_rev=11),
                          machine=MACHINE)
     assert "from the tacho's" in off.warning()
+
+
+def test_the_tacho_stands_in_when_no_mesh_line_stands_out():
+    """--speed mesh on a record whose meshes are lost in noise, a tacho beside them: the
+    tacho's speed, said to be the tacho's, not a refusal (issue 59.9)."""
+    import numpy as np
+
+    from pydiag.core.measurement import Measurement
+    from pydiag.gear.speed import SpeedSource, estimate_speed
+    with_tacho = record(2, tacho_pulses=10)
+    noise = np.random.default_rng(0).standard_normal(with_tacho.n_samples)
+    m = Measurement({"acc": noise, "tacho": with_tacho.channels["tacho"]},
+                    with_tacho.sample_rate_hz)
+    kin = MACHINE.stage_kinematics(0, INPUT_HZ)
+    alone = Measurement({"acc": noise}, with_tacho.sample_rate_hz)
+    with pytest.raises(MeasurementError, match="no mesh line stands out"):
+        estimate_speed(alone, kin, SpeedSettings("mesh"), machine=MACHINE)
+    found = estimate_speed(m, kin, SpeedSettings("mesh", tacho="tacho", pulses_per_rev=10),
+                           machine=MACHINE)
+    assert found.source is SpeedSource.TACHO and "no mesh line stood out" in found.method
+    assert found.speed_hz == pytest.approx(0.99 * INPUT_HZ, 1e-3)
