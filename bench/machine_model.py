@@ -33,7 +33,8 @@ from pydiag.gear.machine import StageEffect, load_machine  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
-from pydiag.loop.machine_model import fit_machine, machine_fmu, machine_problem  # noqa: E402
+from pydiag.loop.machine_fit import fit_machine, machine_problem  # noqa: E402
+from pydiag.loop.machine_model import machine_fmu  # noqa: E402
 from pydiag.loop.stages import machine_speed  # noqa: E402
 
 NAME = re.compile(r"spur \d+_(\d+)hz_(High|Low)_\d+")

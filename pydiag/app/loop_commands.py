@@ -30,7 +30,9 @@ from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effec
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.machine_discover import check_effects, discover_machine, validate_machine
 from pydiag.loop.machine_loop import machine_loop
-from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem)
+from pydiag.loop.machine_edits import accept
+from pydiag.loop.machine_fit import compare_machine, machine_problem
+from pydiag.loop.machine_model import MachineModel
 from pydiag.loop.stages import machine_speed
 from pydiag.loop.discover import (as_dict, discover)
 from pydiag.loop.validate import validate
@@ -250,7 +252,7 @@ def cmd_loop(args) -> int:
 
 
 def cmd_accept(args) -> int:
-    """Give a stage of the machine file an effect (:func:`pydiag.loop.machine_model.accept`)."""
+    """Give a stage of the machine file an effect (:func:`pydiag.loop.machine_edits.accept`)."""
     machine = accept(args.machine, args.effect, args.stage)
     stage = machine.stages[machine.effects[-1].stage].name
     print(f"{args.machine}: {args.effect} on {stage}; `pydiag compare --machine "

@@ -4,7 +4,7 @@ each stage's residual points to).
 
 For each stage, the model's problem is seen from that stage's shafts, its own parameters
 free and the other stages' held at the machine's fit
-(:func:`~pydiag.loop.machine_model.stage_view`), with the catalogue named for it
+(:func:`~pydiag.loop.machine_fit.stage_view`), with the catalogue named for it
 (:func:`~pydiag.loop.machine_model.stage_effects`); each effect the stage lacks is fitted
 on half of the periods on the model with it on that stage and scored on the other half
 (:func:`pydiag.loop.held_out.held_out`), whatever its score on the residual (compare
@@ -38,8 +38,8 @@ from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.discover import (discovery_cost, failed_row, held_out_row, shared_halves,
                                   side_by_side)
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
-from pydiag.loop.machine_model import (MachineModel, nothing_to_fit, on_a_stage,
-                                       stage_effects, stage_view)
+from pydiag.loop.machine_fit import stage_view
+from pydiag.loop.machine_model import MachineModel, nothing_to_fit, on_a_stage, stage_effects
 from pydiag.loop.results import Comparison, Discovery, Status
 from pydiag.loop.validate import effects_to_fit, validate
 
@@ -146,7 +146,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                      every_synchronous: bool = False) -> Comparison:
     """``comparison`` (of ``problem``, the machine's model at its fit) with the effects
     its residual points to on each stage tried held out (:func:`pydiag.loop.validate.
-    validate`, on :func:`~pydiag.loop.machine_model.stage_view`), every stage's
+    validate`, on :func:`~pydiag.loop.machine_fit.stage_view`), every stage's
     suggestions in one list, each with its stage; ``effect_model``: the FMU of a machine
     (the machine with one more effect). The fits of every stage run side by side, one a
     core (module docstring); ``progress`` gets each as it starts, as "effect on stage";

@@ -3,12 +3,12 @@ what the residual points to on each stage held out, accept the one confident eff
 its stage, and again with the model that has it, until nothing is confident.
 
 Each step's fit also starts from the step before's, with the accepted effect at its
-held-out fit (:func:`pydiag.loop.machine_model.fit_machine`), so the error it fits does
+held-out fit (:func:`pydiag.loop.machine_fit.fit_machine`), so the error it fits does
 not rise from step to step; the parameters its try did not fit (a shaft's orders whose
 lines did not stand out of another shaft's) are held off in the accepted model
 (:func:`held_off`). Every accepted effect is written into a copy of the machine file
-(:func:`pydiag.loop.machine_model.accept`), and each step's fit, to start the next one
-from, as its ``[start]`` table (:func:`pydiag.loop.machine_model.record_start`), so the
+(:func:`pydiag.loop.machine_edits.accept`), and each step's fit, to start the next one
+from, as its ``[start]`` table (:func:`pydiag.loop.machine_edits.record_start`), so the
 loop ends with a machine file the user can read, compare with another record, edit, and
 loop on again from where it stopped (a fit of the model's many parameters from nothing
 lands elsewhere); each step's model is built from that file
@@ -29,8 +29,9 @@ from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.machine_discover import validate_machine
-from pydiag.loop.machine_model import (MachineModel, accept, compare_machine, machine_problem,
-                                       possible_parameters, record_start)
+from pydiag.loop.machine_edits import accept, record_start
+from pydiag.loop.machine_fit import compare_machine, machine_problem
+from pydiag.loop.machine_model import MachineModel, possible_parameters
 
 
 def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,
@@ -45,7 +46,7 @@ def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimat
     ``max_steps``-th). ``speed``: the input shaft's in ``measurement``; ``build``: a
     machine's model and its FMU; ``estimator``: the stages' fit; ``refit``: the effects'
     (default EFFECT_REFIT's); ``drop``: channels that are not sensors (the tacho);
-    ``gain_curve``: :func:`~pydiag.loop.machine_model.machine_problem`'s."""
+    ``gain_curve``: :func:`~pydiag.loop.machine_fit.machine_problem`'s."""
     estimator = estimator or FaultEstimator()
     refit = refit or FaultEstimator(**EFFECT_REFIT)
     steps: list[LoopStep] = []

@@ -22,15 +22,11 @@ A stage carries the catalogue effects the machine file gives it (``[[effects]]``
 ``pydiag accept`` writes): those with models of their own make its mesh their composed
 model (:func:`pydiag.loop.compose.compose` on :data:`~pydiag.loop.compose.MESH`, declared
 inside the machine's), one of the base model's own parameters frees them; their parameters
-are fitted as ``<stage>.<name>``. They are fitted after the stages (:func:`fit_machine`),
-from the stages' fit, so an effect never leaves the error above that fit. An effect whose
-lines do not repeat with the machine (a bearing's, a ripple's) or that is a sensor's path
-(the housing) is not a stage's in this model yet.
-
-What the residual points to on each stage is tried held out as on a pair
-(:func:`pydiag.loop.machine_discover.validate_machine`): the model's problem seen from
-that stage's shafts (:func:`stage_view`: its kinematics name the lines), the catalogue
-named for it (:func:`stage_effect`), the model with the effect on the stage built for it.
+are fitted as ``<stage>.<name>``, after the stages
+(:func:`pydiag.loop.machine_fit.fit_machine`). An effect whose lines do not repeat with the
+machine (a bearing's, a ripple's) or that is a sensor's path (the housing) is not a
+stage's in this model yet. The catalogue as a stage has it (its parameters named for the
+stage) is :func:`stage_effect`'s.
 
 The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
 shaft's torsion between two stages (``GearDiag.Components.Shaft``,
@@ -38,8 +34,10 @@ shaft's torsion between two stages (``GearDiag.Components.Shaft``,
 shaft stiffnesses it puts torsional modes at made-up frequencies, and fitted no better
 (measured in ``bench/RESULTS.md`` section 13, ``docs/gearbox.md``).
 
-One concern: the machine's model (written, built, fitted, its effects accepted); its
-effects' held-out tries are :mod:`pydiag.loop.machine_discover`'s.
+One concern: the machine's model, written and built. It is fitted by
+:mod:`pydiag.loop.machine_fit`, its effects tried held out by
+:mod:`pydiag.loop.machine_discover`, and pydiag's edits of the machine file (an effect
+accepted, a fit to start from) are :mod:`pydiag.loop.machine_edits`'.
 """
 
 from __future__ import annotations
@@ -47,31 +45,18 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
-import json
-import math
 import re
-import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from pydiag.core.errors import UsageError
-from pydiag.core.measurement import Measurement
-from pydiag.core.parameters import Parameter, fmu_values
-from pydiag.fit.affine import fit_affine
-from pydiag.fit.estimator import FaultEstimator, FitResult
-from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.core.parameters import Parameter
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS, Effect
-from pydiag.gear.machine import Machine, load_machine, machine_from_dict
-from pydiag.gear.speed import SpeedEstimate
-from pydiag.gear.tracking import order_track
-from pydiag.io.outputs import edit_in_place
-from pydiag.loop.compare import compare
+from pydiag.gear.machine import Machine
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
-from pydiag.loop.results import Comparison
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
-from pydiag.model.simulate import SIMULATED_SOURCE
 
 #: The model's speed parameter: the input shaft's, Hz.
 SPEED_PARAMETER = "f_input"
@@ -350,106 +335,6 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
                         tuple(phases) + tuple(effect_parameters), fixed, frozenset(affine))
 
 
-def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
-                    machine: Machine, speed: SpeedEstimate, fit_gain: bool | None = None,
-                    feature_mode: str = "lines", drop: tuple[str, ...] = (),
-                    gain_curve: bool | None = None) -> FitProblem:
-    """The fit problem of ``measurement`` on the machine model ``model`` (its FMU at
-    ``fmu_path``): the record order-tracked at the input shaft (``speed``, found from every
-    mesh or the tacho; the channels ``drop`` left out), every stage's lines analysed over
-    the machine's fundamental period
-    (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
-    gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`);
-    None (the default): curves wherever the gain is fitted, for a machine's sensors sit on
-    its housing, which passes each band of the meshes differently (the gain of a record
-    ``pydiag simulate`` made is the model's: not fitted)."""
-    tracked = order_track(measurement, speed, drop=drop)
-    channels = [c for c in tracked.channels if c not in drop]
-    adapter = model.adapter(channels)
-    if fit_gain is None:
-        fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
-    if gain_curve is None:
-        gain_curve = fit_gain
-    parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
-    return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
-                         fixed_values=model.fixed_values,
-                         kinematics=machine.model_kinematics(speed.speed_hz),
-                         feature_mode=feature_mode, fit_gain=fit_gain, speed_estimate=speed,
-                         gain_curve=gain_curve)
-
-
-def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
-                effect_estimator: FaultEstimator | None = None,
-                start: dict[str, float] | None = None) -> FitResult:
-    """The fit of a machine's model with its effects, in steps: the stages alone (every
-    effect off), then the effects' parameters with the stages held there
-    (``effect_estimator``, default ``estimator``; the parameters of an effect whose outputs
-    are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`), then
-    every parameter polished from the better of the two. Its error is never above the
-    stages' fit it starts from, which one swarm over every parameter at once does not
-    promise (more parameters, the same budget;
-    a swarm run on another model, even one that adds nothing, may land elsewhere).
-
-    ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
-    effect and the effect's held-out fit; every parameter is polished from there as well
-    (one missing starts off), and the better fit is kept: the error is then not above that
-    fit's either. An affine parameter the problem's features do not see (a shaft's order
-    outside every feature band: :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off
-    through the polishes, which would otherwise leave it wherever their steps wander."""
-    names = {p.name for p in model.effect_parameters}
-    own = tuple(p for p in problem.parameters if p.name not in names)
-    added = tuple(p for p in problem.parameters if p.name in names)
-    later = effect_estimator or estimator
-    pinned: dict[str, float] = {}  # lines outside every feature band: nothing moves them
-    if not added:
-        best = estimator.fit(problem)
-    else:
-        off = {p.name: p.off for p in added}
-        base = estimator.fit(problem.derive(parameters=own,
-                                            fixed_values=fmu_values(added, off)))
-        affine = tuple(p for p in added if p.name in model.affine_parameters)
-        other = tuple(p for p in added if p.name not in model.affine_parameters)
-        values, error = {}, base.error
-        if other:
-            effects = later.fit(problem.derive(parameters=other, fixed_values={
-                **fmu_values(own, base.parameters), **fmu_values(affine, off)}))
-            values, error = dict(effects.parameters), effects.error
-        if affine:  # n + 1 simulations, however many parameters
-            fitted = fit_affine(problem.derive(parameters=affine, fixed_values={
-                **fmu_values(own, base.parameters), **fmu_values(other, {**off, **values})}))
-            values.update(fitted.values)
-            error = fitted.error
-            pinned = {name: off[name] for name in fitted.unseen}
-        best = later.refine(_held(problem, pinned), {**base.parameters,
-                                                     **(values if error < base.error else off)})
-    if start is not None:
-        again = later.refine(_held(problem, pinned), {p.name: start.get(p.name, p.off)
-                                                      for p in problem.parameters})
-        best = again if again.error < best.error else best
-    return dataclasses.replace(best, parameters={**best.parameters, **pinned})
-
-
-def _held(problem: FitProblem, values: dict[str, float]) -> FitProblem:
-    """``problem`` with the parameters named in ``values`` held there."""
-    if not values:
-        return problem
-    held = [p for p in problem.parameters if p.name in values]
-    return problem.derive(parameters=tuple(p for p in problem.parameters
-                                           if p.name not in values),
-                          fixed_values=fmu_values(held, values))
-
-
-def compare_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
-                    effect_estimator: FaultEstimator | None = None,
-                    false_alarm_rate: float = 0.01,
-                    start: dict[str, float] | None = None) -> Comparison:
-    """compare (:func:`pydiag.loop.compare.compare`) of the machine's model at its fit
-    (:func:`fit_machine`), whose error the comparison reports as its fit error."""
-    fit = fit_machine(problem, model, estimator, effect_estimator, start)
-    return dataclasses.replace(compare(problem, None, false_alarm_rate,
-                                       parameters=fit.parameters), fit_error=fit.error)
-
-
 def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
                 ) -> tuple[MachineModel, BuiltModel]:
     """The model of ``machine`` and its FMU, built unless one of the same source exists;
@@ -458,96 +343,6 @@ def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
     model = machine_model(machine, modelica_root)
     return model, built_fmu(model.name, model.source, modelica_root,
                             Path(build_dir) / "machines")
-
-
-def accept(path: str | Path, key: str, stage: str | None = None,
-           off: tuple[str, ...] = ()) -> Machine:
-    """Give the machine of the file ``path`` the effect ``key`` on ``stage`` (its name or
-    number; may be left out for a machine of one stage), with its parameters ``off`` held
-    at their neutral value: an ``[[effects]]`` table appended to the file, in its own line
-    ends, the rest of it as it was. The file is checked as it would be read first, then
-    appended to where it is (:func:`~pydiag.io.outputs.edit_in_place`: a link still names
-    it, its mode stays, a read-only file is refused, another process's lines are kept), so
-    a refused edit leaves it as it was. Returns the machine it now describes."""
-    path = Path(path)
-    machine = load_machine(path)
-    if key not in EFFECTS:
-        raise UsageError(f"no effect {key!r} in the catalogue ({', '.join(EFFECTS)})")
-    if not on_a_stage(EFFECTS[key]):
-        raise UsageError(not_on_a_stage(key))
-    if stage is None and len(machine.stages) > 1:
-        raise UsageError(f"{path}: {len(machine.stages)} stages: give the stage the effect "
-                         f"is on ({machine.stage_choices()})")
-    index = 0 if stage is None else machine.stage_index(stage)
-    name = machine.stages[index].name
-    if key in machine.effect_keys(index):
-        raise UsageError(f"{path}: {key} is on {name} already")
-    edited: list[Machine] = []
-
-    def added(text: str) -> str:  # the table, in the file's own line ends
-        nl = "\r\n" if "\r\n" in text else "\n"
-        text += ("" if text.endswith("\n") or not text else nl) + \
-            f"{nl}[[effects]]{nl}key = \"{key}\"{nl}stage = {_toml_string(name)}{nl}"
-        if off:
-            text += f"off = [{', '.join(_toml_string(o) for o in off)}]{nl}"
-        edited.append(_read_back(text, path))
-        return text
-
-    edit_in_place(path, added)
-    return edited[0]
-
-
-def _toml_string(text: str) -> str:
-    """``text`` as a TOML basic string: any character as it is, but quotes, backslashes and
-    control characters escaped (JSON's escapes of those are TOML's)."""
-    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
-
-
-def _read_back(text: str, path: Path) -> Machine:
-    """The machine the edited ``text`` of ``path`` describes: an edit that would leave the
-    file unreadable is refused before it is written."""
-    try:
-        return machine_from_dict(tomllib.loads(text), str(path))
-    except tomllib.TOMLDecodeError as err:  # a bug of the edit, not the user's file
-        raise RuntimeError(f"the edit of {path} would not be valid TOML: {err}") from err
-
-
-#: The line the loop writes above a machine file's [start] table.
-START_NOTE = ("# a fit of this machine's model (pydiag loop's last): every fit of it "
-              "also polishes from here")
-
-
-#: A TOML table's header line, ``[name]`` or ``[[name]]``, with any spacing TOML allows
-#: and a comment.
-_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\[\]]*?)\s*\]\]?\s*(#.*)?$")
-
-
-def record_start(path: str | Path, values: Mapping[str, float]) -> Machine:
-    """Write ``values`` (a fit of the machine's model, by parameter name) as the file's
-    ``[start]`` table, in place of the one it had, at its end; the rest of the file
-    (comments too, its line ends) as it was. Checked as it would be read, then written
-    where the file is (:func:`~pydiag.io.outputs.edit_in_place`). Returns the machine it
-    now describes."""
-    path = Path(path)
-    edited: list[Machine] = []
-
-    def rewritten(text: str) -> str:
-        nl = "\r\n" if "\r\n" in text else "\n"
-        kept, inside = [], False
-        for line in text.splitlines():
-            header = _HEADER.match(line)
-            if header:
-                inside = header.group(1) == "[" and header.group(2) == "start"
-            if not inside and line != START_NOTE:
-                kept.append(line)
-        rows = "".join(f"{_toml_string(name)} = {float(value)!r}{nl}"
-                       for name, value in sorted(values.items()) if math.isfinite(value))
-        text = nl.join(kept).rstrip("\r\n") + f"{nl}{nl}{START_NOTE}{nl}[start]{nl}{rows}"
-        edited.append(_read_back(text, path))
-        return text
-
-    edit_in_place(path, rewritten)
-    return edited[0]
 
 
 def _prefixed(instance: str, values: dict) -> dict:
@@ -589,21 +384,3 @@ def stage_effects(model: MachineModel, stage: int) -> dict[str, Effect]:
     (:func:`on_a_stage`), named for it (:func:`stage_effect`)."""
     return {key: stage_effect(e, model.stages[stage], model.outputs)
             for key, e in EFFECTS.items() if on_a_stage(e)}
-
-
-def stage_view(problem: FitProblem, machine: Machine, model: MachineModel, stage: int,
-               values: dict[str, float]) -> FitProblem:
-    """The machine model's ``problem`` seen from stage ``stage``: the same record, model and
-    features, the kinematics (which name the lines, and say which are an effect's) the
-    stage's, over the machine's period; its parameters the stage's own
-    (:meth:`MachineModel.stage_parameters`), every other held at ``values`` (the machine's
-    fit). An effect tried on the stage that frees the base (``Effect.reshapes_base``) then
-    frees only the stage's: the other stages' lines are not its, and what they fit is the
-    machine's fit, not the try's."""
-    input_hz = problem.kinematics.f_pinion_hz  # the first stage's pinion: the input shaft
-    own = model.stage_parameters(stage)
-    held = tuple(p for p in problem.parameters if p.name not in own)
-    return dataclasses.replace(
-        problem.derive(parameters=tuple(p for p in problem.parameters if p.name in own),
-                       fixed_values=fmu_values(held, values)),
-        kinematics=machine.model_kinematics(input_hz, stage))

@@ -40,7 +40,8 @@ from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.stage_judge import StageVerdict, judge_stages
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.loop.diagnosis import Diagnosis, classified, diagnose
-from pydiag.loop.machine_model import MachineModel, fit_machine, machine_problem, stage_view
+from pydiag.loop.machine_fit import fit_machine, machine_problem, stage_view
+from pydiag.loop.machine_model import MachineModel
 from pydiag.model.adapter import Adapter
 
 #: Without baselines, a shaft is the suspect when its sidebands carry this many times the
@@ -255,9 +256,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            gain_curve: bool | None = None) -> MachineDiagnosis:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
-    (:func:`~pydiag.loop.machine_model.fit_machine`, from the machine file's ``[start]``
+    (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
     too), each stage classified from its own fault parameters and tested on the lines
-    seen from its own shafts (:func:`~pydiag.loop.machine_model.stage_view`), and judged
+    seen from its own shafts (:func:`~pydiag.loop.machine_fit.stage_view`), and judged
     against ``baselines`` as :func:`diagnose_machine` judges."""
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()

@@ -9,15 +9,20 @@ from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record
 from pydiag.io.measurements import write_measurement
 
 
-def test_a_kept_baseline_judges_as_the_file_it_was_kept_from(tmp_path):
-    write_measurement(tmp_path / "healthy.csv", gearbox_record(1))
-    write_measurement(tmp_path / "broken.csv", gearbox_record(3, faulty_shaft=2, stage=1))
+def box(tmp_path) -> tuple:
+    """The test box's machine file, a history, and the options that name them."""
     machine = tmp_path / "box.toml"
     machine.write_text(f'name = "{MACHINE.name}"\ninput_rpm = {60 * INPUT_HZ}\n'
                        + "".join(f"[[stages]]\npinion_teeth = {s.pinion_teeth}\n"
                                  f"gear_teeth = {s.gear_teeth}\n" for s in MACHINE.stages))
     db = str(tmp_path / "history.sqlite")
-    common = ("--machine", str(machine), "--speed", "mesh", "--history", db)
+    return machine, db, ("--machine", str(machine), "--speed", "mesh", "--history", db)
+
+
+def test_a_kept_baseline_judges_as_the_file_it_was_kept_from(tmp_path):
+    write_measurement(tmp_path / "healthy.csv", gearbox_record(1))
+    write_measurement(tmp_path / "broken.csv", gearbox_record(3, faulty_shaft=2, stage=1))
+    machine, db, common = box(tmp_path)
     res = run_cli("-m", "pydiag", "baseline", "--measurement", str(tmp_path / "healthy.csv"),
                   *common)
     assert res.returncode == 0, res.stderr
@@ -56,12 +61,7 @@ def test_a_baseline_counts_once_and_a_record_judged_against_itself_is_said(tmp_p
     not exist is no "none kept"."""
     write_measurement(tmp_path / "healthy.csv", gearbox_record(1))
     write_measurement(tmp_path / "other.csv", gearbox_record(2))
-    machine = tmp_path / "box.toml"
-    machine.write_text(f'name = "{MACHINE.name}"\ninput_rpm = {60 * INPUT_HZ}\n'
-                       + "".join(f"[[stages]]\npinion_teeth = {s.pinion_teeth}\n"
-                                 f"gear_teeth = {s.gear_teeth}\n" for s in MACHINE.stages))
-    db = str(tmp_path / "history.sqlite")
-    common = ("--machine", str(machine), "--speed", "mesh", "--history", db)
+    machine, db, common = box(tmp_path)
     res = run_cli("-m", "pydiag", "baseline", "--measurement", "healthy.csv", *common,
                   cwd=tmp_path)
     assert res.returncode == 0, res.stderr

@@ -14,7 +14,8 @@ from pydiag.gear.speed import SpeedSettings
 from pydiag.gear.machine import load_machine
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare
-from pydiag.loop.machine_model import machine_fmu, machine_model, machine_problem
+from pydiag.loop.machine_fit import machine_problem
+from pydiag.loop.machine_model import machine_fmu, machine_model
 from pydiag.loop.stages import machine_speed
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -138,7 +139,7 @@ def test_an_effect_the_box_has_lowers_the_error_more_than_one_it_lacks(tmp_path)
     import dataclasses
 
     from pydiag.gear.machine import StageEffect
-    from pydiag.loop.machine_model import fit_machine
+    from pydiag.loop.machine_fit import fit_machine
     m = gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE)
     speed = machine_speed(m, SHORT_MACHINE, INPUT_HZ, SpeedSettings("mesh"))
     errors = {}
@@ -242,7 +243,7 @@ def test_the_loop_accepts_an_effect_with_what_its_try_did_not_fit_held_off(tmp_p
     file's ``off`` with the effect, the file reads back with them, and the effect is not
     tried on that stage again."""
     from pydiag.loop.machine_loop import held_off
-    from pydiag.loop.machine_model import accept
+    from pydiag.loop.machine_edits import accept
     path = tmp_path / "phm.toml"
     path.write_text((ROOT / "examples" / "phm09_spur.toml").read_text())
     machine = load_machine(path)
@@ -269,7 +270,7 @@ def test_a_fit_written_as_the_machine_files_start_is_where_compare_starts(tmp_pa
     numbers is one line."""
     import json
 
-    from pydiag.loop.machine_model import START_NOTE, record_start
+    from pydiag.loop.machine_edits import START_NOTE, record_start
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
     write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
     text = COMMENTED_BOX
@@ -397,7 +398,7 @@ def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
     compare and the loop find, without the residual's pointing."""
     from pydiag.loop.effect_fit import EFFECT_REFIT
     from pydiag.loop.machine_discover import discover_machine
-    from pydiag.loop.machine_model import compare_machine
+    from pydiag.loop.machine_fit import compare_machine
     m = gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE)
     speed = machine_speed(m, SHORT_MACHINE, INPUT_HZ, SpeedSettings("mesh"))
     model, built = machine_fmu(SHORT_MACHINE, MODELICA, tmp_path)

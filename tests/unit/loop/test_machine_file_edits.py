@@ -15,7 +15,7 @@ import pytest
 
 from pydiag.core.errors import MachineError, OutputError
 from pydiag.gear.machine import load_machine
-from pydiag.loop.machine_model import accept, record_start
+from pydiag.loop.machine_edits import accept, record_start
 
 BOX = ('name = "box"  # the user\'s comment\ninput_rpm = 1500\n'
        '[[stages]]\nname = "first"\npinion_teeth = 18\ngear_teeth = 36\n'

@@ -1,0 +1,147 @@
+"""A machine's own model fitted to a record: the problem (the record order-tracked at the
+input shaft, every stage's lines over the machine's period), the fit in steps (the stages,
+then their effects, never above the stages' fit), the comparison at that fit, and the
+problem seen from one stage's shafts.
+
+What the residual points to on each stage is tried held out as on a pair
+(:func:`pydiag.loop.machine_discover.validate_machine`): the model's problem seen from
+that stage's shafts (:func:`stage_view`: its kinematics name the lines), the catalogue
+named for it (:func:`pydiag.loop.machine_model.stage_effect`), the model with the effect
+on the stage built for it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from pydiag.core.measurement import Measurement
+from pydiag.core.parameters import fmu_values
+from pydiag.fit.affine import fit_affine
+from pydiag.fit.estimator import FaultEstimator, FitResult
+from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.gear.machine import Machine
+from pydiag.gear.speed import SpeedEstimate
+from pydiag.gear.tracking import order_track
+from pydiag.loop.compare import compare
+from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.results import Comparison
+from pydiag.model.simulate import SIMULATED_SOURCE
+
+
+def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
+                    machine: Machine, speed: SpeedEstimate, fit_gain: bool | None = None,
+                    feature_mode: str = "lines", drop: tuple[str, ...] = (),
+                    gain_curve: bool | None = None) -> FitProblem:
+    """The fit problem of ``measurement`` on the machine model ``model`` (its FMU at
+    ``fmu_path``): the record order-tracked at the input shaft (``speed``, found from every
+    mesh or the tacho; the channels ``drop`` left out), every stage's lines analysed over
+    the machine's fundamental period
+    (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
+    gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`);
+    None (the default): curves wherever the gain is fitted, for a machine's sensors sit on
+    its housing, which passes each band of the meshes differently (the gain of a record
+    ``pydiag simulate`` made is the model's: not fitted)."""
+    tracked = order_track(measurement, speed, drop=drop)
+    channels = [c for c in tracked.channels if c not in drop]
+    adapter = model.adapter(channels)
+    if fit_gain is None:
+        fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
+    if gain_curve is None:
+        gain_curve = fit_gain
+    parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
+    return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
+                         fixed_values=model.fixed_values,
+                         kinematics=machine.model_kinematics(speed.speed_hz),
+                         feature_mode=feature_mode, fit_gain=fit_gain, speed_estimate=speed,
+                         gain_curve=gain_curve)
+
+
+def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
+                effect_estimator: FaultEstimator | None = None,
+                start: dict[str, float] | None = None) -> FitResult:
+    """The fit of a machine's model with its effects, in steps: the stages alone (every
+    effect off), then the effects' parameters with the stages held there
+    (``effect_estimator``, default ``estimator``; the parameters of an effect whose outputs
+    are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`), then
+    every parameter polished from the better of the two. Its error is never above the
+    stages' fit it starts from, which one swarm over every parameter at once does not
+    promise (more parameters, the same budget;
+    a swarm run on another model, even one that adds nothing, may land elsewhere).
+
+    ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
+    effect and the effect's held-out fit; every parameter is polished from there as well
+    (one missing starts off), and the better fit is kept: the error is then not above that
+    fit's either. An affine parameter the problem's features do not see (a shaft's order
+    outside every feature band: :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off
+    through the polishes, which would otherwise leave it wherever their steps wander."""
+    names = {p.name for p in model.effect_parameters}
+    own = tuple(p for p in problem.parameters if p.name not in names)
+    added = tuple(p for p in problem.parameters if p.name in names)
+    later = effect_estimator or estimator
+    pinned: dict[str, float] = {}  # lines outside every feature band: nothing moves them
+    if not added:
+        best = estimator.fit(problem)
+    else:
+        off = {p.name: p.off for p in added}
+        base = estimator.fit(problem.derive(parameters=own,
+                                            fixed_values=fmu_values(added, off)))
+        affine = tuple(p for p in added if p.name in model.affine_parameters)
+        other = tuple(p for p in added if p.name not in model.affine_parameters)
+        values, error = {}, base.error
+        if other:
+            effects = later.fit(problem.derive(parameters=other, fixed_values={
+                **fmu_values(own, base.parameters), **fmu_values(affine, off)}))
+            values, error = dict(effects.parameters), effects.error
+        if affine:  # n + 1 simulations, however many parameters
+            fitted = fit_affine(problem.derive(parameters=affine, fixed_values={
+                **fmu_values(own, base.parameters), **fmu_values(other, {**off, **values})}))
+            values.update(fitted.values)
+            error = fitted.error
+            pinned = {name: off[name] for name in fitted.unseen}
+        best = later.refine(_held(problem, pinned), {**base.parameters,
+                                                     **(values if error < base.error else off)})
+    if start is not None:
+        again = later.refine(_held(problem, pinned), {p.name: start.get(p.name, p.off)
+                                                      for p in problem.parameters})
+        best = again if again.error < best.error else best
+    return dataclasses.replace(best, parameters={**best.parameters, **pinned})
+
+
+def _held(problem: FitProblem, values: dict[str, float]) -> FitProblem:
+    """``problem`` with the parameters named in ``values`` held there."""
+    if not values:
+        return problem
+    held = [p for p in problem.parameters if p.name in values]
+    return problem.derive(parameters=tuple(p for p in problem.parameters
+                                           if p.name not in values),
+                          fixed_values=fmu_values(held, values))
+
+
+def compare_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
+                    effect_estimator: FaultEstimator | None = None,
+                    false_alarm_rate: float = 0.01,
+                    start: dict[str, float] | None = None) -> Comparison:
+    """compare (:func:`pydiag.loop.compare.compare`) of the machine's model at its fit
+    (:func:`fit_machine`), whose error the comparison reports as its fit error."""
+    fit = fit_machine(problem, model, estimator, effect_estimator, start)
+    return dataclasses.replace(compare(problem, None, false_alarm_rate,
+                                       parameters=fit.parameters), fit_error=fit.error)
+
+
+def stage_view(problem: FitProblem, machine: Machine, model: MachineModel, stage: int,
+               values: dict[str, float]) -> FitProblem:
+    """The machine model's ``problem`` seen from stage ``stage``: the same record, model and
+    features, the kinematics (which name the lines, and say which are an effect's) the
+    stage's, over the machine's period; its parameters the stage's own
+    (:meth:`MachineModel.stage_parameters`), every other held at ``values`` (the machine's
+    fit). An effect tried on the stage that frees the base (``Effect.reshapes_base``) then
+    frees only the stage's: the other stages' lines are not its, and what they fit is the
+    machine's fit, not the try's."""
+    input_hz = problem.kinematics.f_pinion_hz  # the first stage's pinion: the input shaft
+    own = model.stage_parameters(stage)
+    held = tuple(p for p in problem.parameters if p.name not in own)
+    return dataclasses.replace(
+        problem.derive(parameters=tuple(p for p in problem.parameters if p.name in own),
+                       fixed_values=fmu_values(held, values)),
+        kinematics=machine.model_kinematics(input_hz, stage))
