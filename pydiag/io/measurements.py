@@ -13,7 +13,8 @@ import numpy as np
 
 from pydiag.core.measurement import Measurement
 from pydiag.io.outputs import atomic_output
-from pydiag.io.readers import META_PREFIX, TIME_COLUMNS
+from pydiag.io.formats import META_PREFIX
+from pydiag.io.readers import TIME_COLUMNS
 
 TIME_COLUMN = TIME_COLUMNS[0]
 

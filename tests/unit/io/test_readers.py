@@ -295,8 +295,8 @@ def test_an_empty_unit_and_a_column_chosen_twice_are_refused(tmp_path, signals):
 
 @pytest.mark.parametrize("fmt", ["csv", "csv.gz", "parquet", "mat", "wav", "tdms"])
 def test_a_record_past_the_bound_is_refused_before_it_is_read(tmp_path, monkeypatch, fmt):
-    from pydiag.io import readers
-    monkeypatch.setattr(readers, "MAX_SAMPLES", 1000)
+    from pydiag.io import formats
+    monkeypatch.setattr(formats, "MAX_SAMPLES", 1000)
     x = np.sin(np.arange(1500) / 7.0)
     path = tmp_path / f"long.{fmt}"
     if fmt.startswith("csv"):
@@ -313,7 +313,7 @@ def test_a_record_past_the_bound_is_refused_before_it_is_read(tmp_path, monkeypa
             w.write_segment([ChannelObject("g", "acc", x, properties={"wf_increment": 1 / FS})])
     with pytest.raises(MeasurementError, match="pydiag reads at most 1,000"):
         read_measurement(path, FS)
-    monkeypatch.setattr(readers, "MAX_SAMPLES", 2000)
+    monkeypatch.setattr(formats, "MAX_SAMPLES", 2000)
     assert read_measurement(path, FS).n_samples == 1500
 
 
