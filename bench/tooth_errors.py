@@ -71,7 +71,7 @@ from error_budget import (gfd_problems, half_lines, phm09_problems,  # noqa: E40
 from pydiag.core.parameters import Parameter  # noqa: E402
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.gain import curve_nodes  # noqa: E402
-from pydiag.gear.effects import Effect  # noqa: E402
+from pydiag.gear.effect import Effect  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.compose import built_fmu  # noqa: E402
 from pydiag.loop.held_out import held_out  # noqa: E402

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Callable
 
 from pydiag.core.errors import UsageError
-from pydiag.gear.effects import Effect
+from pydiag.gear.effect import Effect
 from pydiag.gear.machine import Machine
 from pydiag.loop.compose import BuiltModel, composed_fmu
 from pydiag.loop.discover import (MODELICA_ROOT, check_modelica_root, default_build_dir,

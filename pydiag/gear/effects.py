@@ -1,480 +1,25 @@
-"""The effect catalogue: each candidate missing effect, its Modelica model, and the
-frequency signature that points to it.
-
-One concern: the catalogue. Each effect is declared here once (its parameters with the
-ranges its Modelica file declares too, its signature, its hint, its properties), beside
-the functions that say its signature and its hints; docs/effects.md tells how to add one.
-
-A signature weighs unexplained residual peaks by their kinematic family and order:
-1 for the effect's defining lines, 0.5 for lines it also produces, 0 otherwise. An
-effect's score is the share of the unexplained peak energy its signature covers.
-
-A housing mode reweights every line the gear pair makes on its way to the sensor, so
-its signature is all of them; its frequency is fitted inside the band where those lines'
-unexplained energy bunches (:func:`resonance_band`), or above the analysed band when the
-bunch reaches its top or there is none (``Effect.free_start``).
+"""The effect catalogue: each candidate missing effect (:class:`~pydiag.gear.effect.Effect`),
+its Modelica model and its parameters, declared here once, its signature and hint named
+from :mod:`pydiag.gear.signatures`; docs/effects.md tells how to add one.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Callable
 
 from pydiag.core.parameters import Parameter
-from pydiag.gear.features import max_band_freq_hz
-from pydiag.gear.kinematic_map import (BEARING_FAMILIES, SHAFT_ORDERS, KinematicLine, coinciding,
-                                      kinematic_map, match)
-from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.peaks import Peak
+from pydiag.gear.effect import Effect
+from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPPLE_HZ,
+                                    MAX_SHAFT_ORDER_M_S2, MAX_STRIKE_M_S2, MAX_SWING,
+                                    backlash, bearing_missing, bearing_values, family,
+                                    gear_eccentricity, gear_tooth_fault, housing_hint,
+                                    housing_start, load_fluctuation, mesh_modulation,
+                                    other_shaft, other_shaft_hint, other_shaft_missing,
+                                    other_shaft_values, pinion_shaft, pinion_shaft_hint,
+                                    ripple_hint, second_pinion_tooth, shaft_swing,
+                                    stiffness_shape, tooth_hint)
+from pydiag.gear.kinematic_map import SHAFT_ORDERS
 from pydiag.signal.transfer import HousingMode
-
-
-@dataclass(frozen=True)
-class Effect:
-    """One catalogue effect (docs/effects.md).
-
-    Attributes:
-        key: the name the CLI and the JSON use
-        model: its Modelica class (``GearDiag.GearPair`` for one whose parameters are the
-            base model's own, ``in_base``)
-        description: what it is, in a line
-        parameters: what it adds, named as its FMU variables, with the ranges its Modelica
-            file declares
-        weight: its signature, (line or None, freq_hz, kinematics) -> 0..1: the weight of
-            a residual line at ``freq_hz`` (``line``: the kinematic line there) on the pair
-            of ``kinematics``
-        hint: (peaks, bin_hz, kinematics) -> {name: (low, high), or None: not fitted here}
-        in_base: its parameters are the base model's, neutral by default: it frees them in
-            the base FMU instead of building a model of its own
-        synchronous: every line it makes is an order of the fundamental period, so its
-            model is simulated over one period and repeated; False for a bearing's strikes
-            or a ripple at a frequency of its own, simulated whole (discover starts those
-            first)
-        outputs: the GearPair outputs whose lines it changes (None: all): a housing mode or
-            a bearing's strikes ring the acceleration at the sensor, not the mesh's
-            displacement, so peaks of disp are no evidence for them
-        reshapes_base: it takes energy from the lines the base makes (a speed fluctuation,
-            a second faulty tooth, a housing mode), so a base fit without it bent its
-            parameters: it is fitted with the base parameters free as well, and the misfit
-            the bent base left on any channel is its evidence
-        free_start: (top of the analysed band, Hz) -> values of some of its parameters a
-            second polish with the base free starts from (a housing mode above the band
-            shows only as a tilt, which a fit with the base held makes up for); the better
-            polish is kept
-        affine: its outputs are affine in its parameters (a strike amplitude, a shaft's
-            orders): fitted from one simulation more than it has parameters
-        envelope: its lines show in the envelope of the acceleration above the gear's bands
-            (a bearing's strikes ringing a structural mode), where held-out validation
-            fits and scores it
-        machine_values: (kinematics) -> FMU values its model takes from the machine (a
-            bearing's geometry, another shaft's ratio) rather than fits
-        missing: (kinematics) -> what the machine's description must say for it to have
-            lines at all, "" when nothing is missing
-        transfer: it is a path between the model's output and the sensor, applied to the
-            base model's simulated output (:mod:`pydiag.signal.transfer`) rather than
-            built into an FMU of its own: it adds to any model, and costs no integration
-            of a stiff or slowly settling mode (its ``model`` is the Modelica model that
-            says the same, which a test holds it to)
-    """
-
-    key: str
-    model: str
-    description: str
-    parameters: tuple[Parameter, ...]
-    weight: Callable[[KinematicLine | None, float, GearKinematics], float]
-    hint: Callable[[list[Peak], float, GearKinematics | None], dict] | None = None
-    in_base: bool = False
-    synchronous: bool = True
-    outputs: tuple[str, ...] | None = None
-    reshapes_base: bool = False
-    free_start: Callable[[float], dict[str, float]] | None = None
-    affine: bool = False
-    envelope: bool = False
-    machine_values: Callable[[GearKinematics | None], dict[str, float]] | None = None
-    missing: Callable[[GearKinematics | None], str] | None = None
-    transfer: HousingMode | None = None
-
-    @property
-    def own_fmu(self) -> bool:
-        """Whether it is fitted on an FMU of its own (else on the base model's FMU: its
-        parameters are the base's, ``in_base``, or a ``transfer`` path's)."""
-        return not self.in_base and self.transfer is None
-
-    def changes(self, output: str) -> bool:
-        """Whether the effect changes the model output ``output`` (an FMU variable)."""
-        return self.outputs is None or output in self.outputs
-
-    def bounds(self, peaks: list[Peak], bin_hz: float,
-               kinematics: GearKinematics | None = None) -> tuple[Parameter, ...]:
-        """The effect's parameters, bounds narrowed by what the residual peaks (and the gear
-        machine's ``kinematics``: :class:`pydiag.gear.kinematics.GearKinematics`) say, if it can;
-        those its hint leaves out (None) are not fitted: they keep the FMU's neutral value."""
-        narrowed = self.hint(peaks, bin_hz, kinematics) if self.hint else {}
-        return tuple(dataclasses.replace(p, low=narrowed[p.name][0], high=narrowed[p.name][1])
-                     if p.name in narrowed else p for p in self.parameters
-                     if p.name not in narrowed or narrowed[p.name] is not None)
-
-    def values_from(self, kinematics) -> dict[str, float]:
-        """FMU values its model takes from the machine's ``kinematics``, not fitted."""
-        return self.machine_values(kinematics) if self.machine_values else {}
-
-    def unknown_lines(self, kinematics) -> str:
-        """Why ``kinematics`` do not say where its lines are, or "" when they do."""
-        missing = self.missing(kinematics) if self.missing else ""
-        return f"its lines are not known without {missing}" if missing else ""
-
-    def neutral_values(self) -> dict[str, float]:
-        """FMU values that switch the effect off (each parameter's value nearest zero,
-        :attr:`pydiag.core.parameters.Parameter.off`; none for a transfer path, which is
-        off when it is not applied)."""
-        if self.transfer is not None:
-            return {}
-        return {p.fmu_variable: p.fmu_value(p.off) for p in self.parameters}
-
-
-def _gear_eccentricity(line, freq, kin):
-    if line is None:
-        return 0.0
-    if line.family == "gear":
-        return 1.0 if line.order == 1 else 0.5 if line.order == 2 else 0.0
-    return 1.0 if line.family == "mesh_sb_gear" and abs(line.order) == 1 else 0.0
-
-
-def _mesh_modulation(line, freq, kin):
-    # amplitude modulation once per turn of a shaft: the first sideband of that shaft's
-    # order either side of every mesh harmonic, and, at half weight, the shaft's first
-    # order (the deflection under load)
-    if line is None:
-        return 0.0
-    if line.family in ("mesh_sb_pinion", "mesh_sb_gear"):
-        return 1.0 if abs(line.order) == 1 else 0.0
-    return 0.5 if line.family in ("pinion", "gear") and line.order == 1 else 0.0
-
-
-def _shaft_swing(line, freq, kin):
-    # the mesh's phase modulated at each shaft's speed: the first sideband of that shaft
-    # either side of every mesh harmonic; no line at the shaft's own order (the phase of a
-    # force, not its size, swings). Only the first: a shallow modulation of the phase and
-    # one of the size (mesh_modulation, which claims these lines and more) make the same
-    # first sidebands in an amplitude spectrum, so wherever the swing is tried on its
-    # score the modulation is too, and the record, held out, tells them apart; a claim on
-    # the second sidebands (a deep swing's) would try it alone on a comb a local fault
-    # makes, and make it confident with its rival untried
-    if line is None or line.family not in ("mesh_sb_pinion", "mesh_sb_gear"):
-        return 0.0
-    return 1.0 if abs(line.order) == 1 else 0.0
-
-
-def _gear_tooth_fault(line, freq, kin):
-    if line is None:
-        return 0.0
-    if line.family == "gear":
-        return 1.0 if line.order >= 2 else 0.5
-    if line.family == "mesh_sb_gear":
-        return 1.0 if abs(line.order) >= 2 else 0.5
-    return 0.0
-
-
-def _second_pinion_tooth(line, freq, kin):
-    if line is None:
-        return 0.0
-    if line.family == "mesh_sb_pinion":
-        return 1.0
-    return 0.5 if line.family == "pinion" and line.order >= 2 else 0.0
-
-
-def _backlash(line, freq, kin):
-    # the contact lost where the deflection is lowest: every mesh harmonic, the higher
-    # ones above all, and, at half weight, the lines of the pinion's turn (its faulty
-    # tooth's, its runout's) whose troughs the loss clips
-    if line is None:
-        return 0.0
-    if line.family == "mesh":
-        return 1.0 if line.order >= 2 else 0.5
-    return 0.5 if line.family in ("mesh_sb_pinion", "pinion") else 0.0
-
-
-#: The largest line of a shaft order the shaft effects fit, m/s2 at the model's sensor, like
-#: a bearing strike (MAX_STRIKE_M_S2): a fitted gain of 0.0145 makes it 7 g.
-MAX_SHAFT_ORDER_M_S2 = 5000.0
-
-
-#: A pinion order another shaft turns at too is fitted only where its unexplained line
-#: stands this many times above that shaft's neighbouring orders' (_pinion_shaft_hint).
-SHARED_ORDER_MARGIN = 2.0
-#: Families of the other shafts' orders (a pair's gear, the other shaft named, a
-#: gearbox's other shafts).
-OTHER_SHAFTS = ("gear", "other_shaft", "machine_shaft")
-
-
-def _pinion_shaft(line, freq, kin):
-    # the pinion shaft's own lines: its first orders, far below the mesh's sidebands. An
-    # order another shaft turns at too (2x pinion is 3x gear on 14/21 teeth; every order
-    # of the PHM09 box's 32-tooth input pinion is an order of its idler's and of its
-    # output's) is claimed only where the pinion has no order of its own (each is another
-    # shaft's too), as a line it may make (0.5), which the hint fits only where the line
-    # stands above the other shaft's orders around it; where the pinion has orders of its
-    # own, those are the evidence of its vibration, and a shared line, which the other
-    # shaft's comb may make (a broken gear tooth strikes at every gear order), is left to
-    # neither. One a bearing's line falls on (in a spectrum of joined halves, within half
-    # a bin: 2x BPFO on 7x pinion on the catalogue's 6205) is no evidence for it
-    if (line is None or line.family != "pinion" or line.order > SHAFT_ORDERS
-            or set(line.also) & set(BEARING_FAMILIES)):
-        return 0.0
-    if not set(line.also) & set(OTHER_SHAFTS):
-        return 1.0
-    return 0.5 if _every_order_shared(kin) else 0.0
-
-
-def _every_order_shared(kin: GearKinematics) -> bool:
-    """Whether the pinion's 1x, and so each of its orders, is an order of another shaft
-    (a 32-tooth pinion driving 96: the gear turns once in 3 of its turns)."""
-    fp = kin.f_pinion_hz
-    return any(abs(fp / f - round(fp / f)) <= 1e-6 for f in _other_speeds(kin))
-
-
-def _other_speeds(kin: GearKinematics) -> list[float]:
-    """The speeds of the shafts other than the pinion's that the kinematics know, each
-    once (a gearbox's list holds the pair's two shafts too)."""
-    fp = kin.f_pinion_hz
-    speeds = [kin.f_gear_hz] + ([kin.f_other_shaft_hz] if kin.f_other_shaft_hz else [])
-    if kin.machine is not None:
-        speeds += [shaft.ratio * fp for shaft in kin.machine.shafts]
-    out: list[float] = []
-    for f in speeds:
-        if not any(math.isclose(f, seen, rel_tol=1e-9) for seen in [fp, *out]):
-            out.append(f)
-    return out
-
-
-def _pinion_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """The orders whose line it does not claim (:func:`_pinion_shaft`: one a
-    bearing's line falls on, a mesh sideband on a pinion of few teeth, one another shaft
-    turns at too where the pinion has orders of its own) are not fitted, nor a shared
-    one whose residual's line does not stand :data:`SHARED_ORDER_MARGIN` times above each
-    other shaft's orders 1 and 2 either side of it that are no pinion order: a line of
-    another shaft's comb is as high as its neighbours, the pinion's own vibration stands
-    out of it. Without a spectrum (``bin_hz`` 0: what the pair alone says) a shared order
-    it claims may be fitted."""
-    if kin is None:
-        return {}
-    fp = kin.f_pinion_hz
-    lines = kinematic_map(kin, (SHAFT_ORDERS + 0.5) * fp)
-    out = {}
-    for k in range(1, SHAFT_ORDERS + 1):
-        weight = _pinion_shaft(match(k * fp, lines, 1e-6 * fp), k * fp, kin)
-        if weight == 0 or (weight < 1 and bin_hz > 0
-                           and not _stands_out(k * fp, peaks, bin_hz, kin)):
-            out[f"A_s{k}"] = None
-    return out
-
-
-def _stands_out(freq_hz: float, peaks: list[Peak], bin_hz: float, kin: GearKinematics) -> bool:
-    """Whether the residual's line at the pinion order ``freq_hz`` stands
-    :data:`SHARED_ORDER_MARGIN` times above every other shaft's orders next to it (those
-    that are no pinion order), in the largest excess over the model of any channel."""
-    def excess(f: float) -> float:
-        return max((p.amplitude for p in peaks if abs(p.freq_hz - f) <= 0.5 * bin_hz),
-                   default=0.0)
-
-    fp = kin.f_pinion_hz
-    neighbours = []
-    for f_shaft in _other_speeds(kin):
-        order = freq_hz / f_shaft
-        if abs(order - round(order)) > 1e-6:
-            continue
-        for step in (-2, -1, 1, 2):
-            f = (round(order) + step) * f_shaft
-            turns = f / fp
-            if f > 0 and abs(turns - round(turns)) > 1e-6:
-                neighbours.append(excess(f))
-    own = excess(freq_hz)
-    return own > 0 and own > SHARED_ORDER_MARGIN * max(neighbours, default=0.0)
-
-
-def _other_shaft(line, freq, kin):
-    # another shaft's first orders, but for those a line of the gear pair (or a bearing)
-    # falls on: which shaft makes such a line the record does not say
-    ok = (line is not None and line.family == "other_shaft" and line.order <= SHAFT_ORDERS
-          and not set(line.also) - {"hunting"})
-    return 1.0 if ok else 0.0
-
-
-def _other_shaft_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """Only the orders it claims (:func:`_other_shaft`) at which the residual has a peak
-    are fitted: none when the other shaft's speed is not known. Its lines are not
-    synchronous with the pair's period, so in a spectrum of joined halves each leaks over
-    the bins around it: an order with no line in the record, fitted, takes noise peaks of
-    the fitted half by its leakage and predicts lines the other half lacks."""
-    names = [f"A_o{k}" for k in range(1, SHAFT_ORDERS + 1)]
-    f_other = None if kin is None else kin.f_other_shaft_hz
-    if f_other is None:
-        return dict.fromkeys(names)
-    top = min((SHAFT_ORDERS + 0.5) * f_other, max_band_freq_hz(kin))
-    own = {ln.order: ln for ln in coinciding(kinematic_map(kin, top), 0.5 * bin_hz)
-           if ln.family == "other_shaft"}
-    seen = {p.order for p in peaks if p.family == "other_shaft"}
-    return {name: None for k, name in enumerate(names, 1) if k not in seen or k not in own
-            or _other_shaft(own[k], own[k].freq_hz, kin) == 0}
-
-
-def _other_shaft_values(kin) -> dict[str, float]:
-    ratio = None if kin is None else kin.other_shaft_ratio
-    return {} if ratio is None else {"r_other": ratio}
-
-
-def _other_shaft_missing(kin) -> str:
-    return "the other shaft's speed ratio" if kin is None or kin.other_shaft_ratio is None else ""
-
-
-def _family(name):
-    def weight(line, freq, kin):
-        return 1.0 if line is not None and line.family in name else 0.0
-    return weight
-
-
-def _stiffness_shape(line, freq, kin):
-    # an even harmonic of the healthy mesh's stiffness: the mesh harmonics, 2x above all
-    if line is None or line.family != "mesh":
-        return 0.0
-    return 1.0 if line.order % 2 == 0 else 0.5
-
-
-#: Kinematic families the base gear pair (GearDiag.GearPair) makes: the lines a transfer
-#: path between its mesh and the sensor can reshape.
-GEAR_PAIR_FAMILIES = ("mesh", "mesh_sb_pinion", "pinion", "assembly")
-#: Half-width of a housing mode's band, relative to its frequency. A mode of damping
-#: ratio zeta amplifies lines within about +-zeta of f_n by more than 1/sqrt(2) of its
-#: peak; housing modes have zeta of 0.01-0.05, so +-10 % holds what it amplifies.
-MODE_BAND = 0.1
-#: The highest housing-mode frequency the housing-sensor effect fits, Hz.
-MAX_HOUSING_HZ = 10_000.0
-
-
-def resonance_band(peaks: list[Peak], families: tuple[str, ...] = GEAR_PAIR_FAMILIES,
-                   half_width: float = MODE_BAND) -> tuple[float, float] | None:
-    """The band (low, high), Hz, of relative half-width ``half_width`` around the peak
-    frequency that gathers the most unexplained energy of lines of ``families``; None
-    when there are no such peaks. The centre is the energy-weighted mean frequency of the
-    peaks in the best window."""
-    lines = [(p.freq_hz, p.energy_fraction) for p in peaks if p.family in families]
-    if not lines:
-        return None
-    def window(fc):
-        return [(f, e) for f, e in lines if abs(f - fc) <= half_width * fc]
-    best = max((f for f, _ in lines), key=lambda fc: sum(e for _, e in window(fc)))
-    inside = window(best)
-    energy = sum(e for _, e in inside)
-    fc = sum(f * e for f, e in inside) / energy if energy > 0 else best
-    return fc * (1 - half_width), fc * (1 + half_width)
-
-
-def _housing_start(top_hz: float) -> dict[str, float]:
-    # a mode a quarter above the analysed band, of a housing's usual damping: from there
-    # the polish reaches a mode anywhere above the band; from below the band's top, or
-    # from the held fit's start, it stays below it
-    return {"f_housing": 1.25 * top_hz, "zeta_housing": 0.05}
-
-
-def _housing_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-    """The mode's frequency inside the band its signature claims; when that band reaches
-    the top of the analysed range, the lines there may be the skirt of a mode above it, so
-    the mode may lie anywhere above the band's lower edge."""
-    band = resonance_band(peaks)
-    if band is None:
-        return {}
-    if kin is not None and band[1] >= max_band_freq_hz(kin):
-        return {"f_housing": (band[0], MAX_HOUSING_HZ)}
-    return {"f_housing": band}
-
-
-def _bearing_values(kin) -> dict[str, float]:
-    """The bearing's geometry, as the bearing effects' models name it."""
-    b = None if kin is None else kin.bearing
-    return {} if b is None else {"n_balls": float(b.n_balls), "d_ball": b.ball_diameter_m,
-                                 "d_pitch": b.pitch_diameter_m,
-                                 "alpha_contact": b.contact_angle_rad}
-
-
-def _bearing_missing(kin) -> str:
-    return "the bearing's geometry (--bearing)" if kin is None or kin.bearing is None else ""
-
-
-#: The largest bearing strike the bearing effects fit, m/s2 at the model's sensor (500 g):
-#: a fitted channel gain scales it to the measurement's, and real records fit gains down
-#: to about 0.01.
-MAX_STRIKE_M_S2 = 5000.0
-#: The largest swing of a shaft's speed once a turn the shaft-swing effect fits, relative
-#: to its mean speed: a drive train's torsional swing is a few per cent of it.
-MAX_SWING = 0.05
-#: The highest torque-ripple frequency the load-fluctuation effect models, Hz.
-MAX_RIPPLE_HZ = 20.0
-
-
-def _load_fluctuation(line, freq, kin):
-    # a torque ripple is not kinematic: its line (and its mesh sidebands) match no family.
-    # It predicts lines only at its own frequency (<= MAX_RIPPLE_HZ) and within that of a
-    # mesh harmonic; a non-kinematic line elsewhere (another shaft, the mains, a
-    # resonance) is no evidence for it.
-    if line is not None:
-        return 0.0
-    f_mesh = kin.f_mesh_hz
-    harmonic = round(freq / f_mesh)
-    near_mesh = harmonic >= 1 and abs(freq - harmonic * f_mesh) <= MAX_RIPPLE_HZ
-    return 1.0 if freq <= MAX_RIPPLE_HZ or near_mesh else 0.0
-
-
-def ripple_frequency(peaks: list[Peak], bin_hz: float, f_mesh_hz: float) -> float | None:
-    """The torque-ripple frequency the unexplained peaks agree on, Hz, or None.
-
-    A ripple f puts lines at f and its harmonics and modulates the mesh: sidebands at
-    n f_mesh +- k f, the higher k the stronger the modulation. Each unexplained peak's
-    offset from 0 or from the nearest mesh harmonic (up to half the mesh frequency) is a
-    multiple of f; a candidate (every offset <= MAX_RIPPLE_HZ) is supported by the
-    unexplained energy of the peaks whose offset is within k bins of its k-th multiple.
-    The largest candidate with 90 % of the best support wins: a subharmonic f/2 is
-    supported by every peak f is, and a single strong line near a shaft order by itself.
-    """
-    unexplained = [p for p in peaks if p.family == "unexplained"]
-    def offset(f):
-        harmonic = round(f / f_mesh_hz)
-        return abs(f - harmonic * f_mesh_hz) if harmonic >= 1 else f
-    offsets = [(offset(p.freq_hz), p.energy_fraction) for p in unexplained]
-    candidates = {o for o, _ in offsets if 0.5 <= o <= MAX_RIPPLE_HZ}
-    if not candidates:
-        return None
-    def support(d):
-        # the k-th multiple carries k times the candidate's error of up to half a bin
-        return sum(e for o, e in offsets
-                   if round(o / d) >= 1 and abs(o - round(o / d) * d) <= round(o / d) * bin_hz)
-    best = max(support(d) for d in candidates)
-    return max(d for d in candidates if support(d) >= 0.9 * best)
-
-
-def _ripple_hint(name):
-    def hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-        """The ripple frequency from the unexplained peaks' spacing, to within a bin."""
-        f = ripple_frequency(peaks, bin_hz, kin.f_mesh_hz) if kin is not None else None
-        return {} if f is None else {name: (max(0.5, f - bin_hz), f + bin_hz)}
-    return hint
-
-
-def _tooth_hint(name, teeth, other_than_zero=False):
-    def hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -> dict:
-        """The faulty tooth may be any of the wheel's (one turn of its index), or, when
-        ``other_than_zero``, a tooth 1 to N/2 from tooth 0 (the base model's faulty tooth):
-        a tooth k and a tooth N - k make patterns that are each other's time reverse, whose
-        amplitude spectra are the same but for the mesh's dynamics, so the spectra cannot
-        tell them apart and a search over both would choose between them by rounding
-        (bench/RESULTS.md, changelog)."""
-        if kin is None:
-            return {}
-        n = float(getattr(kin, teeth))
-        return {name: (0.5, n // 2 + 0.5) if other_than_zero else (0.0, n)}
-    return hint
 
 
 EFFECTS = {e.key: e for e in (
@@ -482,34 +27,34 @@ EFFECTS = {e.key: e for e in (
            "even harmonics of the mesh stiffness wave (contact ratio, tip relief)",
            (Parameter("k2", 0.0, 0.3), Parameter("phi2", -math.pi, math.pi, periodic=True),
             Parameter("k4", 0.0, 0.1), Parameter("phi4", -math.pi, math.pi, periodic=True)),
-           _stiffness_shape, in_base=True),
+           stiffness_shape, in_base=True),
     Effect("pinion_tooth_softening", "GearDiag.GearPair",
            "the faulty pinion tooth is also softer over its contact, most while alone in it "
            "(a crack, a chip)",
            (Parameter("d_f", 0.0, 0.6), Parameter("eps_c", 1.1, 1.9),
             Parameter("q_c", 1.0, 5.0), Parameter("r_c", 0.02, 0.5)),
-           _second_pinion_tooth, in_base=True),
+           second_pinion_tooth, in_base=True),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
-           (Parameter("ecc_gear", 0.0, 50e-6),), _gear_eccentricity),
+           (Parameter("ecc_gear", 0.0, 50e-6),), gear_eccentricity),
     # an eccentric or tilted gear: the load along the face varies around the turn
     Effect("mesh_modulation", "GearDiag.Effects.MeshModulation",
            "the mesh stiffness modulated once per turn of each shaft (a gear mounted tilted "
            "or eccentric: the face width in contact varies around its turn)",
            (Parameter("m_p", 0.0, 0.5), Parameter("phi_p", -math.pi, math.pi, periodic=True),
             Parameter("m_g", 0.0, 0.5), Parameter("phi_g", -math.pi, math.pi, periodic=True)),
-           _mesh_modulation),
+           mesh_modulation),
     # a softer tooth over its contact; which tooth is unknown (one turn of the index, the
     # bump moving smoothly with it; the hint sets the turn from the wheel's teeth)
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
            (Parameter("d_g", 0.0, 0.6), Parameter("tooth_g", 0.0, 21.0, periodic=True)),
-           _gear_tooth_fault, _tooth_hint("tooth_g", "n_gear")),
+           gear_tooth_fault, tooth_hint("tooth_g", "n_gear")),
     # a second tooth is not tooth 0; its index is a whole tooth (step 1: each tooth is
     # searched by particles of its own; a smooth index stopped between teeth), counted the
     # shorter way from tooth 0 (the hint: tooth k and N - k are one pattern, reversed)
     Effect("second_pinion_tooth_fault", "GearDiag.Effects.SecondPinionToothFault",
            "a second faulty pinion tooth",
            (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5, step=1.0)),
-           _second_pinion_tooth, _tooth_hint("tooth2", "n_pinion", other_than_zero=True),
+           second_pinion_tooth, tooth_hint("tooth2", "n_pinion", other_than_zero=True),
            reshapes_base=True),
     # the teeth separate only where the dynamic deflection outgrows the static one (the mesh
     # at a resonance): the loss then reshapes the lines the base makes, which a base fit
@@ -517,27 +62,27 @@ EFFECTS = {e.key: e for e in (
     # a hard contact to the roughness of ground teeth (Ra 0.3 um). Wider, the factor is a
     # softening stiffness law over the whole deflection instead (RESULTS.md, changelog).
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
-           (Parameter("delta_c", 0.01e-6, 0.3e-6),), _backlash, reshapes_base=True),
+           (Parameter("delta_c", 0.01e-6, 0.3e-6),), backlash, reshapes_base=True),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
-           (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), _family(("bpfo",)), synchronous=False,
-           outputs=("acc",), envelope=True, affine=True, machine_values=_bearing_values,
-           missing=_bearing_missing),
+           (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), family(("bpfo",)), synchronous=False,
+           outputs=("acc",), envelope=True, affine=True, machine_values=bearing_values,
+           missing=bearing_missing),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
             Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
-           _family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
-           machine_values=_bearing_values, missing=_bearing_missing),
+           family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
+           machine_values=bearing_values, missing=bearing_missing),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
-           (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), _load_fluctuation,
-           _ripple_hint("f_load"), synchronous=False),
+           (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,
+           ripple_hint("f_load"), synchronous=False),
     # the same lines as a torque ripple (they compete): a ripple the shafts' inertia turns
     # into a speed fluctuation modulates the mesh's phase rather than its force
     Effect("speed_fluctuation", "GearDiag.Effects.SpeedFluctuation",
            "the shafts' speed fluctuates (phase modulation of every line)",
            (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
-           _load_fluctuation, _ripple_hint("f_speed"), synchronous=False, reshapes_base=True),
+           load_fluctuation, ripple_hint("f_speed"), synchronous=False, reshapes_base=True),
     # a torsional swing at each shaft's own speed (a misaligned coupling, a bent shaft): the
     # mesh's phase modulated once a turn of either shaft, synchronous with the pair. Deep
     # (the gear's swing is Ng times deeper in the mesh's phase), so far from affine, and it
@@ -550,7 +95,7 @@ EFFECTS = {e.key: e for e in (
            "shaft's speed)",
            (Parameter("s_p", 0.0, MAX_SWING), Parameter("psi_p", -math.pi, math.pi, periodic=True),
             Parameter("s_g", 0.0, MAX_SWING), Parameter("psi_g", -math.pi, math.pi, periodic=True)),
-           _shaft_swing, reshapes_base=True),
+           shaft_swing, reshapes_base=True),
     # a shaft's unbalance, misalignment or looseness, seen at the sensor through its
     # bearings: one amplitude an order (the outputs are affine in all of them)
     Effect("pinion_shaft_orders", "GearDiag.Effects.PinionShaftOrders",
@@ -558,15 +103,15 @@ EFFECTS = {e.key: e for e in (
            "looseness)",
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
-           _pinion_shaft, _pinion_shaft_hint, outputs=("acc",), affine=True),
+           pinion_shaft, pinion_shaft_hint, outputs=("acc",), affine=True),
     # the same, of a shaft beyond the pair at a speed ratio the kinematics give: not
     # synchronous with the pair's period in general (a motor shaft at 29/17 of the pinion's)
     Effect("other_shaft_orders", "GearDiag.Effects.OtherShaftOrders",
            "another shaft's own vibration at its first orders (a second stage, a motor shaft)",
            tuple(Parameter(f"A_o{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
-           _other_shaft, _other_shaft_hint, synchronous=False, outputs=("acc",), affine=True,
-           machine_values=_other_shaft_values, missing=_other_shaft_missing),
+           other_shaft, other_shaft_hint, synchronous=False, outputs=("acc",), affine=True,
+           machine_values=other_shaft_values, missing=other_shaft_missing),
     # the mode reweights every line the gear pair makes on its way to the sensor (its
     # signature: all of them); its frequency is fitted in the band where the residual of
     # those lines bunches (the hint), or above the band, where it shows only as a tilt
@@ -576,10 +121,6 @@ EFFECTS = {e.key: e for e in (
     Effect("housing_sensor", "GearDiag.Effects.HousingSensor",
            "accelerometer on the housing, behind one housing mode",
            (Parameter("f_housing", 20.0, MAX_HOUSING_HZ), Parameter("zeta_housing", 0.005, 0.5)),
-           _family(GEAR_PAIR_FAMILIES), _housing_hint, outputs=("acc",), reshapes_base=True,
-           free_start=_housing_start, transfer=HousingMode("acc")),
+           family(GEAR_PAIR_FAMILIES), housing_hint, outputs=("acc",), reshapes_base=True,
+           free_start=housing_start, transfer=HousingMode("acc")),
 )}
-
-
-def model_file(effect: Effect, modelica_root) -> Path:
-    return Path(modelica_root) / "GearDiag" / "Effects" / f"{effect.model.rsplit('.', 1)[1]}.mo"

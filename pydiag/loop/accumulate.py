@@ -20,7 +20,8 @@ from typing import Callable
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.effect import Effect
+from pydiag.gear.effects import EFFECTS
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.effect_fit import EFFECT_REFIT, with_effect
 from pydiag.loop.results import Comparison

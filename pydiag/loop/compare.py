@@ -34,7 +34,8 @@ import numpy as np
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.effect import Effect
+from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematic_map import kinematic_map, match
 from pydiag.gear.peaks import Peak
 from pydiag.loop.effect_fit import evidence_channels, fit_effect

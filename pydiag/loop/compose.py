@@ -36,7 +36,8 @@ from pathlib import Path
 
 from pydiag.core.errors import UsageError
 from pydiag.fmu.archive import usable_cache
-from pydiag.gear.effects import EFFECTS, model_file
+from pydiag.gear.effect import model_file
+from pydiag.gear.effects import EFFECTS
 
 #: Hooks whose contributions add.
 SUMMED_HOOKS = ("k_mod", "e_extra", "F_extra", "acc_sensor", "t_angle")

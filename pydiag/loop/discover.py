@@ -48,7 +48,8 @@ from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.archive import usable_cache
-from pydiag.gear.effects import EFFECTS, Effect, model_file
+from pydiag.gear.effect import Effect, model_file
+from pydiag.gear.effects import EFFECTS
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model

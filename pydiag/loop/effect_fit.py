@@ -10,7 +10,7 @@ from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
-from pydiag.gear.effects import Effect
+from pydiag.gear.effect import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.peaks import Peak
 from pydiag.loop.results import Comparison

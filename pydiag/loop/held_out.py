@@ -58,7 +58,7 @@ from pydiag.core.parameters import Parameter
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.objective import noise_corrected_error, rician_mean, spectral_error
 from pydiag.fit.problem import FitProblem, ProblemObjective
-from pydiag.gear.effects import Effect
+from pydiag.gear.effect import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
 from pydiag.loop.effect_fit import (EFFECT_REFIT, effect_parameters, evidence_channels,

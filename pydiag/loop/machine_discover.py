@@ -31,7 +31,8 @@ from fmu_build import ModelicaBuildError as BuildError
 from pydiag.core.errors import PydiagError, UsageError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.effect import Effect
+from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine, StageEffect
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import mark_settled, settle

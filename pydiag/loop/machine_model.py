@@ -53,7 +53,8 @@ from pathlib import Path
 from pydiag.core.errors import UsageError
 from pydiag.core.parameters import Parameter
 from pydiag.gear.conventions import GEAR_FAULT_PARAMETERS, HEALTHY_TOOTH
-from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.effect import Effect
+from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
 from pydiag.model.adapter import Adapter, Quantity, SensorMap

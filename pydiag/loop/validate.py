@@ -25,7 +25,8 @@ from pydiag.core.errors import PydiagError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
-from pydiag.gear.effects import EFFECTS, Effect
+from pydiag.gear.effect import Effect
+from pydiag.gear.effects import EFFECTS
 from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.effect_fit import in_model
 from pydiag.loop.held_out import FALSE_ALARM_RATE, held_out, threshold

@@ -5,7 +5,8 @@ import dataclasses
 
 import pytest
 
-from pydiag.gear.effects import EFFECTS, MODE_BAND, resonance_band
+from pydiag.gear.effects import EFFECTS
+from pydiag.gear.signatures import MODE_BAND, resonance_band
 from pydiag.gear.features import max_band_freq_hz
 from pydiag.gear.kinematic_map import KinematicLine
 from pydiag.gear.kinematics import GearKinematics

@@ -2,7 +2,7 @@
 
 from types import SimpleNamespace
 
-from pydiag.gear.effects import ripple_frequency
+from pydiag.gear.signatures import ripple_frequency
 
 F_MESH, BIN = 350.0, 1 / 2.4
 

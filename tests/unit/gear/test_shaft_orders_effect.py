@@ -1,6 +1,7 @@
 """The pinion shaft's orders: which lines they claim and which amplitudes are fitted."""
 
-from pydiag.gear.effects import EFFECTS, SHAFT_ORDERS
+from pydiag.gear.effects import EFFECTS
+from pydiag.gear.kinematic_map import SHAFT_ORDERS
 from pydiag.gear.kinematic_map import kinematic_map, match
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.peaks import Peak
