@@ -74,7 +74,7 @@ from pydiag.fit.objective import noise_corrected_error, spectral_residuals  # no
 from pydiag.fit.problem import build_problem  # noqa: E402
 from pydiag.gear.features import FullSpectrumFeaturizer, other_stages_lines  # noqa: E402
 from pydiag.gear.kinematic_map import kinematic_map  # noqa: E402
-from pydiag.gear.machine import load_machine  # noqa: E402
+from pydiag.gear.machine_file import load_machine  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402

@@ -29,7 +29,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.gear.machine import StageEffect, load_machine  # noqa: E402
+from pydiag.gear.machine import StageEffect  # noqa: E402
+from pydiag.gear.machine_file import load_machine  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402

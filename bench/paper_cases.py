@@ -44,7 +44,7 @@ from pydiag.gear.paper_cases import TABLE1, case  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.loop.diagnosis import classified  # noqa: E402
 from pydiag.fmu.plant import FmuPlant  # noqa: E402
-from pydiag.gear.machine import machine_from_dict  # noqa: E402
+from pydiag.gear.machine_file import machine_from_dict  # noqa: E402
 from pydiag.loop.discover import default_build_dir  # noqa: E402
 from pydiag.loop.machine_model import machine_fmu  # noqa: E402
 from pydiag.loop.stages import diagnose_machine_model  # noqa: E402

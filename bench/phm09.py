@@ -56,7 +56,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag.gear.machine import load_machine  # noqa: E402
+from pydiag.gear.machine_file import load_machine  # noqa: E402
 from pydiag.gear.machine_indicators import machine_record  # noqa: E402
 from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
 from pydiag.gear.stage_judge import judge_stages  # noqa: E402

@@ -34,7 +34,7 @@ from pydiag.fit.problem import build_problem
 from pydiag.gear.classify import SEVERITIES
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
-from pydiag.gear.machine import load_machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.gear.speed import SpeedSettings
 from pydiag.io.readers import is_measurement_file, read_measurement

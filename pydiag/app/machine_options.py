@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from pydiag.core.errors import UsageError
-from pydiag.gear.machine import Machine, load_machine
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.io.readers import parse_units
 
 #: The commands that fit a pair model; of these, diagnose and batch fit every stage of a

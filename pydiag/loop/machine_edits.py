@@ -14,7 +14,8 @@ from pathlib import Path
 
 from pydiag.core.errors import UsageError
 from pydiag.gear.effects import EFFECTS
-from pydiag.gear.machine import Machine, load_machine, machine_from_dict
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_file import load_machine, machine_from_dict
 from pydiag.io.outputs import edit_in_place
 from pydiag.loop.machine_model import not_on_a_stage, on_a_stage
 

@@ -23,7 +23,8 @@ from typing import Callable
 
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.gear.machine import Machine, load_machine
+from pydiag.gear.machine import Machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.compose import BuiltModel

@@ -9,7 +9,7 @@ import pytest
 from conftest import run_cli, write_csv
 
 from pydiag.core.errors import MachineError, UsageError
-from pydiag.gear.machine import machine_from_dict
+from pydiag.gear.machine_file import machine_from_dict
 from pydiag.io.readers import read_measurement
 from pydiag.io.units import sensitivity_factor
 
@@ -130,7 +130,7 @@ def test_a_damaged_cached_fmu_is_built_again_not_read(tmp_path):
     from conftest import ROOT
 
     from pydiag.fmu.archive import usable_cache
-    from pydiag.gear.machine import load_machine
+    from pydiag.gear.machine_file import load_machine
     from pydiag.loop.discover import effect_fmu
     from pydiag.loop.machine_model import machine_fmu
     modelica = ROOT / "modelica"

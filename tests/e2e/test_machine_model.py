@@ -11,7 +11,7 @@ from truth.gearbox import INPUT_HZ, SHORT_MACHINE, gearbox_record
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.speed import SpeedSettings
-from pydiag.gear.machine import load_machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.io.measurements import write_measurement
 from pydiag.loop.compare import compare
 from pydiag.loop.machine_fit import machine_problem

@@ -7,7 +7,7 @@ import json
 import pytest
 from conftest import ROOT, run_cli
 
-from pydiag.gear.machine import load_machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.gear.speed import SpeedSettings, estimate_speed
 from pydiag.io.readers import read_measurement
 

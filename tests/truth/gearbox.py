@@ -8,7 +8,7 @@ drive swinging once a turn of a shaft (every angle moved with the input's)."""
 import numpy as np
 
 from pydiag.core.measurement import Measurement
-from pydiag.gear.machine import machine_from_dict
+from pydiag.gear.machine_file import machine_from_dict
 
 FS, DURATION, INPUT_HZ = 20_000.0, 6.0, 25.0
 #: 20/64 then 24/54 teeth (whole periods of 16 and 9 pinion turns: a pair model needs one,

@@ -48,7 +48,7 @@ def test_a_stage_of_a_gearbox_names_every_other_stage_shaft_and_bearing():
     the other stages' mesh harmonics, their sidebands at their own shafts, their assembly
     and hunting lines, the other shafts' orders and their bearings are kinematic lines of
     their own families, which no effect of the pair claims."""
-    from pydiag.gear.machine import machine_from_dict
+    from pydiag.gear.machine_file import machine_from_dict
     machine = machine_from_dict({
         "name": "box", "shafts": ["input", "idler", "output", "drum"],
         "stages": [{"pinion_teeth": 32, "gear_teeth": 96, "name": "first"},

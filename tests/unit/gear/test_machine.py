@@ -14,7 +14,7 @@ import pytest
 
 from pydiag.core.errors import MachineError, MeasurementError
 from pydiag.core.measurement import Measurement
-from pydiag.gear.machine import load_machine, machine_from_dict
+from pydiag.gear.machine_file import load_machine, machine_from_dict
 from pydiag.gear.speed import SpeedSettings, estimate_speed
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples"

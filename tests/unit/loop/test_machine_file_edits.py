@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from pydiag.core.errors import MachineError, OutputError
-from pydiag.gear.machine import load_machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.loop.machine_edits import accept, record_start
 
 BOX = ('name = "box"  # the user\'s comment\ninput_rpm = 1500\n'

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pydiag.fit.estimator import FitResult
-from pydiag.gear.machine import load_machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSource
 from pydiag.loop.diagnosis import Diagnosis, fit_warnings
 from pydiag.loop.stages import MachineDiagnosis, StageDiagnosis, stage_speed
