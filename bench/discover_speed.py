@@ -39,7 +39,7 @@ from truth import OPERATING_POINT  # noqa: E402
 from truth.gear_sim import TruthGear, record  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.effect_fit import EFFECT_REFIT  # noqa: E402

@@ -71,7 +71,7 @@ sys.path.insert(0, str(ROOT))
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.gain import curve_basis, curve_nodes, fitted_curve  # noqa: E402
 from pydiag.fit.objective import noise_corrected_error, spectral_residuals  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
 from pydiag.gear.features import FullSpectrumFeaturizer, other_stages_lines  # noqa: E402
 from pydiag.gear.kinematic_map import kinematic_map  # noqa: E402
 from pydiag.gear.machine_file import load_machine  # noqa: E402

@@ -22,7 +22,7 @@ from truth import BASE_PARAMETERS, BEARING, OPERATING_POINT  # noqa: E402
 from truth.gear_sim import TruthGear, line_margin_db, record, simulate  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.discover import effect_fmu  # noqa: E402
 from pydiag.loop.validate import validate  # noqa: E402

@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
 from pydiag.gear.tracking import order_track  # noqa: E402

@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
 from pydiag.gear.indicators import INDICATORS, condition_indicators  # noqa: E402
 from pydiag.gear.kinematics import GearKinematics  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402

@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.problem import build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
 from pydiag.gear.effects import EFFECTS  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402

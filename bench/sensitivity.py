@@ -20,7 +20,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pydiag.fit.problem import ProblemObjective, build_problem  # noqa: E402
+from pydiag.fit.build import build_problem  # noqa: E402
+from pydiag.fit.problem import ProblemObjective  # noqa: E402
 from pydiag.gear.conventions import kinematics_from  # noqa: E402
 from pydiag.core.measurement import Measurement  # noqa: E402
 from pydiag.signal.noise import add_white_noise  # noqa: E402

@@ -30,7 +30,7 @@ from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.core.termination import deferred, raise_once
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import build_problem
+from pydiag.fit.build import build_problem
 from pydiag.gear.classify import SEVERITIES
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics

@@ -19,7 +19,8 @@ from pydiag.app.reading import channels_to_read, read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.fit.build import build_problem
+from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
 from pydiag.fmu.inspect import describe, format_info
 from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from

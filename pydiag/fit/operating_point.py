@@ -9,7 +9,7 @@ prepared at it.
    it (:mod:`pydiag.gear.speed`); for a model whose speed is fixed, :func:`at_model_speed`.
 
 The third, the :class:`~pydiag.fit.problem.FitProblem` itself, is
-:func:`pydiag.fit.problem.build_problem`'s.
+:func:`pydiag.fit.build.build_problem`'s.
 """
 
 from __future__ import annotations

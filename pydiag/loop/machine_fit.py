@@ -19,7 +19,8 @@ from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import fmu_values
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator, FitResult
-from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.fit.build import build_problem
+from pydiag.fit.problem import FitProblem
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track

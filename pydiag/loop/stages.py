@@ -32,7 +32,8 @@ import numpy as np
 
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.fit.build import build_problem
+from pydiag.fit.problem import FitProblem
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
@@ -152,7 +153,7 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
     """The fit problem of stage ``stage``: the record tracked at its pinion shaft, the
     other stages' lines left out (module docstring); its kinematics name every line of
     the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`); ``gain_curve``:
-    :func:`~pydiag.fit.problem.build_problem`'s; ``upsampled``: the record upsampled for
+    :func:`~pydiag.fit.build.build_problem`'s; ``upsampled``: the record upsampled for
     tracking at ``speed`` (:func:`~pydiag.gear.tracking.upsampled_record`), when made once
     for every stage."""
     estimate = stage_speed(speed, machine, stage)

@@ -10,7 +10,7 @@ from conftest import GEARPAIR_MO, ROOT, inspected, run_cli
 from fmu_build import build_fmu
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import build_problem
+from pydiag.fit.build import build_problem
 from pydiag.fmu.plant import FmuPlant
 from pydiag.gear.conventions import kinematics_from
 from pydiag.gear.effects import EFFECTS

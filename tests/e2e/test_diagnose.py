@@ -7,7 +7,7 @@ import pytest
 from conftest import NAMES, noisy_measurement, run_cli
 
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import build_problem
+from pydiag.fit.build import build_problem
 from pydiag.gear.paper_cases import TABLE1, case
 from pydiag.loop.diagnosis import diagnose
 

@@ -17,7 +17,7 @@ from truth.gear_sim import (TruthGear, dynamics_of, envelope_margin_db, line_mar
 
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import build_problem
+from pydiag.fit.build import build_problem
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.io.measurements import write_measurement

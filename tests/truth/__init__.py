@@ -2,7 +2,8 @@
 and bench fit to its records, and the operating points they share."""
 
 from pydiag.core.parameters import Parameter
-from pydiag.fit.problem import FitProblem, build_problem
+from pydiag.fit.build import build_problem
+from pydiag.fit.problem import FitProblem
 from pydiag.gear.conventions import HEALTHY_TOOTH
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematics import Bearing

@@ -11,7 +11,8 @@ from pydiag.core.errors import UsageError
 from pydiag.core.parameters import Parameter
 from pydiag.fit import estimator as estimator_module
 from pydiag.fit.estimator import DISCRETE_FINALISTS, FINALIST_TIE, FaultEstimator, finalists
-from pydiag.fit.problem import ProblemObjective, build_problem
+from pydiag.fit.build import build_problem
+from pydiag.fit.problem import ProblemObjective
 from pydiag.fmu.isolation import IsolatedPool
 from pydiag.gear.paper_cases import case
 
@@ -187,7 +188,7 @@ def test_fit_writes_no_files_and_leaves_logging_alone(gear_fmu, tmp_path):
 import logging, numpy as np
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import build_problem
+from pydiag.fit.build import build_problem
 from pydiag.fmu.plant import FmuPlant
 with FmuPlant({str(gear_fmu)!r}, ("acc",)) as p:
     y = p.simulate({{}}, 0.24, 0.05)[0]

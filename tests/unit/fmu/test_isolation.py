@@ -14,7 +14,8 @@ from fmus import hostile
 from pydiag.core.errors import EstimationError, PlantError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.problem import ProblemObjective, build_problem
+from pydiag.fit.build import build_problem
+from pydiag.fit.problem import ProblemObjective
 from pydiag.fmu.isolation import IsolatedPool
 from pydiag.fmu.plant import FmuPlant
 from pydiag.model.adapter import parse_adapter

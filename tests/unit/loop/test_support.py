@@ -8,7 +8,7 @@ import pytest
 from conftest import NAMES, noisy_measurement
 
 from pydiag.fit.estimator import FitResult
-from pydiag.fit.problem import build_problem
+from pydiag.fit.build import build_problem
 from pydiag.gear.paper_cases import case
 from pydiag.loop.diagnosis import classified
 from pydiag.loop.support import fault_support
