@@ -29,7 +29,7 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
     seen: set[str] = set()  # each baseline counts once: a second would narrow the spread
     record = _same_file(getattr(args, "measurement", None))
     for path in args.baseline or []:
-        nominal_hz = args.rpm / 60.0  # the machine file's when --rpm is not given
+        nominal_hz = args.input_hz  # the machine file's when --rpm is not given
         if path != KEPT:
             if _same_file(path) in seen:
                 _warn(args, f"--baseline {path} is given twice; it counts once")
@@ -100,7 +100,7 @@ def cmd_baseline(args) -> int:
         return 0
     history.check(db)
     speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
-    record = machine_record(read_input(args), machine, speed, args.rpm / 60.0)
+    record = machine_record(read_input(args), machine, speed, args.input_hz)
     kept = history.keep_baseline(db, machine, record, str(Path(args.measurement).resolve()))
     warning = record.speed.warning()
     if warning:

@@ -111,8 +111,8 @@ def problem_settings(args) -> dict:
     if not hasattr(args, "speed"):
         return settings
     op = {}
-    if args.rpm is not None:
-        op["f_pinion_hz"] = args.rpm / 60.0
+    if args.input_hz is not None:
+        op["f_pinion_hz"] = args.input_hz
     if args.teeth is not None:
         op["n_pinion"], op["n_gear"] = args.teeth
     if getattr(args, "other_shaft", None) is not None:  # compare and discover
@@ -135,7 +135,7 @@ def problem_of(args, measurement: Measurement,
                              fixed_values=fixed_values)
     speed = settings["speed"]
     return stage_problem(args.fmu, measurement, machine, args.stage_index,
-                         machine_speed(measurement, machine, args.rpm / 60.0, speed),
+                         machine_speed(measurement, machine, args.input_hz, speed),
                          adapter_of(args), settings["feature_mode"], settings["fit_gain"],
                          (speed.tacho,) if speed.tacho else (), fixed_values,
                          settings["gain_curve"])
@@ -208,13 +208,13 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
         if model is None:
-            result = diagnose_machine(args.fmu, m, machine, args.rpm / 60.0, settings["speed"],
+            result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings["speed"],
                                       estimator, baselines, adapter_of(args),
                                       settings["feature_mode"], settings["fit_gain"],
                                       settings["gain_curve"])
         else:  # the machine's own model, every stage at once
             result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
-                                            args.rpm / 60.0, settings["speed"], estimator,
+                                            args.input_hz, settings["speed"], estimator,
                                             baselines, settings["feature_mode"],
                                             settings["fit_gain"], settings["gain_curve"])
     finally:
@@ -234,11 +234,11 @@ def record_kinematics(args, measurement: Measurement) -> GearKinematics:
     known = kinematics_from(meta) if isinstance(meta, dict) else None
     if args.teeth is None and known is None:
         raise UsageError("give the teeth (--teeth NP,NG): the record does not say them")
-    if args.rpm is None and known is None:
+    if args.input_hz is None and known is None:
         raise UsageError("give the nominal pinion speed (--rpm): the record does not say it")
     n_pinion, n_gear = args.teeth if args.teeth is not None else (known.n_pinion, known.n_gear)
     return GearKinematics(n_pinion, n_gear,
-                          args.rpm / 60.0 if args.rpm is not None else known.f_pinion_hz)
+                          args.input_hz if args.input_hz is not None else known.f_pinion_hz)
 
 
 def cmd_indicators(args) -> int:
@@ -247,7 +247,7 @@ def cmd_indicators(args) -> int:
     speed = SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev)
     machine = args.machine_description
     if machine is not None:
-        report = machine_report(m, machine, speed, args.rpm / 60.0,
+        report = machine_report(m, machine, speed, args.input_hz,
                                 baseline_records(args, machine, speed))
         return _said_indicators(args, format_machine_report(report), report.record.speed,
                                 report.to_dict())
@@ -287,7 +287,7 @@ def cmd_batch(args) -> int:
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,
                              tuple(args.sensitivity or ()), args.machine if staged else None,
-                             baselines, args.rpm / 60.0 if staged else None)
+                             baselines, args.input_hz if staged else None)
              for p in paths]
     bar = None
     if not args.quiet:

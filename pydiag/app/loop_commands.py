@@ -90,7 +90,7 @@ def _machine_record(args, m: Measurement) -> tuple[SpeedEstimate, dict, tuple[st
     else from every mesh), the problem's settings, the channels that are no sensor's."""
     settings = problem_settings(args)
     speed = settings["speed"]
-    return (machine_speed(m, args.machine_description, args.rpm / 60.0, speed), settings,
+    return (machine_speed(m, args.machine_description, args.input_hz, speed), settings,
             (speed.tacho,) if speed.tacho else ())
 
 

@@ -16,7 +16,10 @@ def apply_machine(args) -> Machine | None:
     """The machine file's facts as the options they stand for, where the command line did
     not give them (it wins): channels and their units and sensitivities, the tacho, the
     nominal speed; for the commands that fit a pair, its teeth and its pinion bearing.
-    Returns the machine (None without --machine)."""
+    Returns the machine (None without --machine). ``args.input_hz`` is then the nominal
+    input speed in Hz (from --rpm, else the file's; None when neither says it): the one
+    speed every command reads."""
+    args.input_hz = args.rpm / 60.0 if getattr(args, "rpm", None) is not None else None
     if not getattr(args, "machine", None):
         if getattr(args, "pulses_per_rev", None) is None and hasattr(args, "pulses_per_rev"):
             args.pulses_per_rev = 1
@@ -27,9 +30,9 @@ def apply_machine(args) -> Machine | None:
     fits = args.command in PAIR_COMMANDS
     staged = len(machine.stages) > 1
     args.stage_index = _stage_of(args, machine) if fits else None
-    if args.rpm is None and machine.input_hz is not None:
-        args.rpm = 60 * machine.input_hz
-    elif args.rpm is None and getattr(args, "measurement", "") is not None:  # not baseline --list
+    if args.input_hz is None and machine.input_hz is not None:
+        args.input_hz = machine.input_hz
+    elif args.input_hz is None and getattr(args, "measurement", "") is not None:  # not --list
         raise UsageError(f"give the nominal input speed (--rpm): {args.machine} has no "
                          "input_rpm")
     tacho = machine.tacho
