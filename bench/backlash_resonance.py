@@ -18,9 +18,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
-from truth import (RESONANCE_RATE_HZ, RESONANCE_TOP_HZ, resonance_clean,  # noqa: E402
-                   resonance_problem)
-from truth.gear_sim import line_margin_db  # noqa: E402
+from truth_fits import (RESONANCE_RATE_HZ, RESONANCE_TOP_HZ, line_margin_db,  # noqa: E402
+                        resonance_clean, resonance_problem)
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402

@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
 # the machine beyond the gear pair, known on every record: the motor shaft's speed ratio
-from truth import OPERATING_POINT  # noqa: E402
+from truth_fits import OPERATING_POINT  # noqa: E402
 from truth.gear_sim import TruthGear, record  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402

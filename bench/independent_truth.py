@@ -18,8 +18,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "tests"))
 
 # the motor shaft's speed ratio, given on every case but the one that says it is not
-from truth import BASE_PARAMETERS, BEARING, OPERATING_POINT  # noqa: E402
-from truth.gear_sim import TruthGear, line_margin_db, record, simulate  # noqa: E402
+from truth.gear_sim import TruthGear, record, simulate  # noqa: E402
+from truth_fits import BASE_PARAMETERS, BEARING, OPERATING_POINT, line_margin_db  # noqa: E402
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.build import build_problem  # noqa: E402

@@ -67,11 +67,11 @@ def test_the_loop_writes_its_copy_where_out_says_and_never_over_the_machine_file
                                                                                    slow):
     """An existing <name>.loop.toml is refused with the option that chooses another
     (--out); --out the machine file itself is refused as an input; --out elsewhere runs."""
-    from truth.gearbox import SHORT_MACHINE, gearbox_record
+    from truth.gearbox import SHORT_BOX, gearbox_record
 
     from pydiag.io.measurements import write_measurement
     rec = tmp_path / "box.csv"
-    write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
+    write_measurement(rec, gearbox_record(4, box=SHORT_BOX))
     machine = tmp_path / "box.toml"
     machine.write_text('name = "short box"\ninput_rpm = 1500\n'
                        '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'

@@ -4,7 +4,8 @@
 import json
 
 from conftest import run_cli
-from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record
+from boxes import MACHINE
+from truth.gearbox import INPUT_HZ, gearbox_record
 
 from pydiag.io.measurements import write_measurement
 

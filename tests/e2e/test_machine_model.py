@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 from conftest import inspected, run_cli
-from truth.gearbox import INPUT_HZ, SHORT_MACHINE, gearbox_record
+from boxes import SHORT_MACHINE
+from truth.gearbox import INPUT_HZ, SHORT_BOX, gearbox_record
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.speed import SpeedSettings
@@ -33,7 +34,7 @@ def test_the_machine_model_explains_the_second_stages_lines(tmp_path):
     with the second stage silenced: the first stage alone leaves the second's lines (most
     of the residual); with both, the error falls to well under half and so does what is
     left on those lines."""
-    m = gearbox_record(3, machine=SHORT_MACHINE)
+    m = gearbox_record(3, box=SHORT_BOX)
     model, built = machine_fmu(SHORT_MACHINE, MODELICA, tmp_path)
     inspected(built.fmu)
     assert machine_fmu(SHORT_MACHINE, MODELICA, tmp_path) == (model, built)  # cached
@@ -75,7 +76,7 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     an effect on compare's machine model are each one line, the file untouched."""
     import json
     rec = tmp_path / "box.csv"
-    write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
+    write_measurement(rec, gearbox_record(4, box=SHORT_BOX))
     machine = tmp_path / "box.toml"
     text = COMMENTED_BOX
     machine.write_text(text)
@@ -140,7 +141,7 @@ def test_an_effect_the_box_has_lowers_the_error_more_than_one_it_lacks(tmp_path)
 
     from pydiag.gear.machine import StageEffect
     from pydiag.loop.machine_fit import fit_machine
-    m = gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE)
+    m = gearbox_record(5, faulty_shaft=2, stage=1, box=SHORT_BOX)
     speed = machine_speed(m, SHORT_MACHINE, INPUT_HZ, SpeedSettings("mesh"))
     errors = {}
     for key in (None, "mesh_stiffness_shape", "gear_eccentricity"):
@@ -272,7 +273,7 @@ def test_a_fit_written_as_the_machine_files_start_is_where_compare_starts(tmp_pa
 
     from pydiag.loop.machine_edits import START_NOTE, record_start
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
-    write_measurement(rec, gearbox_record(4, machine=SHORT_MACHINE))
+    write_measurement(rec, gearbox_record(4, box=SHORT_BOX))
     text = COMMENTED_BOX
     machine.write_text(text)
     common = ("-m", "pydiag", "compare", "--measurement", str(rec), "--machine", str(machine),
@@ -341,7 +342,7 @@ def test_the_effect_the_box_has_is_confirmed_held_out_on_each_stage(tmp_path):
     of their own) confirmed on both stages, nothing else confident."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
-    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
+    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, box=SHORT_BOX))
     machine.write_text('name = "short box"\ninput_rpm = 1500\n'
                        '[[stages]]\npinion_teeth = 18\ngear_teeth = 36\n'
                        '[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
@@ -365,7 +366,7 @@ def test_discover_tries_an_effect_on_every_stage_of_the_machines_model(tmp_path,
     without --fmu, are one line each."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
-    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
+    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, box=SHORT_BOX))
     machine.write_text(BOX)
     common = ("discover", "--measurement", str(rec), "--machine", str(machine), "--speed",
               "mesh", "--build-dir", str(tmp_path / "build"), "--quiet")
@@ -399,7 +400,7 @@ def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
     from pydiag.loop.effect_fit import EFFECT_REFIT
     from pydiag.loop.machine_discover import discover_machine
     from pydiag.loop.machine_fit import compare_machine
-    m = gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE)
+    m = gearbox_record(5, faulty_shaft=2, stage=1, box=SHORT_BOX)
     speed = machine_speed(m, SHORT_MACHINE, INPUT_HZ, SpeedSettings("mesh"))
     model, built = machine_fmu(SHORT_MACHINE, MODELICA, tmp_path)
     problem = machine_problem(built.fmu, model, m, SHORT_MACHINE, speed)
@@ -423,7 +424,7 @@ def test_the_loop_on_the_machines_model_accepts_effect_after_effect(tmp_path):
     accepted."""
     import json
     rec, machine = tmp_path / "box.csv", tmp_path / "box.toml"
-    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, machine=SHORT_MACHINE))
+    write_measurement(rec, gearbox_record(5, faulty_shaft=2, stage=1, box=SHORT_BOX))
     text = ('name = "short box"\ninput_rpm = 1500\n[[stages]]\npinion_teeth = 18\n'
             'gear_teeth = 36\n[[stages]]\npinion_teeth = 20\ngear_teeth = 50\n')
     machine.write_text(text)

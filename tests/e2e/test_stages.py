@@ -5,7 +5,8 @@ baseline."""
 
 import numpy as np
 import pytest
-from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record
+from boxes import MACHINE
+from truth.gearbox import INPUT_HZ, gearbox_record
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.features import KinematicFeaturizer

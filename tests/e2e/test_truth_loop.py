@@ -10,10 +10,10 @@ import os
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli
-from truth import (BASE_PARAMETERS, BEARING, OPERATING_POINT, RESONANCE_RATE_HZ,
-                   RESONANCE_TOP_HZ, resonance_clean, resonance_problem)
-from truth.gear_sim import (TruthGear, dynamics_of, envelope_margin_db, line_margin_db,
-                            pinion_speed_hz, record, simulate_many)
+from truth.gear_sim import TruthGear, dynamics_of, pinion_speed_hz, record, simulate_many
+from truth_fits import (BASE_PARAMETERS, BEARING, OPERATING_POINT, RESONANCE_RATE_HZ,
+                        RESONANCE_TOP_HZ, envelope_margin_db, line_margin_db, resonance_clean,
+                        resonance_problem)
 
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator

@@ -35,7 +35,6 @@ import numpy as np
 from scipy import integrate, signal
 
 from pydiag.core.measurement import Measurement
-from pydiag.signal.noise import add_white_noise
 
 TWO_PI = 2.0 * math.pi
 
@@ -346,37 +345,9 @@ def record(g: TruthGear, periods: int, seed: int, sample_rate_hz: float = 10_000
     periods; ``clean``: the noise-free channels when already simulated."""
     clean = clean or simulate(g, periods * g.period_s, sample_rate_hz)
     rng = np.random.default_rng(seed)
-    return Measurement({k: add_white_noise(v, snr, rng) for k, v in clean.items()},
-                       sample_rate_hz)
+    return Measurement({k: _noisy(v, snr, rng) for k, v in clean.items()}, sample_rate_hz)
 
 
-def line_margin_db(with_effect: np.ndarray, without: np.ndarray, snr: float,
-                   sample_rate_hz: float, max_freq_hz: float) -> tuple[float, float]:
-    """(frequency, margin in dB) of the strongest spectral line an effect changes below
-    ``max_freq_hz``, over the mean amplitude of a noise bin at ``snr`` (noise-free inputs
-    of equal length)."""
-    n = with_effect.size
-    freqs = np.fft.rfftfreq(n, 1 / sample_rate_hz)
-    change = 2 * np.abs(np.fft.rfft(with_effect - np.mean(with_effect))
-                        - np.fft.rfft(without - np.mean(without))) / n
-    keep = (freqs > 0) & (freqs <= max_freq_hz)
-    k = np.argmax(np.where(keep, change, 0))
-    sigma = np.sqrt(np.var(with_effect) / snr)
-    noise_bin = sigma * np.sqrt(np.pi / n)  # mean amplitude of a white-noise bin
-    return float(freqs[k]), float(20 * np.log10(max(change[k], 1e-300) / noise_bin))
-
-
-def envelope_margin_db(noisy: np.ndarray, sample_rate_hz: float, band_hz: tuple[float, float],
-                       lines_hz: list[float]) -> tuple[float, float]:
-    """(frequency, margin in dB) of the strongest of ``lines_hz`` in the envelope spectrum
-    of a noisy record (the band ``band_hz``, Hann window), over that spectrum's noise
-    floor (median power / ln 2: robust to the lines)."""
-    from pydiag.signal.spectra import amplitude_spectrum, band_envelope, noise_power
-
-    freqs, amp = amplitude_spectrum(band_envelope(noisy, sample_rate_hz, band_hz),
-                                    sample_rate_hz, "hann")
-    keep = (freqs > 1.0) & (freqs < 2000.0)
-    floor = np.sqrt(noise_power(amp[keep], robust=True))
-    peaks = [(f, amp[np.abs(freqs - f) <= 1.5 * (freqs[1] - freqs[0])].max()) for f in lines_hz]
-    f, a = max(peaks, key=lambda p: p[1])
-    return float(f), float(20 * np.log10(a / floor))
+def _noisy(x: np.ndarray, snr: float, rng: np.random.Generator) -> np.ndarray:
+    """``x`` with Gaussian white noise of 1/``snr`` its variance (a power ratio)."""
+    return x + rng.normal(0.0, np.sqrt(np.var(x) / snr), x.shape)

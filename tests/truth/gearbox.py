@@ -5,34 +5,52 @@ it, a runout as a once-a-turn swing of its mesh's amplitude and timing, white no
 an input speed that wanders by 0.05 %; optionally a tacho on the input shaft, and the whole
 drive swinging once a turn of a shaft (every angle moved with the input's)."""
 
+from dataclasses import dataclass
+from fractions import Fraction
+
 import numpy as np
 
 from pydiag.core.measurement import Measurement
-from pydiag.gear.machine_file import machine_from_dict
 
 FS, DURATION, INPUT_HZ = 20_000.0, 6.0, 25.0
+
+
+@dataclass(frozen=True)
+class Box:
+    """A gearbox as the simulator knows it: its stages' (pinion, gear) teeth from the input,
+    stage k+1's pinion on stage k's gear shaft; its kinematics are its own, not pydiag's."""
+
+    name: str
+    teeth: tuple[tuple[int, int], ...]
+
+    def turns(self, shaft: int) -> Fraction:
+        """Turns of shaft ``shaft`` (0: the input) per turn of the input."""
+        out = Fraction(1)
+        for pinion, gear in self.teeth[:shaft]:
+            out *= Fraction(pinion, gear)
+        return out
+
+    def meshes(self, stage: int) -> Fraction:
+        """Tooth contacts of stage ``stage`` per turn of the input."""
+        return self.teeth[stage][0] * self.turns(stage)
+
+
 #: 20/64 then 24/54 teeth (whole periods of 16 and 9 pinion turns: a pair model needs one,
-#: and a hunting-tooth pair's lasts as many turns as its gear has teeth); no sensor or
-#: tacho described: the record's channel is "acc".
-MACHINE = machine_from_dict({"name": "two-stage test box",
-                             "stages": [{"pinion_teeth": 20, "gear_teeth": 64},
-                                        {"pinion_teeth": 24, "gear_teeth": 54}]})
-
-
+#: and a hunting-tooth pair's lasts as many turns as its gear has teeth); its record's
+#: channel is "acc".
+BOX = Box("two-stage test box", ((20, 64), (24, 54)))
 #: A box whose stages repeat together every 10 input turns (18/36 then 20/50 teeth, no
 #: hunting tooth), 0.4 s: short enough for a model that simulates both stages.
-SHORT_MACHINE = machine_from_dict({"name": "short-period test box",
-                                   "stages": [{"pinion_teeth": 18, "gear_teeth": 36},
-                                              {"pinion_teeth": 20, "gear_teeth": 50}]})
+SHORT_BOX = Box("short-period test box", ((18, 36), (20, 50)))
 
 
 def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
-                   depth: float = 0.8, noise: float = 0.3, machine=MACHINE,
+                   depth: float = 0.8, noise: float = 0.3, box: Box = BOX,
                    also: tuple[tuple[int, int], ...] = (),
                    runout: tuple[tuple[int, int, float], ...] = (),
                    tacho_pulses: int = 0,
                    swing: tuple[tuple[int, float], ...] = ()) -> Measurement:
-    """A record of ``machine`` at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2
+    """A record of ``box`` at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2
     output) carries a broken tooth of ``depth`` on stage ``stage``'s mesh, and so does each
     (shaft, stage) of ``also``; each (shaft, stage, size) of ``runout``: the gear of that
     shaft on that stage runs out, its mesh's amplitude swinging by ``size`` and its timing
@@ -40,29 +58,28 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
     that many pulses a turn of the input; each (shaft, size) of ``swing``: the input's angle,
     and every angle after it, swings by ``size`` turns of the input once a turn of that
     shaft."""
-    MACHINE = machine  # noqa: N806 (the box the record is of)
     rng = np.random.default_rng(seed)
     n = int(FS * DURATION)
     t = np.arange(n) / FS
     speed = INPUT_HZ * 0.99 * (1 + 0.0005 * np.sin(2 * np.pi * 0.2 * t + seed))
     revs = np.cumsum(speed) / FS
     for shaft, size in swing:
-        revs = revs + size * np.sin(2 * np.pi * float(MACHINE.shaft_ratio(shaft)) * revs + 1.0)
+        revs = revs + size * np.sin(2 * np.pi * float(box.turns(shaft)) * revs + 1.0)
     x = np.zeros(n)
-    for k in range(len(MACHINE.stages)):
-        order = float(MACHINE.mesh_order(k))
+    for k in range(len(box.teeth)):
+        order = float(box.meshes(k))
         gain = np.ones(n)
         for shaft in (k, k + 1):
-            gain += 0.1 * np.cos(2 * np.pi * float(MACHINE.shaft_ratio(shaft)) * revs + shaft)
+            gain += 0.1 * np.cos(2 * np.pi * float(box.turns(shaft)) * revs + shaft)
         faults = ((faulty_shaft, stage),) if faulty_shaft is not None else ()
         for shaft, on_stage in faults + also:
             if on_stage == k:
-                angle = np.mod(float(MACHINE.shaft_ratio(shaft)) * revs, 1.0)
+                angle = np.mod(float(box.turns(shaft)) * revs, 1.0)
                 gain -= depth * np.exp(-0.5 * ((angle - 0.3) / 0.01) ** 2)
         timing = np.zeros(n)
         for shaft, on_stage, size in runout:
             if on_stage == k:
-                turn = 2 * np.pi * float(MACHINE.shaft_ratio(shaft)) * revs
+                turn = 2 * np.pi * float(box.turns(shaft)) * revs
                 gain += size * np.cos(turn)
                 timing += size * np.sin(turn)
         x += gain * sum(np.cos(2 * np.pi * h * order * revs + h * timing + h) / h

@@ -3,7 +3,8 @@
 on one gear or none."""
 
 import pytest
-from truth.gearbox import INPUT_HZ, MACHINE, SHORT_MACHINE, gearbox_record as record
+from boxes import MACHINE, SHORT_MACHINE
+from truth.gearbox import INPUT_HZ, SHORT_BOX, gearbox_record as record
 
 from pydiag.core.errors import MeasurementError
 from pydiag.gear.machine_indicators import machine_record
@@ -45,12 +46,12 @@ def test_the_report_judges_nothing_without_a_baseline_and_is_plain_data():
 
 @pytest.fixture(scope="module")
 def short_baseline():
-    return machine_record(record(1, machine=SHORT_MACHINE), SHORT_MACHINE,
+    return machine_record(record(1, box=SHORT_BOX), SHORT_MACHINE,
                           SpeedSettings("mesh"), INPUT_HZ)
 
 
 def judged_short(baseline, **fault):
-    faulty = machine_record(record(3, machine=SHORT_MACHINE, **fault), SHORT_MACHINE,
+    faulty = machine_record(record(3, box=SHORT_BOX, **fault), SHORT_MACHINE,
                             SpeedSettings("mesh"), INPUT_HZ)
     return judge_stages(SHORT_MACHINE, faulty, [baseline])[0]
 

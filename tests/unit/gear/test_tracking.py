@@ -4,7 +4,8 @@ is tracked exactly as each shaft alone would track it, on a record of :mod:`trut
 
 import numpy as np
 import pytest
-from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record
+from boxes import MACHINE
+from truth.gearbox import INPUT_HZ, gearbox_record
 
 from pydiag.gear.speed import SpeedSettings, estimate_speed
 from pydiag.gear.tracking import order_track, track_revolutions, upsampled_record

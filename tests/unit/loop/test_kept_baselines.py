@@ -6,7 +6,8 @@ import dataclasses
 import sqlite3
 
 import pytest
-from truth.gearbox import INPUT_HZ, MACHINE, gearbox_record as record
+from boxes import MACHINE
+from truth.gearbox import INPUT_HZ, gearbox_record as record
 
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
