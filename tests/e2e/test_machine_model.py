@@ -396,7 +396,12 @@ def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
     1/2, 1/3 at phases of their own) and the mesh's modulation once per turn of each shaft
     (10 % by each of its two shafts); nothing else confident (a swing of the shafts, whose
     first sidebands are the modulation's, ranks high but is outcompeted by it): what
-    compare and the loop find, without the residual's pointing."""
+    compare and the loop find, without the residual's pointing.
+
+    The box also has a broken tooth on the output gear (stage 2's gear): it should be found
+    as that gear's tooth fault. It is a known miss, said as such: the box writes it as a
+    short dip of the mesh's amplitude once a turn, which the catalogue's forms (a stiffness
+    loss while the tooth is alone in contact) fit only in part (bench/RESULTS.md 13)."""
     from pydiag.loop.effect_fit import EFFECT_REFIT
     from pydiag.loop.machine_discover import discover_machine
     from pydiag.loop.machine_fit import compare_machine
@@ -407,9 +412,16 @@ def test_discover_finds_the_boxs_effect_on_each_stage(tmp_path):
     base = compare_machine(problem, model, FaultEstimator(), FaultEstimator(**EFFECT_REFIT))
     found = discover_machine(problem, SHORT_MACHINE, model, base,
                              lambda machine: str(machine_fmu(machine, MODELICA, tmp_path)[1].fmu))
-    assert {(d.effect, d.stage) for d in found if d.confident} == {
-        (effect, stage) for effect in ("mesh_stiffness_shape", "mesh_modulation")
-        for stage in ("stage 1", "stage 2")}, [(d.effect, d.stage, d.message) for d in found]
+    confident = {(d.effect, d.stage) for d in found if d.confident}
+    box = {(effect, stage) for effect in ("mesh_stiffness_shape", "mesh_modulation")
+           for stage in ("stage 1", "stage 2")}
+    tooth = ("gear_tooth_fault", "stage 2")
+    assert box <= confident <= box | {tooth}, [(d.effect, d.stage, d.message) for d in found]
+    if tooth not in confident:
+        pytest.xfail("known miss: the box's broken output-gear tooth (a dip of the mesh's "
+                     "amplitude once a turn) is fitted by the catalogue's tooth fault in part "
+                     "only: " + next((d.message for d in found
+                                      if (d.effect, d.stage) == tooth), "not tried"))
 
 
 @pytest.mark.slow
