@@ -130,8 +130,8 @@ def _record_args(p: argparse.ArgumentParser) -> None:
                    "harmonic (a housing between the gears and the sensor: the model is "
                    "judged on the lines around each harmonic, not on the spectrum's shape); "
                    "auto (default): the model's level on records pydiag simulate made; on "
-                   "others, with --machine and no --fmu (the machine's own model, its "
-                   "sensors on its housing) curve, else fit")
+                   "others curve with --machine and no --fmu when the machine file places "
+                   "its sensors ([[sensors]]: on its housing), else fit")
 
 
 def _measurement_args(p: argparse.ArgumentParser) -> None:

@@ -40,16 +40,18 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
     the machine's fundamental period
     (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
     gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`);
-    None (the default): curves wherever the gain is fitted, for a machine's sensors sit on
-    its housing, which passes each band of the meshes differently (the gain of a record
-    ``pydiag simulate`` made is the model's: not fitted)."""
+    None (the default): curves where the gain is fitted and the machine file describes its
+    sensors (``[[sensors]]``): they sit on its housing, which passes each band of the meshes
+    differently; one gain a channel for a record whose sensors the file does not place (a
+    simulator's mesh acceleration), and none for a record ``pydiag simulate`` made (its
+    level is the model's)."""
     tracked = order_track(measurement, speed, drop=drop)
     channels = [c for c in tracked.channels if c not in drop]
     adapter = model.adapter(channels)
     if fit_gain is None:
         fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
     if gain_curve is None:
-        gain_curve = fit_gain
+        gain_curve = fit_gain and bool(machine.sensors)
     parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
     return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
                          fixed_values=model.fixed_values,
