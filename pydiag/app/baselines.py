@@ -63,6 +63,10 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
         twice = {b.id for b, r in zip(found, kept) if id(r) in chosen and b.id in given}
         if twice:
             _warn(args, "a --baseline given is kept too; it counts once")
+        if any(id(r) in chosen and _same_file(b.measurement) == record
+               for b, r in zip(found, kept)):
+            _warn(args, "a kept baseline is the record itself: it is judged against itself "
+                  "there")
         out += [r for b, r in zip(found, kept) if id(r) in chosen and b.id not in twice]
     return out
 

@@ -264,8 +264,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
-    verdicts, spread, names = _judged(measurement, machine, found, speed,
-                                      upsampled_record(measurement, found, drop), baselines)
+    verdicts, spread, names = _judged(measurement, machine, found, speed, None, baselines)
     problem = machine_problem(fmu_path, model, measurement, machine, found, fit_gain,
                               feature_mode, drop, gain_curve)
     fit = fit_machine(problem, model, estimator, start=machine.fit_start())
