@@ -167,8 +167,8 @@ def cmd_diagnose(args) -> int:
     check_outputs(args, "json")
     machine = args.machine_description
     if args.fmu is None and machine is None:
-        raise UsageError("give --machine FILE (its own model is written and built), or "
-                         "--fmu FILE (a model of your own)")
+        raise UsageError("give --machine FILE, or --teeth NP,NG --rpm N for a gear pair (its "
+                         "own model is written and built), or --fmu FILE (a model of your own)")
     m = read_input(args)
     if _staged(args):
         return _diagnose_stages(args, machine, m)

@@ -80,9 +80,10 @@ def _start_warnings(machine: Machine, model: MachineModel) -> list[str]:
 
 def _model_fact(args, built: BuiltModel) -> str:
     """The machine's own model, as the commands name it: its source, whose it is."""
-    return (f"{built.source} (every stage of {args.machine}, "
+    return (f"{built.source} (every stage of {args.machine_description.source}, "
             + ("your edit of what pydiag wrote" if built.edited else "written by pydiag")
-            + "; pydiag accept EFFECT --stage S gives a stage an effect)")
+            + ("; pydiag accept EFFECT --stage S gives a stage an effect)" if args.machine
+               else "; a machine file takes effects: docs/machine-file.md)"))
 
 
 def _machine_record(args, m: Measurement) -> tuple[SpeedEstimate, dict, tuple[str, ...]]:

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from pydiag.core.errors import UsageError
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_file import load_machine
+from pydiag.gear.machine_file import load_machine, machine_from_dict
 from pydiag.io.readers import parse_units
 
 #: The commands that fit a pair model; of these, diagnose and batch fit every stage of a
 #: machine, compare, discover and loop the one stage --stage names.
 PAIR_COMMANDS = ("diagnose", "compare", "discover", "loop", "batch")
+#: The commands for which --teeth NP,NG --rpm N without --fmu stand for a machine of one
+#: stage, whose own model they fit (loop writes into a machine file: it takes one).
+SHORTHAND_COMMANDS = ("diagnose", "compare", "discover")
 
 
 def apply_machine(args) -> Machine | None:
@@ -23,7 +26,7 @@ def apply_machine(args) -> Machine | None:
     if not getattr(args, "machine", None):
         if getattr(args, "pulses_per_rev", None) is None and hasattr(args, "pulses_per_rev"):
             args.pulses_per_rev = 1
-        return None
+        return _pair(args)
     if args.teeth is not None:
         raise UsageError("--teeth and --machine both give the gears' teeth: give one")
     machine = load_machine(args.machine)
@@ -65,6 +68,22 @@ def apply_machine(args) -> Machine | None:
         if bearing is not None and getattr(args, "bearing", "absent") is None:
             args.bearing = bearing
     return machine
+
+
+def _pair(args) -> Machine | None:
+    """``--teeth NP,NG --rpm N`` without ``--fmu`` (:data:`SHORTHAND_COMMANDS`): a machine of
+    that one stage, its sensors the model's outputs (a channel named ``acc`` or ``disp``, or
+    mapped to one with ``--channel NAME=acc``); None otherwise."""
+    if (args.command not in SHORTHAND_COMMANDS or getattr(args, "fmu", None) is not None
+            or args.teeth is None or args.input_hz is None):
+        return None
+    pinion, gear = args.teeth
+    args.stage_index = 0
+    return machine_from_dict({
+        "name": f"pair {pinion}/{gear}", "input_rpm": 60 * args.input_hz,
+        "stages": [{"name": "pair", "pinion_teeth": pinion, "gear_teeth": gear}],
+        "sensors": [{"channel": output, "output": output} for output in ("acc", "disp")]},
+        f"--teeth {pinion},{gear} --rpm {60 * args.input_hz:g}")
 
 
 def _stage_of(args, machine: Machine) -> int | None:

@@ -93,3 +93,11 @@ def test_cli_diagnose_a_machine_file_without_an_fmu(gear_fmu, tmp_path):
     res = run_cli("-m", "pydiag", "diagnose", "--measurement", str(meas), "--quiet")
     assert res.returncode == 2
     assert "give --machine FILE" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    # --teeth and --rpm without --fmu: the same machine of one stage, written from them
+    short = tmp_path / "short.json"
+    res = run_cli("-m", "pydiag", "diagnose", "--teeth", "14,21", "--rpm", "1500",
+                  "--measurement", str(meas), "--json", str(short), "--quiet")
+    assert res.returncode == 0, res.stderr
+    again = json.loads(short.read_text())["stages"][0]
+    assert (again["fault_mode"], again["severity"]) == (c.fault_mode, c.severity), again
+    assert again["model"]["parameters"] == pytest.approx(fitted)
