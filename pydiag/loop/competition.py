@@ -43,7 +43,7 @@ def settle(held: dict[str, HeldOut], competing: dict[str, list[str]],
     (:func:`deferred`). ``competing``: the effects compare found claiming the same peaks
     as each (``Suggestion.competing``); ``bending``: the effects whose absence bends the
     base (``Effect.reshapes_base``)."""
-    confident = {k: h.z for k, h in held.items() if h.confident}
+    confident = {k: h.z for k, h in held.items() if h.confirmed}
     beaten = outcompeted(confident,
                          rivals(competing, {k: h.claimed for k, h in held.items() if h.tried}),
                          {k: h.z for k, h in held.items() if h.significant},

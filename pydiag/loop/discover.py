@@ -122,7 +122,7 @@ def held_out_row(problem: FitProblem, base: Comparison, effect: Effect, fmu: str
     except PydiagError as err:
         return failed_row(effect.key, err, started, stage)
     return Discovery(effect.key, h.status, h.message, h, len(effect.parameters),
-                     time.perf_counter() - started, h.confident, stage=stage)
+                     time.perf_counter() - started, h.confirmed, stage=stage)
 
 
 def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,

@@ -74,7 +74,11 @@ class HeldOut:
         return self.error_effect < self.error_base
 
     @property
-    def confident(self) -> bool:
+    def confirmed(self) -> bool:
+        """Whether the held-out test confirms the effect: significant, explaining enough of
+        its lines, inside its bounds, predicting half B better. Confident is more: confirmed
+        and no competitor explaining its lines as well (:mod:`pydiag.loop.competition`), a
+        verdict of a suggestion or a discovery, not of a test alone."""
         return (self.significant and self.explained >= MIN_EXPLAINED and not self.at_bound
                 and self.predicts_better)
 
@@ -132,7 +136,7 @@ class HeldOut:
     def to_dict(self) -> dict:
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "line_terms"}
         return {**out, "status": self.status.value, "significant": self.significant,
-                "confident": self.confident}
+                "confirmed": self.confirmed}
 
 
 @dataclass

@@ -108,7 +108,7 @@ def validate(problem: FitProblem, comparison: Comparison,
             h = dataclasses.replace(h, threshold=threshold(false_alarm_rate))
         fits[s.effect] = h
         s.held_out = h if h.tried else None
-        s.status, s.message, s.confident = h.status, h.message, h.confident
+        s.status, s.message, s.confident = h.status, h.message, h.confirmed
     mark_settled(suggestions, settle(fits, {s.effect: s.competing for s in suggestions},
                                      {key for key in fits if catalogue[key].reshapes_base},
                                      false_alarm_rate))

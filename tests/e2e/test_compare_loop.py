@@ -250,12 +250,12 @@ def test_an_effect_none_of_whose_lines_is_scored_is_not_fitted(gear_fmu, effect_
     problem = problem_of(gear_fmu, record(effect_fmus["gear_eccentricity"], periods=10))
     base = compare(problem, FaultEstimator(**FAST))
     h = held_out(problem, base, bearing, lambda: pytest.fail("built"), estimator)
-    assert not h.tried and not h.confident and h.parameters == {}
+    assert not h.tried and not h.confirmed and h.parameters == {}
     assert h.status is Status.NOT_TRIED and h.message.startswith("not tried")
     problem = problem_of(gear_fmu, record(effect_fmus["bearing_outer_race"], periods=10))
     base = compare(problem, FaultEstimator(**FAST))
     h = held_out(problem, base, bearing, effect_fmus["bearing_outer_race"], estimator)
-    assert h.tried and h.confident, h.message
+    assert h.tried and h.confirmed, h.message
 
 
 @pytest.mark.slow

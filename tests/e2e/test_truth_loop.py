@@ -257,7 +257,7 @@ def test_a_tilted_gear_is_found_and_a_runout_is_not_taken_for_one(gear_fmu, trut
                                        modulation, effect_fmu_of(modulation))
     tilt, runout = verdicts["tilt"], verdicts["gear_eccentricity"]
     assert tilt.z > 20 and tilt.explained > 0.5 and tilt.error_effect < tilt.error_base, tilt
-    assert runout.z < runout.threshold and not runout.confident, runout
+    assert runout.z < runout.threshold and not runout.confirmed, runout
 
 
 @pytest.mark.slow

@@ -279,7 +279,7 @@ def test_an_effect_that_predicts_the_other_half_worse_is_not_confident():
     held out", not confident, and the sentence gives both errors."""
     better = HeldOut("wave", 11.4, 2.3, 0.51, 0.699, 0.690, {})
     worse = HeldOut("wave", 11.4, 2.3, 0.51, 0.699, 0.721, {})
-    assert better.confident and better.status is Status.CONFIRMED
-    assert not worse.confident and worse.status is Status.WORSE
+    assert better.confirmed and better.status is Status.CONFIRMED
+    assert not worse.confirmed and worse.status is Status.WORSE
     assert "0.699 -> 0.721" in worse.message
     assert worse.to_dict()["status"] == "worse held out"
