@@ -87,6 +87,9 @@ CENTROID_PASSES = 3
 #: A tacho's speed and the mesh lines' may differ by this much (%) before a warning: ten
 #: times what the mesh search measures on real records, far below a wrong pulse count.
 TACHO_TOLERANCE_PCT = 0.1
+#: The tacho's speed over the nominal beyond which (or below its inverse) the tacho is
+#: checked against a mesh found near the nominal: a wrong count of pulses a turn.
+PULSE_CHECK_RATIO = 1.5
 #: A speed that swings by more than this share of the mesh demodulation's half-band
 #: (half the speed's range over the record, against the half-band) may have left it: the
 #: phase followed is then partly another line's, and the speed from it may be off, so it
@@ -451,11 +454,6 @@ def estimate_speed(measurement: Measurement, kinematics: GearKinematics,
         return SpeedEstimate(mean, _variation_pct(revs, fs, mean),
                              "tacho (no mesh line stood out from chance)", nominal, revs,
                              source=SpeedSource.TACHO)
-
-
-#: The tacho's speed over the nominal beyond which (or below its inverse) the tacho is
-#: checked against a mesh found near the nominal: a wrong count of pulses a turn.
-PULSE_CHECK_RATIO = 1.5
 
 
 def _check_pulses(tacho_hz: float, mesh: SpeedEstimate | None, nominal_hz: float,
