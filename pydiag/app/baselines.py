@@ -24,51 +24,54 @@ KEPT = "kept"
 def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
     """The --baseline records as the machine sees them (their speed and every shaft's TSA),
     read and made once; ``kept``: those kept for the machine in the history at the
-    record's operating point (:func:`~pydiag.gear.stage_judge.at_speed`)."""
-    out: list[MachineRecord] = []
-    seen: set[str] = set()  # each baseline counts once: a second would narrow the spread
+    record's operating point (:func:`~pydiag.gear.stage_judge.at_speed`). Each baseline
+    counts once, however often it is given or whether it is given and kept too (a second
+    copy would narrow the healthy spread); the record among its own baselines is said."""
     record = _same_file(getattr(args, "measurement", None))
-    for path in args.baseline or []:
-        nominal_hz = args.input_hz  # the machine file's when --rpm is not given
-        if path != KEPT:
-            if _same_file(path) in seen:
-                _warn(args, f"--baseline {path} is given twice; it counts once")
-                continue
-            seen.add(_same_file(path))
-            if _same_file(path) == record:
-                _warn(args, f"--baseline {path} is the record itself: it is judged against "
-                      "itself there")
-            out.append(machine_record(read_input(args, path), machine, speed, nominal_hz))
+    asked = list(args.baseline or [])
+    files: dict[str, str] = {}  # one file, one baseline
+    for path in asked:
+        if path == KEPT:
             continue
-        if KEPT in seen:
-            _warn(args, "--baseline kept is given twice; the kept baselines count once")
+        if _same_file(path) in files:
+            _warn(args, f"--baseline {path} is given twice; it counts once")
             continue
-        seen.add(KEPT)
-        db = str(args.history or history.default_path())
-        if args.history and not Path(db).exists():
-            raise UsageError(f"--baseline kept: no history {db} (nothing is kept there)")
-        found = history.kept_baselines(db, machine)
-        given = {b.id for b in found if _same_file(b.measurement) in seen}
-        kept = [dataclasses.replace(b.record, file=f"kept {b.id}: {b.record.file}")
-                for b in found]
-        near = at_speed(kept, nominal_hz)
-        if not near:
-            speeds = ", ".join(f"{b.speed.speed_hz:.4g} Hz ({b.file.partition(':')[0]})"
-                               for b in kept)
-            raise UsageError(f"--baseline kept: no baseline of machine '{machine.name}' kept in "
-                             f"{db} within {100 * BASELINE_SPEED_SHARE:g} % of "
-                             f"{nominal_hz:.4g} Hz (kept: {speeds or 'none'}); keep one with "
-                             "pydiag baseline")
-        chosen = {id(r) for r in near}  # at_speed returns the records it was given
-        twice = {b.id for b, r in zip(found, kept) if id(r) in chosen and b.id in given}
-        if twice:
-            _warn(args, "a --baseline given is kept too; it counts once")
-        if any(id(r) in chosen and _same_file(b.measurement) == record
-               for b, r in zip(found, kept)):
-            _warn(args, "a kept baseline is the record itself: it is judged against itself "
-                  "there")
-        out += [r for b, r in zip(found, kept) if id(r) in chosen and b.id not in twice]
+        if _same_file(path) == record:
+            _warn(args, f"--baseline {path} is the record itself: it is judged against "
+                  "itself there")
+        files[_same_file(path)] = path
+    out = [machine_record(read_input(args, path), machine, speed, args.input_hz)
+           for path in files.values()]
+    if asked.count(KEPT) > 1:
+        _warn(args, "--baseline kept is given twice; the kept baselines count once")
+    if KEPT in asked:
+        out += _kept(args, machine, set(files), record)
     return out
+
+
+def _kept(args, machine: Machine, files: set[str], record: str | None) -> list[MachineRecord]:
+    """The baselines kept for ``machine`` at the record's operating point, but those of
+    ``files`` (given on the command line too)."""
+    db = str(args.history or history.default_path())
+    if args.history and not Path(db).exists():
+        raise UsageError(f"--baseline kept: no history {db} (nothing is kept there)")
+    nominal_hz = args.input_hz  # the machine file's when --rpm is not given
+    found = history.kept_baselines(db, machine)
+    kept = [dataclasses.replace(b.record, file=f"kept {b.id}: {b.record.file}") for b in found]
+    chosen = {id(r) for r in at_speed(kept, nominal_hz)}  # the records it was given
+    if not chosen:
+        speeds = ", ".join(f"{b.speed.speed_hz:.4g} Hz ({b.file.partition(':')[0]})"
+                           for b in kept)
+        raise UsageError(f"--baseline kept: no baseline of machine '{machine.name}' kept in "
+                         f"{db} within {100 * BASELINE_SPEED_SHARE:g} % of "
+                         f"{nominal_hz:.4g} Hz (kept: {speeds or 'none'}); keep one with "
+                         "pydiag baseline")
+    near = [(_same_file(b.measurement), r) for b, r in zip(found, kept) if id(r) in chosen]
+    if any(name in files for name, _ in near):
+        _warn(args, "a --baseline given is kept too; it counts once")
+    if any(name == record for name, _ in near):
+        _warn(args, "a kept baseline is the record itself: it is judged against itself there")
+    return [r for name, r in near if name not in files]
 
 
 def _same_file(path: str | None) -> str | None:

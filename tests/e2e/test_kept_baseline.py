@@ -81,7 +81,8 @@ def test_a_baseline_counts_once_and_a_record_judged_against_itself_is_said(tmp_p
     assert said == ""
     for twice in ((str(tmp_path / "healthy.csv"), str(tmp_path / ".." / tmp_path.name
                                                        / "healthy.csv")),
-                  (str(tmp_path / "healthy.csv"), "kept")):
+                  (str(tmp_path / "healthy.csv"), "kept"),
+                  ("kept", str(tmp_path / "healthy.csv"))):  # in either order
         data, said = judged(*twice)
         assert data["stages"] == once["stages"] and len(data["baselines"]) == 1, twice
         assert "counts once" in said or "count once" in said, said
