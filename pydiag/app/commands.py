@@ -169,6 +169,9 @@ def cmd_diagnose(args) -> int:
     if args.fmu is None and machine is None:
         raise UsageError("give --machine FILE, or --teeth NP,NG --rpm N for a gear pair (its "
                          "own model is written and built), or --fmu FILE (a model of your own)")
+    if args.fmu is None and args.adapter:
+        raise UsageError("--adapter describes an FMU of your own: give it with --fmu (the "
+                         "machine's own model needs none)")
     m = read_input(args)
     if _staged(args):
         return _diagnose_stages(args, machine, m)

@@ -152,3 +152,12 @@ def test_batch_refuses_a_results_name_of_another_format(gear_fmu, short_measurem
                   str(short_measurement), "--out", str(out), "--quiet")
     assert res.returncode == 2 and "name it .parquet or .csv" in res.stderr, res.stderr
     assert not out.exists()
+
+
+def test_an_adapter_without_its_fmu_is_refused(short_measurement):
+    """The machine's own model needs no adapter: one given without --fmu is a mistake said
+    in one line, not silently unused."""
+    res = run_cli("-m", "pydiag", "diagnose", "--teeth", "14,21", "--rpm", "1500",
+                  "--measurement", str(short_measurement), "--adapter", "a.toml", "--quiet")
+    assert res.returncode == 2 and "give it with --fmu" in res.stderr, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
