@@ -23,7 +23,7 @@ def test_the_simulators_import_of_pydiag_only_the_record_they_write(path):
     assert {m for m in imported if m.split(".")[0] == "pydiag"} <= ALLOWED, path
 
 
-def test_the_check_sees_an_import_of_pydiag(tmp_path):
+def test_the_check_sees_an_import_of_pydiag():
     """Not vacuous: the simulators are read, and a pydiag import in them would be seen."""
     sources = " ".join(p.read_text() for p in TRUTH.glob("*.py"))
     assert "from pydiag.core.measurement import Measurement" in sources
