@@ -9,6 +9,7 @@ record (:class:`~pydiag.fit.problem.FitProblem`, whose docstring says what it so
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 
 from pydiag.core.errors import AdapterError, EstimationError, PlantError
 from pydiag.core.measurement import Measurement
@@ -43,7 +44,7 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
                   engine: str | None = None, fit_gain: bool | None = False,
                   speed: SpeedSettings | None = None,
                   speed_estimate: SpeedEstimate | None = None,
-                  gain_curve: bool | None = False) -> FitProblem:
+                  gain_curve: bool | Iterable[str] | None = False) -> FitProblem:
     """The fit problem of ``measurement`` on ``fmu_path``.
 
     Args:
@@ -67,12 +68,11 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
             the record at the nominal speed as it is
         speed_estimate: a speed already found for this (already tracked) measurement
         gain_curve: with the gain fitted, a curve over frequency (a node at every mesh
-            harmonic, :mod:`pydiag.fit.gain`) rather than one number a channel (None: one
-            number)
+            harmonic, :mod:`pydiag.fit.gain`) rather than one number: on every channel
+            (True), on those named, or on none (False, None)
     """
     if fit_gain is None:
         fit_gain = measurement.metadata.get("source") != SIMULATED_SOURCE
-    gain_curve = bool(gain_curve)
     given = adapter
     tacho = speed.tacho if speed is not None else None
     # the built-in adapter: every channel but the tacho is a sensor of the same name
@@ -106,7 +106,9 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
     except (PlantError, AdapterError) as err:
         raise EstimationError(str(err)) from err
     kin = resolve_operating_point(measurement, fmu_kin, kinematics, operating_point)
-    if gain_curve and fit_gain and kin is None:
+    curved = frozenset(s.channel for s in maps) if gain_curve is True else \
+        frozenset(gain_curve or ()) & {s.channel for s in maps}
+    if curved and fit_gain and kin is None:
         raise EstimationError("a gain curve needs the gear's kinematics: its nodes are the "
                               "mesh harmonics (give the teeth and the speed)")
     if kin is not None:
@@ -139,4 +141,4 @@ def build_problem(fmu_path: str, measurement: Measurement, adapter: Adapter | No
                       parameters, reference, featurizer,
                       adapter.warmup_s if warmup_s is None else warmup_s, kin, measurement,
                       adapter, fixed, fit_gain, speed_estimate,
-                      gain_curve=gain_curve and fit_gain)
+                      gain_curve=curved if fit_gain else frozenset())

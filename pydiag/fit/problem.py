@@ -76,8 +76,9 @@ class FitProblem:
         transfer: paths between the model's outputs and the sensors, applied to the
             simulated outputs (:mod:`pydiag.signal.transfer`); their variables are among
             the parameters and fixed values, never set in the FMU
-        gain_curve: with ``fit_gain``, each fitted gain is a curve over frequency with a
-            node at every mesh harmonic (module docstring)
+        gain_curve: the channels whose fitted gain (with ``fit_gain``) is a curve over
+            frequency with a node at every mesh harmonic (module docstring); the others'
+            is one number
     """
 
     spec: PlantSpec
@@ -95,7 +96,7 @@ class FitProblem:
     speed: SpeedEstimate | None = None
     fixed_gains: dict[str, float] = field(default_factory=dict)
     transfer: tuple[HousingMode, ...] = ()
-    gain_curve: bool = False
+    gain_curve: frozenset[str] = frozenset()
 
     @property
     def lows(self) -> np.ndarray:
@@ -159,7 +160,7 @@ class FitProblem:
         return np.sqrt(np.maximum(ref.amplitude ** 2 - ref.noise_power, 0.0))
 
     def _curved(self, channel: str) -> bool:
-        return self.fit_gain and self.gain_curve and channel not in self.fixed_gains
+        return self.fit_gain and channel in self.gain_curve and channel not in self.fixed_gains
 
     def curve_nodes_hz(self) -> np.ndarray:
         """The gain curve's nodes (:func:`pydiag.fit.gain.curve_nodes`), Hz."""
@@ -184,7 +185,7 @@ class FitProblem:
             return self.fixed_gains[channel]
         if not self.fit_gain:
             return 1.0
-        if self.gain_curve:  # the basis once: this runs at every evaluation of a fit
+        if channel in self.gain_curve:  # the basis once: it runs at every evaluation of a fit
             basis = self._basis(channel)
             return basis @ self._curve(model, channel, basis)
         return fitted_gain(model, self._clean(channel))

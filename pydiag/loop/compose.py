@@ -16,8 +16,8 @@ does:
 The same effects compose on a stage's mesh between two shafts
 (``GearDiag.Components.GearMesh``, :data:`MESH`, a machine's model's stage): its
 ``acc_sensor`` starts from what the housing sees of the mesh force, its ``t_angle`` from
-the stage's own phase, and it has no ``F_extra`` (a force on a stage is a torque on its
-shafts: a component of the machine).
+the stage's own phase, and its ``F_extra`` is a force from outside the mesh that the gear's
+shaft takes (a torque ripple of the stage's drive or load).
 
 The effects' declarations (parameters, components) are copied as written; a component
 name two effects use is prefixed with the effect's key in the second; a parameter two
@@ -65,9 +65,8 @@ class Base:
 #: The paper's pair: every effect's own model extends it.
 PAIR = Base("GearDiag.GearPair", SUMMED_HOOKS + SOLE_HOOKS, PAIR_STARTS)
 #: A stage's mesh between two shafts (a machine's model).
-MESH = Base("GearDiag.Components.GearMesh",
-            ("k_mod", "e_extra", "acc_sensor", "t_angle", "contact"),
-            {"acc_sensor": "(T/r_p - mesh_force)/m_s", "t_angle": "time + t_phase"})
+MESH = Base("GearDiag.Components.GearMesh", SUMMED_HOOKS + SOLE_HOOKS,
+            {"acc_sensor": "(T/r_p + F_extra - mesh_force)/m_s", "t_angle": "time + t_phase"})
 
 
 class CompositionError(UsageError):

@@ -15,17 +15,20 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import numpy as np
+
 from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import fmu_values
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.build import build_problem
-from pydiag.fit.problem import FitProblem
+from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.tracking import order_track
 from pydiag.loop.compare import compare
 from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.residual import measured_spectra
 from pydiag.loop.results import Comparison
 from pydiag.model.simulate import SIMULATED_SOURCE
 
@@ -33,25 +36,27 @@ from pydiag.model.simulate import SIMULATED_SOURCE
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
                     machine: Machine, speed: SpeedEstimate, fit_gain: bool | None = None,
                     feature_mode: str = "lines", drop: tuple[str, ...] = (),
-                    gain_curve: bool | None = None) -> FitProblem:
+                    gain_curve: bool | list[str] | None = None) -> FitProblem:
     """The fit problem of ``measurement`` on the machine model ``model`` (its FMU at
     ``fmu_path``): the record order-tracked at the input shaft (``speed``, found from every
     mesh or the tacho; the channels ``drop`` left out), every stage's lines analysed over
     the machine's fundamental period
     (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
     gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`);
-    None (the default): curves where the gain is fitted and the machine file describes its
-    sensors (``[[sensors]]``): they sit on its housing, which passes each band of the meshes
-    differently; one gain a channel for a record whose sensors the file does not place (a
-    simulator's mesh acceleration), and none for a record ``pydiag simulate`` made (its
-    level is the model's)."""
+    None (the default): curves where the gain is fitted on the accelerometers the machine
+    file places (``[[sensors]]``, output ``acc``): they sit on its housing, which passes
+    each band of the meshes differently; one gain a channel for a record whose sensors the
+    file does not place (a simulator's mesh acceleration) and for a sensor of the mesh's
+    deflection (``disp``: no housing between), and none for a record ``pydiag simulate``
+    made (its level is the model's)."""
     tracked = order_track(measurement, speed, drop=drop)
     channels = [c for c in tracked.channels if c not in drop]
     adapter = model.adapter(channels)
     if fit_gain is None:
         fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
-    if gain_curve is None:
-        gain_curve = fit_gain and bool(machine.sensors)
+    if gain_curve is None and machine.sensors:
+        housing = {o.name for o in model.outputs if o.quantity == "acc"}
+        gain_curve = [s.channel for s in adapter.sensors if s.variable in housing]
     parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
     return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
                          fixed_values=model.fixed_values,
@@ -62,53 +67,97 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
 
 def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
                 effect_estimator: FaultEstimator | None = None,
-                start: dict[str, float] | None = None) -> FitResult:
+                start: dict[str, float] | None = None,
+                false_alarm_rate: float = 0.01) -> FitResult:
     """The fit of a machine's model with its effects, in steps: the stages alone (every
-    effect off), then the effects' parameters with the stages held there
-    (``effect_estimator``, default ``estimator``; the parameters of an effect whose outputs
-    are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`), then
-    every parameter polished from the better of the two. Its error is never above the
-    stages' fit it starts from, which one swarm over every parameter at once does not
-    promise (more parameters, the same budget;
-    a swarm run on another model, even one that adds nothing, may land elsewhere).
+    effect off) on ``problem``'s features; the effects' parameters with the stages held
+    there (``effect_estimator``, default ``estimator``; the parameters of an effect whose
+    outputs are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`)
+    on the bins a comparison scores (:func:`~pydiag.loop.residual.measured_spectra` at
+    ``false_alarm_rate``), as a pair's accepted effect is
+    (:func:`~pydiag.loop.compare.refit_with_effect`); then the stages polished on their
+    features with the effects held, and the effects polished on the scored bins with the
+    stages held. An effect's lines need not lie in the stages' bands (a gear's runout is
+    its turn's line in the displacement, below every band): fitted there, its parameters
+    would go wherever nothing holds them. The stages are polished on their own features,
+    of one period, not on the scored bins of the whole record, which cost a spectrum of
+    the record at every simulation. The fit kept is the one of least error on the scored
+    bins, which is never above the stages' fit (a swarm over every parameter at once does
+    not promise it: more parameters, the same budget).
 
     ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
-    effect and the effect's held-out fit; every parameter is polished from there as well
-    (one missing starts off), and the better fit is kept: the error is then not above that
-    fit's either. An affine parameter the problem's features do not see (a shaft's order
-    outside every feature band: :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off
-    through the polishes, which would otherwise leave it wherever their steps wander."""
+    effect and the effect's held-out fit; the stages and the effects are polished from
+    there as well (one missing starts off). An affine parameter the scored bins do not see
+    (a shaft's order above them: :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off."""
     names = {p.name for p in model.effect_parameters}
-    own = tuple(p for p in problem.parameters if p.name not in names)
     added = tuple(p for p in problem.parameters if p.name in names)
     later = effect_estimator or estimator
-    pinned: dict[str, float] = {}  # lines outside every feature band: nothing moves them
     if not added:
         best = estimator.fit(problem)
-    else:
-        off = {p.name: p.off for p in added}
-        base = estimator.fit(problem.derive(parameters=own,
-                                            fixed_values=fmu_values(added, off)))
-        affine = tuple(p for p in added if p.name in model.affine_parameters)
-        other = tuple(p for p in added if p.name not in model.affine_parameters)
-        values, error = {}, base.error
-        if other:
-            effects = later.fit(problem.derive(parameters=other, fixed_values={
-                **fmu_values(own, base.parameters), **fmu_values(affine, off)}))
-            values, error = dict(effects.parameters), effects.error
-        if affine:  # n + 1 simulations, however many parameters
-            fitted = fit_affine(problem.derive(parameters=affine, fixed_values={
-                **fmu_values(own, base.parameters), **fmu_values(other, {**off, **values})}))
-            values.update(fitted.values)
-            error = fitted.error
-            pinned = {name: off[name] for name in fitted.unseen}
-        best = later.refine(_held(problem, pinned), {**base.parameters,
-                                                     **(values if error < base.error else off)})
+        if start is not None:
+            again = later.refine(problem, {p.name: start.get(p.name, p.off)
+                                           for p in problem.parameters})
+            best = again if again.error < best.error else best
+        return best
+    off = {p.name: p.off for p in added}
+    scored = problem.derive(featurizer=measured_spectra(problem,
+                                                        false_alarm_rate).featurizer)
+    base = estimator.fit(_held(problem, off))
+    effects, pinned = _effects_fit(scored, model, added, later, base.parameters)
+    fits = [_stages_then_effects(problem, scored, later, base.parameters, effects, pinned)]
     if start is not None:
-        again = later.refine(_held(problem, pinned), {p.name: start.get(p.name, p.off)
-                                                      for p in problem.parameters})
-        best = again if again.error < best.error else best
-    return dataclasses.replace(best, parameters={**best.parameters, **pinned})
+        fits.append(_stages_then_effects(
+            problem, scored, later, {p.name: start.get(p.name, p.off)
+                                     for p in problem.parameters if p.name not in names},
+            {p.name: start.get(p.name, p.off) for p in added if p.name not in pinned},
+            pinned))
+    with ProblemObjective(scored) as objective:
+        at_base = {**base.parameters, **off}
+        fits.append(dataclasses.replace(base, parameters=at_base, error=objective(
+            np.array([at_base[p.name] for p in scored.parameters]))))
+    best = min(fits, key=lambda f: f.error)
+    return dataclasses.replace(best, evaluations=sum(f.evaluations for f in fits))
+
+
+def _effects_fit(scored: FitProblem, model: MachineModel, added: tuple,
+                 estimator: FaultEstimator, stages: dict[str, float]
+                 ) -> tuple[dict[str, float], dict[str, float]]:
+    """The effects' parameters (``added``) fitted on ``scored`` with the stages held at
+    ``stages``, and those held off (an affine one the bins do not see)."""
+    off = {p.name: p.off for p in added}
+    affine = tuple(p for p in added if p.name in model.affine_parameters)
+    other = tuple(p for p in added if p.name not in model.affine_parameters)
+    values: dict[str, float] = {}
+    pinned: dict[str, float] = {}
+    if other:
+        values = dict(estimator.fit(_held(scored, {**stages, **{
+            p.name: off[p.name] for p in affine}})).parameters)
+    if affine:  # n + 1 simulations, however many parameters
+        fitted = fit_affine(_held(scored, {**stages, **{p.name: values[p.name]
+                                                        for p in other}}))
+        values.update(fitted.values)
+        pinned = {name: off[name] for name in fitted.unseen}
+    return {**values, **pinned}, pinned
+
+
+def _stages_then_effects(problem: FitProblem, scored: FitProblem, estimator: FaultEstimator,
+                         stages: dict[str, float], effects: dict[str, float],
+                         pinned: dict[str, float]) -> FitResult:
+    """The stages polished from ``stages`` on ``problem``'s features with the effects held
+    at ``effects``, then the effects polished from there on ``scored`` with the stages
+    held: the fit with every parameter, its error on ``scored``."""
+    held = {**effects, **pinned}
+    own = estimator.refine(_held(problem, held), stages)
+    fixed = _held(scored, {**own.parameters, **pinned})
+    if not fixed.parameters:  # every effect parameter held off: nothing to polish
+        with ProblemObjective(scored) as objective:
+            at = {**own.parameters, **held}
+            error = objective(np.array([at[p.name] for p in scored.parameters]))
+        return dataclasses.replace(own, parameters=at, error=error)
+    polished = estimator.refine(fixed, {k: v for k, v in held.items() if k not in pinned})
+    return dataclasses.replace(polished, parameters={**own.parameters, **polished.parameters,
+                                                     **pinned},
+                               evaluations=own.evaluations + polished.evaluations)
 
 
 def _held(problem: FitProblem, values: dict[str, float]) -> FitProblem:
@@ -127,7 +176,7 @@ def compare_machine(problem: FitProblem, model: MachineModel, estimator: FaultEs
                     start: dict[str, float] | None = None) -> Comparison:
     """compare (:func:`pydiag.loop.compare.compare`) of the machine's model at its fit
     (:func:`fit_machine`), whose error the comparison reports as its fit error."""
-    fit = fit_machine(problem, model, estimator, effect_estimator, start)
+    fit = fit_machine(problem, model, estimator, effect_estimator, start, false_alarm_rate)
     return dataclasses.replace(compare(problem, None, false_alarm_rate,
                                        parameters=fit.parameters), fit_error=fit.error)
 

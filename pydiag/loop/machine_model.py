@@ -23,10 +23,12 @@ A stage carries the catalogue effects the machine file gives it (``[[effects]]``
 model (:func:`pydiag.loop.compose.compose` on :data:`~pydiag.loop.compose.MESH`, declared
 inside the machine's), one of the base model's own parameters frees them; their parameters
 are fitted as ``<stage>.<name>``, after the stages
-(:func:`pydiag.loop.machine_fit.fit_machine`). An effect whose lines do not repeat with the
-machine (a bearing's, a ripple's) or that is a sensor's path (the housing) is not a
-stage's in this model yet. The catalogue as a stage has it (its parameters named for the
-stage) is :func:`stage_effect`'s.
+(:func:`pydiag.loop.machine_fit.fit_machine`). A ripple's lines need not repeat with the
+machine (the model is then simulated whole, not one period repeated); an effect that
+needs a component the stage does not describe (a bearing's geometry, another shaft's
+ratio) or that is a sensor's path (the housing) is not a stage's in this model yet. The
+catalogue as a stage has it (its parameters named for the stage) is
+:func:`stage_effect`'s.
 
 The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
 shaft's torsion between two stages (``GearDiag.Components.Shaft``,
@@ -63,7 +65,8 @@ from pydiag.model.adapter import Adapter, Quantity, SensorMap
 SPEED_PARAMETER = "f_input"
 #: Range of a stage's level at a sensor relative to the stage the sensor is near, dB.
 PATH_RANGE_DB = (-40.0, 40.0)
-#: The model output a sensor maps to when the machine file describes no sensor.
+#: The model output a channel is when the machine file describes no sensor (a channel
+#: named as another of :data:`STAGE_OUTPUTS` is that one, as on a pair's FMU).
 DEFAULT_OUTPUT = "acc"
 #: The outputs of a stage a sensor may measure.
 STAGE_OUTPUTS = ("acc", "disp")
@@ -92,9 +95,10 @@ def _said(text: str) -> str:
 
 @dataclass(frozen=True)
 class SensorOutput:
-    """One output of the machine model: the channel it stands for (None: every channel of
-    a record whose machine file names no sensor), what it measures, the index of the stage
-    it sees as its own and the level parameter of each other stage (by stage index)."""
+    """One output of the machine model: the channel it stands for (None: every channel no
+    other output names, of a record whose machine file describes no sensor), what it
+    measures, the index of the stage it sees as its own and the level parameter of each
+    other stage (by stage index)."""
 
     name: str
     channel: str | None
@@ -150,11 +154,13 @@ class MachineModel:
 
     def adapter(self, channels: list[str]) -> Adapter:
         """The model described to a fit of ``channels``: each mapped to its sensor's output
-        (every channel to the one output of a machine file without sensors), the first
-        stage's kinematics with the speed in ``f_input``."""
+        (of a machine file without sensors, a channel named ``disp`` to the deflection and
+        every other to ``acc``), the first stage's kinematics with the speed in
+        ``f_input``."""
         sensors = []
         for channel in channels:
-            out = next((o for o in self.outputs if o.channel in (channel, None)), None)
+            out = next((o for o in self.outputs if o.channel == channel),
+                       next((o for o in self.outputs if o.channel is None), None))
             if out is None:
                 raise UsageError(f"channel {channel} is none of the machine file's sensors "
                                  f"({', '.join(o.channel for o in self.outputs)})")
@@ -167,14 +173,16 @@ class MachineModel:
 
 
 def on_a_stage(effect: Effect) -> bool:
-    """Whether a machine's model can give ``effect`` to a stage (module docstring)."""
-    return effect.synchronous and effect.transfer is None
+    """Whether a machine's model can give ``effect`` to a stage (module docstring): an
+    effect of the mesh or its shafts, not one that needs a component the stage does not
+    describe (a bearing's geometry, another shaft's ratio) nor a sensor's path."""
+    return effect.machine_values is None and effect.transfer is None
 
 
 def not_on_a_stage(key: str) -> str:
     """Why the effect ``key`` cannot be a stage's (one that :func:`on_a_stage` refuses)."""
-    return (f"{key} is not a stage's in a machine's model yet (a bearing's or a ripple's "
-            "lines do not repeat with the machine; the housing is a sensor's path)")
+    return (f"{key} is not a stage's in a machine's model yet (a bearing's lines need its "
+            "geometry, another shaft's its ratio; the housing is a sensor's path)")
 
 
 def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
@@ -264,7 +272,8 @@ def _drive_train(machine: Machine, k: int, mesh: str, taken: set[str]
 def machine_model(machine: Machine, modelica_root: Path | None = None) -> MachineModel:
     """The model of ``machine`` (module docstring); ``modelica_root``: the library whose
     effects a stage with several is composed of."""
-    taken: set[str] = {SPEED_PARAMETER}
+    # the outputs of a machine without sensors are named as a pair's (acc, disp)
+    taken: set[str] = {SPEED_PARAMETER} | (set() if machine.sensors else set(STAGE_OUTPUTS))
     stages = tuple(_identifier(s.name, f"stage{k + 1}", taken)
                    for k, s in enumerate(machine.stages))
     lines = [f"  parameter Real {SPEED_PARAMETER}(unit=\"Hz\") = "
@@ -298,14 +307,15 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
         declarations, equations = _drive_train(machine, k, inst, taken)
         lines += declarations
         connects += equations
+    described = bool(machine.sensors)
     sensors = [(s.channel, s.output, s.near_stage or 0) for s in machine.sensors] or \
-        [(None, DEFAULT_OUTPUT, 0)]
+        [(None, DEFAULT_OUTPUT, 0)] + [(q, q, 0) for q in STAGE_OUTPUTS if q != DEFAULT_OUTPUT]
     outputs = []
     for channel, quantity, near in sensors:
         if quantity not in STAGE_OUTPUTS:
             raise UsageError(f"{machine.source}: sensor {channel} measures {quantity}; a "
                              f"machine model has {', '.join(STAGE_OUTPUTS)}")
-        name = quantity if channel is None else \
+        name = quantity if not described else \
             _identifier(f"{quantity}_{channel}", f"{quantity}_{len(outputs) + 1}", taken)
         levels = {k: _identifier(f"{name}_{inst}_dB", f"{name}_{k + 1}_dB", taken)
                   for k, inst in enumerate(stages) if k != near}

@@ -67,6 +67,8 @@ TILT = dict(gear_tilt=0.1)
 #: Two hidden effects in one record: a gear runout and the motor shaft's orders (a
 #: sensor-only difference from the runout's record: one integration for both).
 TWO_HIDDEN = dict(gear_runout_m=10e-6, other_shaft_acc=3.0)
+#: A gear runout and a torque ripple on the input shaft in one record.
+RUNOUT_AND_RIPPLE = dict(gear_runout_m=10e-6, torque_ripple=0.005)
 #: The strike frequency of each bearing effect on the simulator, Hz.
 STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
@@ -84,7 +86,8 @@ def truth_records(tmp_path_factory):
         from concurrent.futures import ProcessPoolExecutor
         gears = {key: TruthGear().with_effects(**magnitudes)
                  for key, magnitudes in {"none": {}, **HIDDEN, "two": TWO_HIDDEN,
-                                         "tilt": TILT}.items()}
+                                         "tilt": TILT, "runout_ripple": RUNOUT_AND_RIPPLE
+                                         }.items()}
         groups: dict = {}  # the records that differ only in what the sensor sees
         for key, g in gears.items():
             groups.setdefault(dynamics_of(g), []).append(key)
@@ -518,6 +521,38 @@ def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, truth_record
     assert steps[0].error > steps[1].error > steps[2].error, [s.error for s in steps]
     assert all(s.held_out_error_with < s.held_out_error_base for s in steps[:2])
     assert steps[2].comparison.parameters["ecc_gear"] == pytest.approx(10e-6, rel=0.2)
+
+
+def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(truth_records,
+                                                                         tmp_path):
+    """`pydiag loop --machine pair.toml` without --fmu, the pair as a machine of one stage
+    (no sensors described: the record's acc and disp channels are the model's outputs of
+    those names, one gain each), on a record with a gear runout and a torque ripple: the
+    runout is accepted first, held out error falling, then the ripple (a speed
+    fluctuation: the simulator's ripple moves the shafts' speed) is confident on the model
+    with the runout, its held-out error falling again; the fit with the runout is
+    below the base's (its line in the displacement lies below every feature band: the
+    effect is fitted on the bins the comparison scores)."""
+    meas, machine, out = tmp_path / "m.csv", tmp_path / "pair.toml", tmp_path / "loop.json"
+    write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
+                                   clean=truth_records["runout_ripple"]))
+    machine.write_text('name = "pair"\ninput_rpm = 1500\n[[stages]]\npinion_teeth = 14\n'
+                       'gear_teeth = 21\n')
+    res = run_cli("-m", "pydiag", "loop", "--machine", str(machine), "--measurement",
+                  str(meas), "--max-steps", "2", "--json", str(out), "--quiet",
+                  "--build-dir", str(tmp_path / "fmus"), "--history", str(tmp_path / "h.sqlite"))
+    assert res.returncode == 0, res.stderr
+    first, second = json.loads(out.read_text())["steps"]
+    assert first["effect"] == "gear_eccentricity on stage 1", first
+    assert first["held_out_error_with"] < 0.8 * first["held_out_error_base"]
+    assert second["error"] < 0.8 * first["error"]
+    ripple = [s for s in second["suggested_effects"] if s["confident"]]
+    assert [s["effect"] for s in ripple] == ["speed_fluctuation"], second["suggested_effects"]
+    held = ripple[0]["held_out"]
+    assert held["error_effect"] < 0.7 * held["error_base"]
+    assert held["parameters"]["stage_1.f_speed"] == pytest.approx(
+        TruthGear().effects.ripple_hz, abs=0.1)
+    assert "stopped at the step limit, confident: speed_fluctuation on stage 1" in res.stdout
 
 
 def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, truth_records,
