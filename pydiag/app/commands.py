@@ -29,7 +29,7 @@ from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import Machine
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings
-from pydiag.gear.stage_judge import machine_report
+from pydiag.gear.machine_report import machine_report
 from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.speed import SpeedEstimate
-from pydiag.gear.stage_judge import MachineReport
+from pydiag.gear.component_judge import ComponentVerdict
+from pydiag.gear.machine_report import MachineReport
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
 from pydiag.loop.stages import MachineDiagnosis
@@ -215,8 +216,24 @@ def format_machine_report(report: MachineReport) -> str:
         lines.append(f"{v.stage:<16}{f'{v.pinion_teeth}/{v.gear_teeth}':>7}{v.mesh_hz:>10.2f}"
                      f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}"
                      f"{f'{v.pinion.fm4_change:+.2f}/{v.gear.fm4_change:+.2f}':>14}  {verdict}")
+    lines += format_components(report.components)
     lines.append(f"baselines  : {', '.join(report.baselines)}")
     return "\n".join(lines)
+
+
+def format_components(judged: tuple[ComponentVerdict, ...]) -> list[str]:
+    """One line a component, faulty ones first: what it is, its state, the change it was
+    judged by over its threshold, and why."""
+    if not judged:
+        return []
+    lines = ["", f"{'component':<30}{'kind':<9}{'shaft':<10}{'state':<12}{'x thr':>7}  why"]
+    for v in judged:
+        c = v.component
+        margin = "-" if v.margin is None or v.margin != v.margin else f"{v.margin:.2f}"
+        lines.append(f"{c.name:<30}{c.kind:<9}{c.shaft:<10}{v.state:<12}{margin:>7}  {v.reason}")
+    lines.append("x thr      : the largest change of a component's measures over its "
+                 "threshold (K x the healthy records' spread): above 1, beyond it")
+    return lines
 
 
 def format_machine_diagnosis(result: MachineDiagnosis) -> str:
@@ -236,6 +253,7 @@ def format_machine_diagnosis(result: MachineDiagnosis) -> str:
                      f"{st.suspect or '-'}")
     for st in result.stages:
         lines += _not_counted(st.fit, f"{st.name}'s ")
+    lines += format_components(result.components)
     scale = result.to_dict()["severity_scale"]
     lines += ["", f"severity   : {scale}"]
     if result.baselines:

@@ -158,6 +158,9 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
         bearings.append(MachineBearing(Bearing(n, d * 1e-3, pitch * 1e-3, math.radians(angle)),
                                        shaft, _text(t.get("name", f"bearing {i + 1}"), source,
                                                     where, "name")))
+        if bearings[-1].name in [b.name for b in bearings[:-1]]:  # each is judged by name
+            raise MachineError(f"{_where(source, where, 'name')}: another bearing is called "
+                               f"{bearings[-1].name!r}: give each a name of its own")
     sensors = []
     for i, t in enumerate(_tables(data, "sensors", source)):
         where = f"sensors[{i}]"

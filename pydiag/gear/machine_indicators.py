@@ -19,17 +19,22 @@ input's turn): a runout or an eccentric gear on that shaft swings the whole driv
 turn, which the tacho sees and a mesh's phase, followed in a band narrower than the
 shaft's speed, does not (docs/gearbox.md). It is reported, not judged: how much it varies
 between healthy runs is not known from a record's halves.
+
+Each shaft's first orders in its TSA (a shaft's unbalance, bend, looseness) and each
+bearing's defect lines (:mod:`pydiag.gear.bearing_lines`) are kept too, of the whole
+record and of each half, for :mod:`pydiag.gear.component_judge`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pydiag.core.errors import MeasurementError
 from pydiag.core.measurement import Measurement
+from pydiag.gear.bearing_lines import BearingRecord, bearing_records
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
@@ -39,6 +44,8 @@ from pydiag.signal.condition import (TrendReference, synchronous_average,
 
 #: Indicators of a shaft's TSA in the report, after the residual energy.
 SHAFT_INDICATORS = ("fm0", "fm4", "na4", "nb4", "er", "ser")
+#: A shaft's first orders kept of each record (its own vibration: unbalance, bend, looseness).
+SHAFT_ORDERS = 5
 
 
 @dataclass(frozen=True)
@@ -57,6 +64,9 @@ class ShaftRecord:
         swing_deg: how far the input's angle swings once a turn of this shaft, degrees of
             the input's turn (module docstring); None without a tacho, for the input and
             for a shaft not slower than it, or a baseline kept before it was measured
+        orders: channel -> the amplitudes of the TSA's first :data:`SHAFT_ORDERS` orders
+            (a shaft's unbalance, bend or looseness); order_halves: the same of each half
+            (empty: a baseline kept before they were)
     """
 
     shaft: str
@@ -70,6 +80,9 @@ class ShaftRecord:
     indicators: dict[str, dict[str, float]]
     fm4_halves: dict[str, tuple[float, float]]
     swing_deg: float | None = None
+    orders: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    order_halves: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = \
+        field(default_factory=dict)
 
 
 def _teeth_on(machine: Machine, shaft: int) -> tuple[int, ...]:
@@ -129,7 +142,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         if n_revs < 4:
             raise MeasurementError(f"the record holds {n_revs} whole turns of the {name} shaft: "
                                    "too few to average (at least 4)")
-        energy, halves, table, fm4_halves = {}, {}, {}, {}
+        energy, halves, table, fm4_halves, orders, order_halves = {}, {}, {}, {}, {}, {}
         half = (n_revs // 2) * samples_per_rev
         for channel, x in zip(names, tracked):
             parts = [tsa_signals(synchronous_average(y, samples_per_rev), teeth[-1],
@@ -141,8 +154,11 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             values = tsa_indicators(parts[0], TrendReference())
             table[channel] = {k: float(values[k]) for k in SHAFT_INDICATORS}
             fm4_halves[channel] = tuple(float(tsa_indicators(p)["fm4"]) for p in parts[1:])
+            first = [tuple(float(a) for a in p.spectrum[1:SHAFT_ORDERS + 1]) for p in parts]
+            orders[channel], order_halves[channel] = first[0], (first[1], first[2])
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
-                               halves, table, fm4_halves, _swing_deg(estimate, ratio)))
+                               halves, table, fm4_halves, _swing_deg(estimate, ratio),
+                               orders, order_halves))
     return out
 
 
@@ -158,7 +174,8 @@ def _swing_deg(estimate: SpeedEstimate, ratio: float) -> float | None:
 
 @dataclass(frozen=True)
 class MachineRecord:
-    """A record seen through the machine: the input speed found, and every shaft's TSA."""
+    """A record seen through the machine: the input speed found, every shaft's TSA, and
+    every bearing's defect lines (:mod:`pydiag.gear.bearing_lines`)."""
 
     speed: SpeedEstimate
     shafts: tuple[ShaftRecord, ...]
@@ -166,6 +183,8 @@ class MachineRecord:
     #: each channel's level as read (:func:`channel_levels`); None: not known (a baseline
     #: kept before pydiag kept it)
     units: dict[str, str] | None = None
+    #: empty for a machine without bearings or a baseline kept before they were read
+    bearings: tuple[BearingRecord, ...] = ()
 
     def to_dict(self) -> dict:
         """Plain data that :meth:`from_dict` reads back (a baseline kept in the history):
@@ -185,8 +204,12 @@ class MachineRecord:
                                            for c, t in s.indicators.items()},
                             "fm4_halves": {c: [finite_or_none(v) for v in h]
                                            for c, h in s.fm4_halves.items()},
-                            "swing_deg": s.swing_deg}
-                           for s in self.shafts]}
+                            "swing_deg": s.swing_deg,
+                            "orders": {c: list(o) for c, o in s.orders.items()},
+                            "order_halves": {c: [list(h) for h in o]
+                                             for c, o in s.order_halves.items()}}
+                           for s in self.shafts],
+                "bearings": [b.to_dict() for b in self.bearings]}
 
     @classmethod
     def from_dict(cls, data: dict) -> "MachineRecord":
@@ -200,10 +223,13 @@ class MachineRecord:
             {c: (h[0], h[1]) for c, h in s["halves"].items()},
             {c: {k: _number(v) for k, v in t.items()} for c, t in s["indicators"].items()},
             {c: (_number(h[0]), _number(h[1])) for c, h in s.get("fm4_halves", {}).items()},
-            s.get("swing_deg"))
+            s.get("swing_deg"),
+            {c: tuple(o) for c, o in s.get("orders", {}).items()},
+            {c: (tuple(o[0]), tuple(o[1])) for c, o in s.get("order_halves", {}).items()})
             for s in data["shafts"])
         return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
-                   data["file"], data.get("units"))
+                   data["file"], data.get("units"),
+                   tuple(BearingRecord.from_dict(b) for b in data.get("bearings", [])))
 
 
 def channel_levels(measurement: Measurement) -> dict[str, str]:
@@ -239,7 +265,9 @@ def machine_record(measurement: Measurement, machine: Machine, speed: SpeedSetti
         tracked_s = 8 / (input_hz * slowest)  # a few turns of the slowest shaft beyond the edges
         found = estimate_speed(measurement, kin, speed, tracked_s, machine=machine)
     drop = (speed.tacho,) if speed.tacho else ()
+    upsampled = upsampled or upsampled_record(measurement, found, drop)
     return MachineRecord(found, tuple(shaft_records(measurement, machine, found, drop,
                                                     upsampled)),
                          str(measurement.metadata.get("file", "(in memory)")),
-                         channel_levels(measurement))
+                         channel_levels(measurement),
+                         tuple(bearing_records(measurement, machine, found, drop, upsampled)))

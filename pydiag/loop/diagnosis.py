@@ -158,7 +158,9 @@ def fit_warnings(problem: FitProblem, error: float, gains: dict[str, float] | No
 
     A parameter at the top of its range is named: the record asks for more of it than the
     model allows, so the model's form or range is wrong there (at the bottom, a fault
-    parameter says "none of it", a normal answer)."""
+    parameter says "none of it", a normal answer). A gain far from 1 is named where the
+    level is a unit's check: not on a channel in volts (any level is right) nor on one
+    whose gain is a curve (a housing between the mesh and the sensor sets its level)."""
     found = []
     for p in problem.parameters:
         value = (parameters or {}).get(p.name)
@@ -179,7 +181,8 @@ def fit_warnings(problem: FitProblem, error: float, gains: dict[str, float] | No
     low, high = PLAUSIBLE_GAINS
     volts = problem.measurement.metadata.get("unknown_level", [])
     for channel, gain in (gains or {}).items():
-        if not low <= gain <= high and channel not in volts:  # volts: any level is right
+        if not low <= gain <= high and channel not in volts and \
+                channel not in problem.gain_curve:
             found.append(f"channel {channel}: the model had to be scaled by {gain:.3g} to "
                          f"match the record's level; {check}")
     return found

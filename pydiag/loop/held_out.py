@@ -65,14 +65,10 @@ from pydiag.loop.effect_fit import (EFFECT_REFIT, effect_parameters, evidence_ch
                                     fit_effect, free_polish)
 from pydiag.loop.residual import MeasuredSpectra, measured_spectra
 from pydiag.loop.results import Comparison, HeldOut
-from pydiag.signal.spectra import local_maxima
+from pydiag.signal.spectra import ENVELOPE_TOP, local_maxima
 
 #: Chance that an effect which only fits noise passes the held-out test.
 FALSE_ALARM_RATE = 0.01
-#: The top of the band whose envelope an effect with ``Effect.envelope`` is scored on, as a
-#: share of the sample rate (its bottom: the top of the gear's analysed bands); below the
-#: Nyquist frequency by the anti-alias filter's usual margin.
-ENVELOPE_TOP = 0.45
 #: A parameter closer to a bound than this share of its range is at the bound ...
 AT_BOUND = 0.01
 #: ... and the fit presses against it when a step of BOUND_PROBE of its range inward

@@ -34,6 +34,7 @@ from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import build_problem
 from pydiag.fit.problem import FitProblem
+from pydiag.gear.component_judge import ComponentVerdict, judge_components
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
@@ -94,10 +95,13 @@ class MachineDiagnosis:
     stages: list[StageDiagnosis]
     baselines: tuple[str, ...]
     spread_db: float | None
+    #: every gear, bearing and shaft judged against the baselines (none without)
+    components: tuple[ComponentVerdict, ...] = ()
 
     def to_dict(self) -> dict:
         return {"machine": self.machine.name, **self.speed.to_dict(),
                 "stages": [s.to_dict() for s in self.stages],
+                "components": [c.to_dict() for c in self.components],
                 "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
                 "severity_scale": SCALE_BASELINES if self.baselines else SCALE_PAPER}
 
@@ -172,7 +176,9 @@ def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, sta
 def _stage_channels(measurement: Measurement, machine: Machine, stage: int) -> Measurement:
     """The channels a stage is fitted on, named as the model outputs they measure: the
     sensors the machine places near the stage, else every sensor it describes (the first
-    of those that measure one output), else every channel as it is named."""
+    of those that measure one output), else every channel as it is named. A sensor the
+    machine file places sits on its housing: its level against the pair's is the
+    housing's, not a unit's check (``unknown_level``, as a channel in volts)."""
     sensors = [s for s in machine.sensors if s.channel in measurement.channels]
     near = [s for s in sensors if s.near_stage == stage] or sensors
     if not near:
@@ -181,8 +187,7 @@ def _stage_channels(measurement: Measurement, machine: Machine, stage: int) -> M
     for s in near:
         chosen.setdefault(s.output, s.channel)
     meta = dict(measurement.metadata)
-    volts = meta.get("unknown_level", [])
-    meta["unknown_level"] = [out for out, c in chosen.items() if c in volts]
+    meta["unknown_level"] = list(chosen)
     return dataclasses.replace(measurement, channels={out: measurement.channels[c]
                                                       for out, c in chosen.items()},
                                metadata=meta)
@@ -223,8 +228,8 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
     upsampled = upsampled_record(measurement, found, drop)  # once for every shaft and stage
-    verdicts, spread, names = _judged(measurement, machine, found, speed, upsampled,
-                                      baselines)
+    verdicts, spread, names, judged = _judged(measurement, machine, found, speed, upsampled,
+                                              baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
@@ -232,20 +237,22 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
                                 upsampled=upsampled)
         fit = diagnose(problem, estimator, speed_warning=False)
         stages.append(stage_diagnosis(stage.name, problem, fit, verdicts[k]))
-    return MachineDiagnosis(machine, found, stages, names, spread)
+    return MachineDiagnosis(machine, found, stages, names, spread, judged)
 
 
 def _judged(measurement: Measurement, machine: Machine, found: SpeedEstimate,
             speed: SpeedSettings, upsampled: Upsampled | None,
             baselines: Sequence[MachineRecord]
-            ) -> tuple[list[StageVerdict | None], float | None, tuple[str, ...]]:
+            ) -> tuple[list[StageVerdict | None], float | None, tuple[str, ...],
+                       tuple[ComponentVerdict, ...]]:
     """Each stage's verdict against ``baselines`` (None each without), the healthy
-    records' spread, the baselines' files."""
+    records' spread, the baselines' files, every component's verdict."""
     if not baselines:
-        return [None] * len(machine.stages), None, ()
+        return [None] * len(machine.stages), None, (), ()
     record = machine_record(measurement, machine, speed, found.nominal_hz, found, upsampled)
     verdicts, spread = judge_stages(machine, record, list(baselines))
-    return list(verdicts), spread, tuple(b.file for b in baselines)
+    return (list(verdicts), spread, tuple(b.file for b in baselines),
+            judge_components(machine, record, list(baselines), verdicts))
 
 
 def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Measurement,
@@ -264,7 +271,8 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
-    verdicts, spread, names = _judged(measurement, machine, found, speed, None, baselines)
+    verdicts, spread, names, judged = _judged(measurement, machine, found, speed, None,
+                                              baselines)
     problem = machine_problem(fmu_path, model, measurement, machine, found, fit_gain,
                               feature_mode, drop, gain_curve)
     fit = fit_machine(problem, model, estimator, start=machine.fit_start())
@@ -277,7 +285,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
         stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
                                                                    prefix),
                                       verdicts[k], prefix))
-    return MachineDiagnosis(machine, found, stages, names, spread)
+    return MachineDiagnosis(machine, found, stages, names, spread, judged)
 
 
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,

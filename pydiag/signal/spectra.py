@@ -15,6 +15,11 @@ import numpy as np
 from pydiag.core.errors import MeasurementError
 from pydiag.signal.angle import resample_at
 
+#: The top of the band a bearing's envelope is taken in, as a share of the sample rate (its
+#: bottom: the top of the gear's analysed bands): below the Nyquist frequency by the
+#: anti-alias filter's usual margin.
+ENVELOPE_TOP = 0.45
+
 WINDOWS = ("boxcar", "hann")
 
 

@@ -100,7 +100,7 @@ def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, 
                   "--baseline", str(DATA / "spur 1_30hz_High_2.zip"), "--json", str(out),
                   "--particles", "8", "--iterations", "6", "--polish", "60", "--quiet")
     assert res.returncode == 0, res.stderr
-    assert "scaled by" not in res.stderr  # volts without a sensitivity: no unit warning
+    assert "scaled by" not in res.stderr  # sensors on a housing: its level, not a unit's
     data = json.loads(out.read_text())
     assert data["speed_method"] == "tacho" and "mesh_speed_hz" in data
     stages = data["stages"]
@@ -118,6 +118,17 @@ def test_diagnose_fits_every_stage_and_judges_it_against_the_baseline(gear_fmu, 
     assert stages[0]["baseline"]["suspect_by"] == "impulsiveness"
     assert stages[1]["suspect"] == "pinion" and stages[1]["baseline"]["verdict"] == "changed"
     assert {"tooth_contrast", "transmission_error", "severity", "model"} <= set(stages[0])
+    # every gear, bearing and shaft of the machine file, faulty ones first: the chipped
+    # input pinion named on its gear (its shaft and teeth)
+    parts = data["components"]
+    assert sorted(c["kind"] for c in parts) == ["bearing"] * 6 + ["gear"] * 4 + ["shaft"] * 3
+    pinion = next(c for c in parts if c["kind"] == "gear" and c["teeth"] == 32)
+    assert (pinion["shaft"], pinion["state"]) == ("input", "changed"), pinion
+    states = [c["state"] not in ("good", "not judged") for c in parts]
+    assert states == sorted(states, reverse=True)
+    assert {c["name"] for c in parts if c["kind"] == "bearing"} == {
+        f"{s}:{side}" for s in ("IS", "ID", "OS") for side in ("IS", "OS")}
+    assert "32T pinion of input stage" in res.stdout.split("component")[1]
 
 
 def test_a_stages_class_does_not_hang_on_the_last_bits_of_the_speed(gear_fmu):

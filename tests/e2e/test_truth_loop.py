@@ -26,7 +26,8 @@ from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.compose import composed_fmu
 from pydiag.loop.discover import discover, effect_fmu
 from pydiag.loop.effect_fit import EFFECT_REFIT
-from pydiag.loop.held_out import ENVELOPE_TOP, held_out
+from pydiag.loop.held_out import held_out
+from pydiag.signal.spectra import ENVELOPE_TOP
 from pydiag.loop.residual import measured_spectra
 from pydiag.loop.results import Status
 from pydiag.loop.validate import validate

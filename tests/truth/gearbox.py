@@ -2,8 +2,13 @@
 tests fit): each stage's mesh harmonics amplitude-modulated by its two shafts, a local
 tooth defect as a short dip of its mesh's amplitude once per turn of the shaft carrying
 it, a runout as a once-a-turn swing of its mesh's amplitude and timing, white noise, and
-an input speed that wanders by 0.05 %; optionally a tacho on the input shaft, and the whole
-drive swinging once a turn of a shaft (every angle moved with the input's)."""
+an input speed that wanders by 0.05 %; optionally a tacho on the input shaft, the whole
+drive swinging once a turn of a shaft (every angle moved with the input's), a shaft's
+unbalance or bend (its 1x, or its 1x and 2x, at the sensor) and a rolling bearing's
+defect: impacts at the instants its balls pass the defect, each pass's interval jittered
+by the balls' slip, each impact ringing a structural mode, an inner race's impacts
+stronger in the load zone once a turn of its shaft. The bearing's defect frequencies are
+the simulator's own: from its balls' count and diameters and the contact angle."""
 
 from dataclasses import dataclass
 from fractions import Fraction
@@ -49,7 +54,10 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
                    also: tuple[tuple[int, int], ...] = (),
                    runout: tuple[tuple[int, int, float], ...] = (),
                    tacho_pulses: int = 0,
-                   swing: tuple[tuple[int, float], ...] = ()) -> Measurement:
+                   swing: tuple[tuple[int, float], ...] = (),
+                   unbalance: tuple[tuple[int, float], ...] = (),
+                   bend: tuple[tuple[int, float], ...] = (),
+                   bearing: tuple[tuple[int, str, float], ...] = ()) -> Measurement:
     """A record of ``box`` at 1 % below ``INPUT_HZ``; ``faulty_shaft`` (0 input .. 2
     output) carries a broken tooth of ``depth`` on stage ``stage``'s mesh, and so does each
     (shaft, stage) of ``also``; each (shaft, stage, size) of ``runout``: the gear of that
@@ -57,7 +65,10 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
     by ``size`` radians of the mesh once a turn; ``tacho_pulses`` > 0: a channel "tacho" of
     that many pulses a turn of the input; each (shaft, size) of ``swing``: the input's angle,
     and every angle after it, swings by ``size`` turns of the input once a turn of that
-    shaft."""
+    shaft; each (shaft, size) of ``unbalance``: that shaft's 1x at the sensor, of amplitude
+    ``size``, and of ``bend`` its 1x and 2x; each (shaft, defect, size) of ``bearing``: the
+    :data:`BEARING` on that shaft has a defect ("outer" or "inner") whose impacts ring at
+    the sensor with peak ``size``."""
     rng = np.random.default_rng(seed)
     n = int(FS * DURATION)
     t = np.arange(n) / FS
@@ -84,7 +95,51 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
                 timing += size * np.sin(turn)
         x += gain * sum(np.cos(2 * np.pi * h * order * revs + h * timing + h) / h
                         for h in (1, 2, 3))
+    for shaft, size in unbalance + bend:
+        turn = 2 * np.pi * float(box.turns(shaft)) * revs
+        x += size * np.cos(turn + 0.7)
+        if (shaft, size) in bend:
+            x += 0.8 * size * np.cos(2 * turn + 2.1)
+    for shaft, defect, size in bearing:
+        x += _bearing_impacts(float(box.turns(shaft)) * revs, defect, size, rng)
     channels = {"acc": x + noise * rng.standard_normal(n)}
     if tacho_pulses:
         channels["tacho"] = (np.mod(tacho_pulses * revs, 1.0) < 0.5).astype(float)
     return Measurement(channels, FS)
+
+
+#: A rolling bearing as the simulator knows it: 9 balls of 7.9 mm on a 39 mm pitch circle,
+#: contact angle 0; a structural mode at 7 kHz, damping 5 %, rung by each impact.
+BEARING = dict(n_balls=9, ball_mm=7.9, pitch_mm=39.0, mode_hz=7000.0, zeta=0.05, slip=0.01)
+
+
+def bearing_passes_per_turn(defect: str) -> float:
+    """How many times a ball meets a defect of the outer or inner race in a turn of the
+    shaft: the balls roll at the cage's speed, (1 - d/D)/2 of the shaft's, so the outer
+    race (fixed) meets n of them n (1 - d/D)/2 times a turn, the inner race (turning with
+    the shaft) n (1 + d/D)/2 times."""
+    ratio = BEARING["ball_mm"] / BEARING["pitch_mm"]
+    sign = {"outer": -1.0, "inner": 1.0}[defect]
+    return BEARING["n_balls"] / 2 * (1 + sign * ratio)
+
+
+def _bearing_impacts(turns: np.ndarray, defect: str, size: float,
+                     rng: np.random.Generator) -> np.ndarray:
+    """The impacts of a defect on a bearing whose shaft has turned ``turns`` at each
+    sample: one each time the passes (a ball every 1/passes of a turn, jittered by the
+    slip) are due, ringing the mode; an inner race's strongest at the bottom of its turn."""
+    passes = bearing_passes_per_turn(defect)
+    n = turns.size
+    due = np.arange(1, int(turns[-1] * passes))
+    due = (due + BEARING["slip"] * rng.standard_normal(due.size)) / passes
+    at = np.searchsorted(turns, due)
+    at = at[(at > 0) & (at < n)]
+    strength = np.ones(at.size)
+    if defect == "inner":
+        strength = 0.6 + 0.4 * np.cos(2 * np.pi * turns[at])
+    w = 2 * np.pi * BEARING["mode_hz"]
+    ring_t = np.arange(int(8 / (BEARING["zeta"] * w) * FS)) / FS
+    ring = np.exp(-BEARING["zeta"] * w * ring_t) * np.sin(w * ring_t)
+    pulses = np.zeros(n)
+    np.add.at(pulses, at, strength)
+    return size * np.convolve(pulses, ring)[:n]

@@ -9,7 +9,8 @@ from truth.gearbox import INPUT_HZ, SHORT_BOX, gearbox_record as record
 from pydiag.core.errors import MeasurementError
 from pydiag.gear.machine_indicators import machine_record
 from pydiag.gear.speed import SpeedSettings
-from pydiag.gear.stage_judge import judge_stages, machine_report
+from pydiag.gear.machine_report import machine_report
+from pydiag.gear.stage_judge import judge_stages
 
 
 @pytest.fixture(scope="module")
