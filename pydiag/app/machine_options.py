@@ -48,8 +48,11 @@ def apply_machine(args) -> Machine | None:
             args.pulses_per_rev = tacho.pulses_per_rev
     if args.pulses_per_rev is None:
         args.pulses_per_rev = 1
-    if not args.channel and machine.sensors:  # a staged fit picks each stage's own
-        args.channel = [f"{s.channel}={s.output}" if fits and not staged else s.channel
+    # a pair's FMU (--fmu) reads each sensor as the output it measures; the machine's own
+    # model maps the file's channels itself, and a staged fit picks each stage's own
+    as_output = fits and not staged and getattr(args, "fmu", None) is not None
+    if not args.channel and machine.sensors:
+        args.channel = [f"{s.channel}={s.output}" if as_output else s.channel
                         for s in machine.sensors]
     # the file's sensors the command line chose (every one when it chose none)
     chosen = {c.split("=", 1)[0] for c in args.channel or []}

@@ -128,3 +128,21 @@ def test_a_machine_files_sensors_apply_to_the_channels_chosen_only():
                                           "--machine", str(machine), "--stage", "1"])
     apply_machine(args)
     assert args.unit == ["ch1=V", "ch2=V"]
+
+
+@pytest.mark.parametrize("command", ["diagnose", "compare", "discover", "loop"])
+def test_a_one_stage_machine_files_sensor_keeps_its_name_for_the_machines_model(command):
+    """A one-stage machine file's sensor a1: a pair's FMU (--fmu) reads it as the output it
+    measures (a1=acc); the machine's own model maps the file's channels itself and reads it
+    as a1 (read as acc, it was "channel acc is none of the machine file's sensors")."""
+    from pathlib import Path
+
+    from pydiag.app.machine_options import apply_machine
+    machine = str(Path(__file__).resolve().parents[3] / "examples" / "gfd_spectraquest.toml")
+    common = [command, "--measurement", "m.csv", "--machine", machine]
+    args = cli.build_parser().parse_args(common)
+    apply_machine(args)
+    assert args.channel == ["a1"]
+    args = cli.build_parser().parse_args(common + ["--fmu", "x.fmu"])
+    apply_machine(args)
+    assert args.channel == ["a1=acc"]
