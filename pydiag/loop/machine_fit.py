@@ -75,20 +75,22 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     outputs are affine in them after the others, by :func:`~pydiag.fit.affine.fit_affine`)
     on the bins a comparison scores (:func:`~pydiag.loop.residual.measured_spectra` at
     ``false_alarm_rate``), as a pair's accepted effect is
-    (:func:`~pydiag.loop.compare.refit_with_effect`); then the stages polished on their
-    features with the effects held, and the effects polished on the scored bins with the
-    stages held. An effect's lines need not lie in the stages' bands (a gear's runout is
-    its turn's line in the displacement, below every band): fitted there, its parameters
-    would go wherever nothing holds them. The stages are polished on their own features,
-    of one period, not on the scored bins of the whole record, which cost a spectrum of
-    the record at every simulation. The fit kept is the one of least error on the scored
-    bins, which is never above the stages' fit (a swarm over every parameter at once does
-    not promise it: more parameters, the same budget).
+    (:func:`~pydiag.loop.compare.refit_with_effect`); then every parameter polished on
+    those bins from the better of the two. An effect's lines need not lie in the stages'
+    bands (a gear's runout is its turn's line in the displacement, below every band; a
+    ripple's sidebands are no line of the machine's period): fitted there, its parameters
+    would go wherever nothing holds them, and the stages, polished there with an effect
+    that reshapes their lines held, stay bent as the effect's absence bent them (a speed
+    fluctuation accepted with its held-out error halved left the loop's error where it
+    was). The error is never above the stages' fit on those bins, which one swarm over
+    every parameter at once does not promise (more parameters, the same budget).
 
     ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
-    effect and the effect's held-out fit; the stages and the effects are polished from
-    there as well (one missing starts off). An affine parameter the scored bins do not see
-    (a shaft's order above them: :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off."""
+    effect and the effect's held-out fit; every parameter is polished from there as well
+    (one missing starts off), and the better fit is kept. An affine parameter the scored
+    bins do not see (a shaft's order above them:
+    :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off through the polishes, which
+    would otherwise leave it wherever their steps wander."""
     names = {p.name for p in model.effect_parameters}
     added = tuple(p for p in problem.parameters if p.name in names)
     later = effect_estimator or estimator
@@ -103,61 +105,44 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     scored = problem.derive(featurizer=measured_spectra(problem,
                                                         false_alarm_rate).featurizer)
     base = estimator.fit(_held(problem, off))
-    effects, pinned = _effects_fit(scored, model, added, later, base.parameters)
-    fits = [_stages_then_effects(problem, scored, later, base.parameters, effects, pinned)]
-    if start is not None:
-        fits.append(_stages_then_effects(
-            problem, scored, later, {p.name: start.get(p.name, p.off)
-                                     for p in problem.parameters if p.name not in names},
-            {p.name: start.get(p.name, p.off) for p in added if p.name not in pinned},
-            pinned))
+    at_base = {**base.parameters, **off}
     with ProblemObjective(scored) as objective:
-        at_base = {**base.parameters, **off}
-        fits.append(dataclasses.replace(base, parameters=at_base, error=objective(
-            np.array([at_base[p.name] for p in scored.parameters]))))
+        base_error = objective(np.array([at_base[p.name] for p in scored.parameters]))
+    effects, pinned, error = _effects_fit(scored, model, added, later, base.parameters)
+    free = _held(scored, pinned)
+    fits = [dataclasses.replace(base, parameters=at_base, error=base_error),
+            later.refine(free, {**base.parameters,
+                                **(effects if error < base_error else off)})]
+    if start is not None:
+        fits.append(later.refine(free, {p.name: start.get(p.name, p.off)
+                                        for p in free.parameters}))
     best = min(fits, key=lambda f: f.error)
-    return dataclasses.replace(best, evaluations=sum(f.evaluations for f in fits))
+    return dataclasses.replace(best, parameters={**at_base, **best.parameters, **pinned},
+                               evaluations=sum(f.evaluations for f in fits))
 
 
 def _effects_fit(scored: FitProblem, model: MachineModel, added: tuple,
                  estimator: FaultEstimator, stages: dict[str, float]
-                 ) -> tuple[dict[str, float], dict[str, float]]:
+                 ) -> tuple[dict[str, float], dict[str, float], float]:
     """The effects' parameters (``added``) fitted on ``scored`` with the stages held at
-    ``stages``, and those held off (an affine one the bins do not see)."""
+    ``stages``, those held off (an affine one the bins do not see), and the error."""
     off = {p.name: p.off for p in added}
     affine = tuple(p for p in added if p.name in model.affine_parameters)
     other = tuple(p for p in added if p.name not in model.affine_parameters)
     values: dict[str, float] = {}
     pinned: dict[str, float] = {}
+    error = float("inf")
     if other:
-        values = dict(estimator.fit(_held(scored, {**stages, **{
-            p.name: off[p.name] for p in affine}})).parameters)
+        fitted = estimator.fit(_held(scored, {**stages, **{p.name: off[p.name]
+                                                           for p in affine}}))
+        values, error = dict(fitted.parameters), fitted.error
     if affine:  # n + 1 simulations, however many parameters
-        fitted = fit_affine(_held(scored, {**stages, **{p.name: values[p.name]
+        linear = fit_affine(_held(scored, {**stages, **{p.name: values[p.name]
                                                         for p in other}}))
-        values.update(fitted.values)
-        pinned = {name: off[name] for name in fitted.unseen}
-    return {**values, **pinned}, pinned
-
-
-def _stages_then_effects(problem: FitProblem, scored: FitProblem, estimator: FaultEstimator,
-                         stages: dict[str, float], effects: dict[str, float],
-                         pinned: dict[str, float]) -> FitResult:
-    """The stages polished from ``stages`` on ``problem``'s features with the effects held
-    at ``effects``, then the effects polished from there on ``scored`` with the stages
-    held: the fit with every parameter, its error on ``scored``."""
-    held = {**effects, **pinned}
-    own = estimator.refine(_held(problem, held), stages)
-    fixed = _held(scored, {**own.parameters, **pinned})
-    if not fixed.parameters:  # every effect parameter held off: nothing to polish
-        with ProblemObjective(scored) as objective:
-            at = {**own.parameters, **held}
-            error = objective(np.array([at[p.name] for p in scored.parameters]))
-        return dataclasses.replace(own, parameters=at, error=error)
-    polished = estimator.refine(fixed, {k: v for k, v in held.items() if k not in pinned})
-    return dataclasses.replace(polished, parameters={**own.parameters, **polished.parameters,
-                                                     **pinned},
-                               evaluations=own.evaluations + polished.evaluations)
+        values.update(linear.values)
+        error = linear.error
+        pinned = {name: off[name] for name in linear.unseen}
+    return {**values, **pinned}, pinned, error
 
 
 def _held(problem: FitProblem, values: dict[str, float]) -> FitProblem:
