@@ -10,7 +10,7 @@ from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
 from pydiag.loop.stages import MachineDiagnosis
 from pydiag.loop.accumulate import LoopStep
-from pydiag.loop.results import Comparison, Discovery, Status
+from pydiag.loop.results import Comparison, Status, Suggestion
 from pydiag.loop.regress import RegressionReport
 
 
@@ -97,7 +97,7 @@ def format_comparison(c: Comparison, max_peaks: int = 10) -> str:
     return "\n".join(lines)
 
 
-def format_discovery(base: Comparison, found: list[Discovery]) -> str:
+def format_discovery(base: Comparison, found: list[Suggestion]) -> str:
     width = max([26] + [len(d.label) for d in found])
     lines = [f"base model error {base.error:.5f}; effects fitted on half the periods, ranked by "
              "how far they lower the error on the other half (z: in noise standard deviations)",

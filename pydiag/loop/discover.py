@@ -54,7 +54,7 @@ from pydiag.loop.compare import compare
 from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
 from pydiag.loop.held_out import envelope_band, halves, held_out
-from pydiag.loop.results import Comparison, Discovery, Status
+from pydiag.loop.results import Comparison, Status, Suggestion
 
 #: The Modelica library of a source checkout (an installed wheel does not carry it).
 MODELICA_ROOT = Path(__file__).resolve().parents[2] / "modelica"
@@ -103,17 +103,17 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> 
 
 
 def failed_row(key: str, err: Exception, started: float, stage: str | None = None
-               ) -> Discovery:
+               ) -> Suggestion:
     """The row of an effect (on ``stage`` of a machine's model) that could not be built or
     fitted."""
-    return Discovery(key, Status.FAILED, f"{type(err).__name__}: {err}",
-                     n_parameters=len(EFFECTS[key].parameters),
-                     elapsed_s=time.perf_counter() - started, stage=stage)
+    return Suggestion(key, status=Status.FAILED, message=f"{type(err).__name__}: {err}",
+                      n_parameters=len(EFFECTS[key].parameters),
+                      elapsed_s=time.perf_counter() - started, stage=stage)
 
 
 def held_out_row(problem: FitProblem, base: Comparison, effect: Effect, fmu: str,
                  estimator: FaultEstimator, memo: dict | None = None,
-                 stage: str | None = None) -> Discovery:
+                 stage: str | None = None) -> Suggestion:
     """``effect`` (on ``stage`` of a machine's model) held out, as a row; an effect that
     cannot be fitted is a row too."""
     started = time.perf_counter()
@@ -121,12 +121,14 @@ def held_out_row(problem: FitProblem, base: Comparison, effect: Effect, fmu: str
         h = held_out(problem, base, effect, fmu, estimator, memo=memo)
     except PydiagError as err:
         return failed_row(effect.key, err, started, stage)
-    return Discovery(effect.key, h.status, h.message, h, len(effect.parameters),
-                     time.perf_counter() - started, h.confirmed, stage=stage)
+    return Suggestion(effect.key, status=h.status, message=h.message, held_out=h,
+                      n_parameters=len(effect.parameters),
+                      elapsed_s=time.perf_counter() - started, confident=h.confirmed,
+                      stage=stage)
 
 
 def _try_effect(problem: FitProblem, base: Comparison, key: str, fmu: str,
-                estimator: FaultEstimator, memo: dict | None = None) -> Discovery:
+                estimator: FaultEstimator, memo: dict | None = None) -> Suggestion:
     """:func:`held_out_row` of the effect ``key``. Takes the effect's key, not the effect:
     it runs in a worker process."""
     return held_out_row(problem, base, EFFECTS[key], fmu, estimator, memo)
@@ -164,7 +166,7 @@ def discovery_cost(effect: Effect) -> int:
 
 def side_by_side(call: Callable[[object, FaultEstimator], tuple[Callable, tuple]],
                  tasks: list, estimator: FaultEstimator,
-                 progress: Callable[[Discovery], None] | None) -> list[Discovery]:
+                 progress: Callable[[Suggestion], None] | None) -> list[Suggestion]:
     """The row of each task, in the tasks' order: ``call(task, estimator)`` says the
     function and its arguments, run one task a core (``estimator.n_workers``, default all
     cores), each fit free to use every core (module docstring); in this process when one
@@ -181,7 +183,7 @@ def side_by_side(call: Callable[[object, FaultEstimator], tuple[Callable, tuple]
                 progress(rows[-1])
         return rows
     one = estimator.replace(n_workers=cores, progress=None)
-    done: dict[int, Discovery] = {}
+    done: dict[int, Suggestion] = {}
     with ProcessPoolExecutor(jobs) as pool:
         running = {}
         for i, task in enumerate(tasks):
@@ -197,9 +199,9 @@ def side_by_side(call: Callable[[object, FaultEstimator], tuple[Callable, tuple]
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
              effects: list[str] | None = None,
              modelica_root: Path = MODELICA_ROOT, build_dir: Path | None = None,
-             progress: Callable[[Discovery], None] | None = None,
+             progress: Callable[[Suggestion], None] | None = None,
              effect_estimator: FaultEstimator | None = None,
-             base: Comparison | None = None) -> tuple[Comparison, list[Discovery]]:
+             base: Comparison | None = None) -> tuple[Comparison, list[Suggestion]]:
     """Compare the base model (``problem``), then try every effect held out and rank them.
 
     ``estimator`` fits the base model (unless ``base``, its comparison, is given),
@@ -217,7 +219,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
     keys.sort(key=lambda key: -discovery_cost(EFFECTS[key]))  # the longest first
     fmus: dict[str, str] = {}
-    found: list[Discovery] = []
+    found: list[Suggestion] = []
     for key in keys:  # built in this process: two workers must not build one FMU at once
         started = time.perf_counter()
         try:
@@ -239,7 +241,7 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     return base, found
 
 
-def as_dict(base: Comparison, found: list[Discovery]) -> dict:
+def as_dict(base: Comparison, found: list[Suggestion]) -> dict:
     """Plain data for JSON."""
     return {"base_error": base.error, "criterion": "held-out z (dBIC on the fitted half beside it)",
-            "ranking": [d.to_dict() for d in found]}
+            "ranking": [d.ranking_row() for d in found]}

@@ -41,7 +41,7 @@ from pydiag.loop.discover import (discovery_cost, failed_row, held_out_row, shar
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
 from pydiag.loop.machine_fit import stage_view
 from pydiag.loop.machine_model import MachineModel, nothing_to_fit, on_a_stage, stage_effects
-from pydiag.loop.results import Comparison, Discovery, Status
+from pydiag.loop.results import Comparison, Status, Suggestion
 from pydiag.loop.validate import effects_to_fit, validate
 
 
@@ -56,7 +56,7 @@ class _Stage:
 
 
 def _try_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key: str,
-                  fmu: str, estimator: FaultEstimator) -> Discovery:
+                  fmu: str, estimator: FaultEstimator) -> Suggestion:
     """:func:`~pydiag.loop.discover.held_out_row` of the effect ``key`` on stage ``index``
     (called ``name``). Takes the key, not the effect (whose hints are closures): it runs in
     a worker process."""
@@ -85,7 +85,7 @@ def check_effects(effects: list[str] | None) -> None:
 def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                      base: Comparison, effect_model: Callable[[Machine], str],
                      estimator: FaultEstimator | None = None, effects: list[str] | None = None,
-                     progress: Callable[[Discovery], None] | None = None) -> list[Discovery]:
+                     progress: Callable[[Suggestion], None] | None = None) -> list[Suggestion]:
     """Every effect of ``effects`` (default: the catalogue) that a stage can have and lacks,
     tried on every stage of ``machine``'s model (``problem``, fitted as ``base``), ranked by
     held-out z (module docstring). ``effect_model``: the FMU of a machine (the machine with
@@ -101,14 +101,15 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
              catalogue.items() if (not effects or key in effects)
              and not in_model(views[k], effect)]
     tasks.sort(key=lambda task: -discovery_cost(catalogues[task[0]][task[1]]))
-    found: list[Discovery] = []
+    found: list[Suggestion] = []
     fmus: dict[tuple[int, str], str] = {}
     for k, key in tasks:  # built here: two workers must not build one model at once
         started = time.perf_counter()
         if why := nothing_to_fit(machine, k, key):
-            found.append(Discovery(key, Status.NOT_TRIED, f"{Status.NOT_TRIED.value}: {why}",
-                                   n_parameters=len(EFFECTS[key].parameters),
-                                   stage=machine.stages[k].name))
+            found.append(Suggestion(key, status=Status.NOT_TRIED,
+                                    message=f"{Status.NOT_TRIED.value}: {why}",
+                                    n_parameters=len(EFFECTS[key].parameters),
+                                    stage=machine.stages[k].name))
             if progress:
                 progress(found[-1])
             continue

@@ -141,26 +141,33 @@ class HeldOut:
 
 @dataclass
 class Suggestion:
-    """A catalogue effect the residual points to. ``score``: the share of the unexplained
-    peak energy its signature covers; ``confident`` only once held-out validation
-    (:mod:`pydiag.loop.validate`) confirmed it and no competitor explains its lines as
-    well; ``status`` and ``message`` say where it stands; ``competing``: the effects whose
-    signatures claim some of the same peaks; ``stage``: the stage of a machine's model it
-    would go on (None: the model's own pair)."""
+    """A catalogue effect as a record sees it: what ``compare`` suggests (the residual
+    points to it) and what ``discover`` ranks (it was tried held out) alike.
+
+    ``score``: the share of the unexplained peak energy its signature covers (0 where the
+    residual was not asked: a discover row); ``evidence``: the lines that say so;
+    ``status`` and ``message`` say where it stands; ``held_out``: its held-out verdict (None:
+    not tried); ``confident`` only once held-out validation confirmed it and no competitor
+    explains its lines as well; ``competing``: the effects whose signatures claim some of
+    the same peaks; ``stage``: the stage of a machine's model it goes on (None: the model's
+    own pair); ``n_parameters``: the parameters it declares (its hint may fit fewer);
+    ``elapsed_s``: the wall time of its build, fit and test (a discover row's)."""
 
     effect: str
-    score: float
-    evidence: list[str]
+    score: float = 0.0
+    evidence: list[str] = field(default_factory=list)
     status: Status = Status.NOT_VALIDATED
     message: str = Status.NOT_VALIDATED.value
     confident: bool = False
     competing: list[str] = field(default_factory=list)
     held_out: HeldOut | None = None
     stage: str | None = None
+    n_parameters: int = 0
+    elapsed_s: float = 0.0
 
     @property
     def label(self) -> str:
-        """Its effect, with the stage it would go on: "gear_tooth_fault on output stage"."""
+        """Its effect, with the stage it goes on: "gear_tooth_fault on output stage"."""
         return labelled(self.effect, self.stage)
 
     @property
@@ -169,12 +176,38 @@ class Suggestion:
         (an effect scored on an envelope may have no score in the spectrum)."""
         return self.score > 0 or self.held_out is not None
 
+    @property
+    def z(self) -> float:
+        """Held-out z; nan when it was not fitted (``-inf`` when it failed)."""
+        if self.status is Status.FAILED:
+            return -math.inf
+        return self.held_out.z if self.held_out and self.held_out.tried else math.nan
+
     def to_dict(self) -> dict:
+        """Plain data, as compare reports a suggestion."""
         return {"effect": self.effect, "score": self.score, "evidence": self.evidence,
                 "status": self.status.value, "message": self.message,
                 "confident": self.confident, "competing": self.competing,
                 "held_out": self.held_out.to_dict() if self.held_out else None,
                 "stage": self.stage}
+
+    def ranking_row(self) -> dict:
+        """Plain data, as discover ranks an effect: a number it does not have (not tried,
+        failed) is None."""
+        h = self.held_out if self.held_out and self.held_out.tried else None
+        def number(v: float | None) -> float | None:
+            return None if v is None or not math.isfinite(v) else float(v)
+        reduction = (1 - h.error_effect / h.error_base if h and h.error_base > 0 else None)
+        return {"effect": self.effect, "stage": self.stage, "status": self.status.value,
+                "message": self.message,
+                "z": number(h.z if h else None),
+                "delta_bic": number(h.delta_bic if h else None),
+                "error": number(h.error_effect if h else None),
+                "error_reduction": number(reduction),
+                "added_parameters": len(h.parameters) if h else self.n_parameters,
+                "parameters": dict(h.parameters) if h else {},
+                "confident": self.confident, "elapsed_s": self.elapsed_s,
+                "held_out": h.to_dict() if h else None}
 
 
 @dataclass
@@ -215,46 +248,3 @@ class Comparison:
             d.pop("spectra")
             d.pop("markers")
         return d
-
-
-@dataclass
-class Discovery:
-    """One effect of discover's ranking: its held-out verdict, or why it has none."""
-
-    effect: str
-    status: Status
-    message: str
-    held_out: HeldOut | None = None
-    n_parameters: int = 0  # the parameters it declares (its hint may fit fewer)
-    elapsed_s: float = 0.0  # wall time of its build, fit and test
-    confident: bool = False  # held out confident, and no competitor close to it
-    stage: str | None = None  # the machine's stage it was tried on (a machine's model)
-
-    @property
-    def label(self) -> str:
-        """Its effect, with the stage it was tried on: "gear_tooth_fault on output stage"."""
-        return labelled(self.effect, self.stage)
-
-    @property
-    def z(self) -> float:
-        """Held-out z; nan when it was not fitted (``-inf`` when it failed)."""
-        if self.status is Status.FAILED:
-            return -math.inf
-        return self.held_out.z if self.held_out and self.held_out.tried else math.nan
-
-    def to_dict(self) -> dict:
-        """Plain data: a number it does not have (not tried, failed) is None."""
-        h = self.held_out if self.held_out and self.held_out.tried else None
-        def number(v: float | None) -> float | None:
-            return None if v is None or not math.isfinite(v) else float(v)
-        reduction = (1 - h.error_effect / h.error_base if h and h.error_base > 0 else None)
-        return {"effect": self.effect, "stage": self.stage, "status": self.status.value,
-                "message": self.message,
-                "z": number(h.z if h else None),
-                "delta_bic": number(h.delta_bic if h else None),
-                "error": number(h.error_effect if h else None),
-                "error_reduction": number(reduction),
-                "added_parameters": len(h.parameters) if h else self.n_parameters,
-                "parameters": dict(h.parameters) if h else {},
-                "confident": self.confident, "elapsed_s": self.elapsed_s,
-                "held_out": h.to_dict() if h else None}
