@@ -103,9 +103,10 @@ def _levels_db(envelope: np.ndarray, samples_per_rev: int,
     bins of the shafts' orders (``shafts``, in input orders) left out."""
     freqs, amp = amplitude_spectrum(envelope, samples_per_rev)  # in orders of the input
     step = freqs[1] - freqs[0]
-    index = np.clip(np.searchsorted(shafts, freqs), 1, max(shafts.size - 1, 1))
-    on_order = (np.minimum(np.abs(freqs - shafts[index - 1]), np.abs(freqs - shafts[index]))
-                <= ORDER_BINS * step + 1e-12) if shafts.size > 1 else np.zeros(freqs.size, bool)
+    padded = np.concatenate(([-np.inf], np.sort(shafts), [np.inf]))
+    index = np.searchsorted(padded, freqs)
+    on_order = (np.minimum(freqs - padded[index - 1], padded[index] - freqs)
+                <= ORDER_BINS * step + 1e-12)
     out: dict[str, dict[str, float]] = {}
     for name, lines in orders.items():
         out[name] = {}
