@@ -8,7 +8,7 @@ unbalance or bend (its 1x, or its 1x and 2x, at the sensor) and a rolling bearin
 defect: impacts at the instants its balls pass the defect, each pass's interval jittered
 by the balls' slip, each impact ringing a structural mode, an inner race's impacts
 stronger in the load zone once a turn of its shaft. The bearing's defect frequencies are
-the simulator's own: from its balls' count and diameters and the contact angle."""
+the simulator's own: from its balls' count and diameters (contact angle 0)."""
 
 from dataclasses import dataclass
 from fractions import Fraction
@@ -95,11 +95,10 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
                 timing += size * np.sin(turn)
         x += gain * sum(np.cos(2 * np.pi * h * order * revs + h * timing + h) / h
                         for h in (1, 2, 3))
-    for shaft, size in unbalance + bend:
+    for shaft, size, second in ([(k, a, 0.0) for k, a in unbalance]
+                                + [(k, a, 0.8) for k, a in bend]):
         turn = 2 * np.pi * float(box.turns(shaft)) * revs
-        x += size * np.cos(turn + 0.7)
-        if (shaft, size) in bend:
-            x += 0.8 * size * np.cos(2 * turn + 2.1)
+        x += size * (np.cos(turn + 0.7) + second * np.cos(2 * turn + 2.1))
     for shaft, defect, size in bearing:
         x += _bearing_impacts(float(box.turns(shaft)) * revs, defect, size, rng)
     channels = {"acc": x + noise * rng.standard_normal(n)}
