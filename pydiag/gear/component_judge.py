@@ -33,7 +33,8 @@ import numpy as np
 
 from pydiag.gear.bearing_lines import DEFECT_LINES, defect_orders
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_indicators import SHAFT_ORDERS, MachineRecord
+from pydiag.gear.machine_indicators import (SHAFT_ORDERS, MachineRecord, faster_shafts,
+                                           finite_or_none)
 from pydiag.gear.stage_judge import K_SPREAD, MIN_SPREAD_DB, StageVerdict
 
 #: Shaft orders a bearing's line is checked against (each shaft's, up to this order).
@@ -83,13 +84,9 @@ class ComponentVerdict:
         if c.kind == "gear":
             out.update(teeth=c.teeth, stage=c.stage, role=c.role)
         return {**out, "state": self.state,
-                "evidence": {k: _finite(v) for k, v in self.evidence.items()},
-                "threshold_db": self.threshold_db, "margin": _finite(self.margin),
+                "evidence": {k: finite_or_none(v) for k, v in self.evidence.items()},
+                "threshold_db": self.threshold_db, "margin": finite_or_none(self.margin),
                 "reason": self.reason}
-
-
-def _finite(value: float | None) -> float | None:
-    return value if value is not None and math.isfinite(value) else None
 
 
 def components(machine: Machine) -> tuple[Component, ...]:
@@ -146,11 +143,8 @@ def _gears(machine: Machine, verdicts: Sequence[StageVerdict]) -> list[Component
 
 def _own_orders(machine: Machine, shaft: int) -> list[int]:
     """The orders of shaft ``shaft`` (1..SHAFT_ORDERS) that are none of a faster shaft's
-    turning a whole number of times per its turn."""
-    own = machine.shaft_ratio(shaft)
-    faster = [(machine.shaft_ratio(j) / own).numerator for j in range(len(machine.shafts))
-              if j != shaft and (machine.shaft_ratio(j) / own).denominator == 1
-              and machine.shaft_ratio(j) > own]
+    turning a whole number of times per its turn (:func:`faster_shafts`)."""
+    faster = faster_shafts(machine, shaft)
     return [k for k in range(1, SHAFT_ORDERS + 1) if not any(k % n == 0 for n in faster)]
 
 

@@ -109,7 +109,7 @@ def _synchronous_meshes(machine: Machine, shaft: int) -> tuple[int, ...]:
     return tuple(found)
 
 
-def _faster_shafts(machine: Machine, shaft: int) -> tuple[int, ...]:
+def faster_shafts(machine: Machine, shaft: int) -> tuple[int, ...]:
     """The turns per turn of shaft ``shaft`` of the shafts that turn a whole number (>= 2)
     of times per turn of it: their lines survive its TSA (module docstring)."""
     own = machine.shaft_ratio(shaft)
@@ -130,7 +130,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         speed_hz = estimate.speed_hz * ratio
         teeth = _teeth_on(machine, index)
         others = _synchronous_meshes(machine, index)
-        faster = _faster_shafts(machine, index)
+        faster = faster_shafts(machine, index)
         samples_per_rev = int(math.ceil(measurement.sample_rate_hz / speed_hz))
         if 1.5 * max(teeth) >= samples_per_rev / 2:
             raise MeasurementError(
