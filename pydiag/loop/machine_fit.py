@@ -81,8 +81,7 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     ripple's sidebands are no line of the machine's period): fitted on the bands, its
     parameters would go wherever nothing holds them, and the stages, polished on the bands
     with an effect that reshapes their lines held, stay as the effect's absence bent them
-    (a speed fluctuation accepted with its held-out error halved left the loop's error
-    where it was). The error is never above the stages' fit on those bins, which one swarm over
+    (bench/CHANGELOG.md, c985a6c). The error is never above the stages' fit on those bins, which one swarm over
     every parameter at once does not promise (more parameters, the same budget).
 
     ``start``: values (by name) of a fit before, e.g. the model's before it accepted an
