@@ -13,7 +13,7 @@ from pydiag.app import batch
 from pydiag.app.baselines import baseline_records
 from pydiag.app.models import machine_models
 from pydiag.app.formatting import (format_facts, format_indicators,
-                                   format_machine_diagnosis, format_machine_report,
+                                   format_machine_report,
                                    format_regression, format_result)
 from pydiag.app.reading import channels_to_read, read_input
 from pydiag.core.errors import UsageError
@@ -222,7 +222,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
                                             settings["fit_gain"], settings["gain_curve"])
     finally:
         close()
-    print(format_machine_diagnosis(result))
+    print(format_machine_report(result))
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
     if args.json:

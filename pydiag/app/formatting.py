@@ -8,7 +8,6 @@ from pydiag.gear.component_judge import ComponentVerdict
 from pydiag.gear.machine_report import MachineReport
 from pydiag.loop.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
-from pydiag.loop.stages import MachineDiagnosis
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.results import Comparison, Status, Suggestion
 from pydiag.loop.regress import RegressionReport
@@ -178,15 +177,36 @@ def _machine_head(name: str, n_stages: int, s: SpeedEstimate) -> list[str]:
 
 
 def format_machine_report(report: MachineReport) -> str:
-    """The speed, a row per shaft (residual energy and indicators, first channel's), then a
-    row per stage when it was judged."""
-    lines = _machine_head(report.machine.name, len(report.machine.stages),
-                          report.record.speed)
-    swings = any(s.swing_deg is not None for s in report.record.shafts)
-    lines += ["", f"{'shaft':<14}{'speed Hz':>10}{'turns':>7}{'teeth':>9}  "
-             + "  ".join(f"{'resid ' + c:>14}" for c in report.record.shafts[0].residual_energy)
+    """The speed; where the TSA was taken, a row per shaft (residual energy and indicators,
+    first channel's); where the stages were judged, a row per stage's change; where a
+    model fitted them, a row per stage's fit and verdict; then a row per component."""
+    lines = _machine_head(report.machine.name, len(report.machine.stages), report.speed)
+    if report.record is not None:
+        lines += _shaft_rows(report)
+    if not report.stages:
+        lines += ["", "stages     : not judged: give a baseline record of the machine in a "
+                  "known healthy state (--baseline)"]
+        return "\n".join(lines)
+    if report.baselines:
+        lines += _verdict_rows(report)
+    if report.fitted:
+        lines += _fit_rows(report)
+    lines += format_components(report.components)
+    lines += ["", f"severity   : {report.severity_scale}"]
+    if report.baselines:
+        lines.append(f"baselines  : {', '.join(report.baselines)} (healthy spread "
+                     f"{report.spread_db:.2f} dB)")
+    return "\n".join(lines)
+
+
+def _shaft_rows(report: MachineReport) -> list[str]:
+    """A row per shaft of the record's TSA, and its swing against the baselines'."""
+    shafts = report.record.shafts
+    swings = any(s.swing_deg is not None for s in shafts)
+    lines = ["", f"{'shaft':<14}{'speed Hz':>10}{'turns':>7}{'teeth':>9}  "
+             + "  ".join(f"{'resid ' + c:>14}" for c in shafts[0].residual_energy)
              + (f"  {'swing deg':>10}{'vs base':>9}" if swings else "")]
-    for shaft in report.record.shafts:
+    for shaft in shafts:
         row = (f"{shaft.shaft:<14}{shaft.speed_hz:>10.4f}{shaft.revolutions:>7d}"
                f"{'/'.join(map(str, shaft.teeth)):>9}  "
                + "  ".join(f"{e:>14.4g}" for e in shaft.residual_energy.values()))
@@ -198,27 +218,46 @@ def format_machine_report(report: MachineReport) -> str:
     if swings:
         lines.append("swing      : of the input's angle (tacho) once a turn of the shaft, "
                      "degrees of the input's turn; not judged")
-    if not report.stages:
-        lines += ["", "stages     : not judged: give a baseline record of the machine in a "
-                  "known healthy state (--baseline)"]
-        return "\n".join(lines)
-    first = report.stages[0]
+    return lines
+
+
+def _verdict_rows(report: MachineReport) -> list[str]:
+    """A row per stage: its shafts' change against the baselines, and the verdict."""
+    first = report.stages[0].verdict
     fm4 = ("" if first.fm4_threshold is None else
            f"; FM4 {first.fm4_threshold:.2f} names a suspect")
-    lines += ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'pinion dB':>11}{'gear dB':>9}"
-              f"{'FM4 p/g':>14}  verdict (threshold {first.threshold_db:.2f} dB = "
-              f"{first.threshold_db / report.spread_db:g} x the healthy spread "
-              f"{report.spread_db:.2f} dB{fm4})"]
-    for v in report.stages:
+    lines = ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'pinion dB':>11}{'gear dB':>9}"
+             f"{'FM4 p/g':>14}  verdict (threshold {first.threshold_db:.2f} dB = "
+             f"{first.threshold_db / report.spread_db:g} x the healthy spread "
+             f"{report.spread_db:.2f} dB{fm4})"]
+    for st in report.stages:
+        v = st.verdict
         verdict = "changed" if v.changed else "healthy"
         if v.suspect:
             verdict += f", {v.suspect} suspect ({v.suspect_by})"
-        lines.append(f"{v.stage:<16}{f'{v.pinion_teeth}/{v.gear_teeth}':>7}{v.mesh_hz:>10.2f}"
+        lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"
                      f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}"
                      f"{f'{v.pinion.fm4_change:+.2f}/{v.gear.fm4_change:+.2f}':>14}  {verdict}")
-    lines += format_components(report.components)
-    lines.append(f"baselines  : {', '.join(report.baselines)}")
-    return "\n".join(lines)
+    return lines
+
+
+def _fit_rows(report: MachineReport) -> list[str]:
+    """A row per stage: teeth, mesh, the fit's tooth contrast and TE levels, error, and
+    the stage's fault mode, severity and suspect; then what each fit did not count."""
+    lines = ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'contrast':>10}{'f_ate':>7}"
+             f"{'f_dte':>7}{'error':>8}  {'fault mode':<20}{'severity':<10}suspect"]
+    for st in report.stages:
+        p = st.fit.parameters
+        contrast = st.fit.tooth_contrast
+        lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"
+                     f"{contrast if contrast is not None else float('nan'):>10.3f}"
+                     f"{p.get(st.prefix + 'f_ate', float('nan')):>7.3f}"
+                     f"{p.get(st.prefix + 'f_dte', float('nan')):>7.3f}"
+                     f"{st.fit.error:>8.3f}  {st.fault_mode:<20}{st.severity:<10}"
+                     f"{st.suspect or '-'}")
+    for st in report.stages:
+        lines += _not_counted(st.fit, f"{st.name}'s ")
+    return lines
 
 
 def format_components(judged: tuple[ComponentVerdict, ...]) -> list[str]:
@@ -234,32 +273,6 @@ def format_components(judged: tuple[ComponentVerdict, ...]) -> list[str]:
     lines.append("x thr      : the largest change of a component's measures over its "
                  "threshold (K x the healthy records' spread): above 1, beyond it")
     return lines
-
-
-def format_machine_diagnosis(result: MachineDiagnosis) -> str:
-    """The speed, then a row per stage: teeth, mesh, the fit's tooth contrast and TE levels,
-    error, and the verdict."""
-    lines = _machine_head(result.machine.name, len(result.stages), result.speed)
-    lines += ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'contrast':>10}{'f_ate':>7}"
-             f"{'f_dte':>7}{'error':>8}  {'fault mode':<20}{'severity':<10}suspect"]
-    for st in result.stages:
-        p = st.fit.parameters
-        contrast = st.fit.tooth_contrast
-        lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"
-                     f"{contrast if contrast is not None else float('nan'):>10.3f}"
-                     f"{p.get(st.prefix + 'f_ate', float('nan')):>7.3f}"
-                     f"{p.get(st.prefix + 'f_dte', float('nan')):>7.3f}"
-                     f"{st.fit.error:>8.3f}  {st.fault_mode:<20}{st.severity:<10}"
-                     f"{st.suspect or '-'}")
-    for st in result.stages:
-        lines += _not_counted(st.fit, f"{st.name}'s ")
-    lines += format_components(result.components)
-    scale = result.to_dict()["severity_scale"]
-    lines += ["", f"severity   : {scale}"]
-    if result.baselines:
-        lines.append(f"baselines  : {', '.join(result.baselines)} (healthy spread "
-                     f"{result.spread_db:.2f} dB)")
-    return "\n".join(lines)
 
 
 def format_kept_baselines(name: str, kept: list[KeptBaseline], db: str) -> str:

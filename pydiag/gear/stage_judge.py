@@ -100,9 +100,7 @@ class StageVerdict:
             return {"name": change.shaft, "change_db": change.change_db,
                     "channels_db": change.channels_db,
                     "fm4_change": finite_or_none(change.fm4_change)}
-        return {"name": self.stage, "pinion_teeth": self.pinion_teeth,
-                "gear_teeth": self.gear_teeth, "mesh_hz": self.mesh_hz,
-                "pinion_shaft": shaft(self.pinion), "gear_shaft": shaft(self.gear),
+        return {"pinion_shaft": shaft(self.pinion), "gear_shaft": shaft(self.gear),
                 "threshold_db": self.threshold_db, "fm4_threshold": self.fm4_threshold,
                 "verdict": "changed" if self.changed else "healthy",
                 "suspect": self.suspect, "suspect_by": self.suspect_by}

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -34,12 +33,13 @@ from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import build_problem
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.component_judge import ComponentVerdict, judge_components
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
+from pydiag.gear.machine_report import (SCALE_PAPER, MachineReport, StageReport, judged_report,
+                                        stage_report)
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
-from pydiag.gear.stage_judge import StageVerdict, judge_stages
+from pydiag.gear.stage_judge import StageVerdict
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.loop.diagnosis import Diagnosis, classified, diagnose
 from pydiag.loop.machine_fit import fit_machine, machine_problem, stage_view
@@ -51,72 +51,6 @@ from pydiag.model.adapter import Adapter
 SUSPECT_RATIO = 2.0
 #: Sideband orders either side of a mesh harmonic that the suspect is judged by.
 SUSPECT_SIDEBANDS = 3
-
-
-@dataclass
-class StageDiagnosis:
-    """One stage: its pair's fit (:class:`~pydiag.loop.diagnosis.Diagnosis`), and what the
-    machine's baselines say of it (``verdict``, None without baselines)."""
-
-    name: str
-    pinion_teeth: int
-    gear_teeth: int
-    pinion_shaft_hz: float
-    gear_shaft_hz: float
-    mesh_hz: float
-    fit: Diagnosis
-    verdict: StageVerdict | None
-    fault_mode: str
-    severity: str
-    suspect: str | None
-    #: what the names of the stage's fault parameters begin with in ``fit`` (a machine's
-    #: model: ``"<stage>."``; a pair's: none)
-    prefix: str = ""
-
-    def to_dict(self) -> dict:
-        params = self.fit.parameters
-        return {"name": self.name, "pinion_teeth": self.pinion_teeth,
-                "gear_teeth": self.gear_teeth, "pinion_shaft_hz": self.pinion_shaft_hz,
-                "gear_shaft_hz": self.gear_shaft_hz, "mesh_hz": self.mesh_hz,
-                "tooth_contrast": self.fit.tooth_contrast,
-                "transmission_error": {k: params[self.prefix + k] for k in ("f_ate", "f_dte")
-                                       if self.prefix + k in params},
-                "fault_mode": self.fault_mode, "severity": self.severity,
-                "suspect": self.suspect, "model": self.fit.to_dict(),
-                "baseline": None if self.verdict is None else self.verdict.to_dict()}
-
-
-@dataclass
-class MachineDiagnosis:
-    """Every stage of a record, in the machine's order, and the input speed found."""
-
-    machine: Machine
-    speed: SpeedEstimate
-    stages: list[StageDiagnosis]
-    baselines: tuple[str, ...]
-    spread_db: float | None
-    #: every gear, bearing and shaft judged against the baselines (none without)
-    components: tuple[ComponentVerdict, ...] = ()
-
-    def to_dict(self) -> dict:
-        return {"machine": self.machine.name, **self.speed.to_dict(),
-                "stages": [s.to_dict() for s in self.stages],
-                "components": [c.to_dict() for c in self.components],
-                "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
-                "severity_scale": SCALE_BASELINES if self.baselines else SCALE_PAPER}
-
-    @property
-    def warnings(self) -> list[str]:
-        """The speed's warning, at the input shaft, then each stage's fit's (which leave the
-        speed to the machine)."""
-        speed = self.speed.warning()
-        return ([speed] if speed else []) + [f"{stage.name}: {w}" for stage in self.stages
-                                             for w in stage.fit.warnings]
-
-
-#: What a severity is judged on, in the JSON's ``severity_scale``.
-SCALE_BASELINES = "change against the baselines, classified on the paper's simulated scale"
-SCALE_PAPER = "the paper's simulated scale (no baseline)"
 
 
 def pair_json(name: str, problem: FitProblem, fit: Diagnosis) -> dict:
@@ -219,7 +153,7 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
                      estimator: FaultEstimator | None = None,
                      baselines: Sequence[MachineRecord] = (), adapter: Adapter | None = None,
                      feature_mode: str = "lines", fit_gain: bool | None = None,
-                     gain_curve: bool = False) -> MachineDiagnosis:
+                     gain_curve: bool = False) -> MachineReport:
     """Every stage of ``measurement`` diagnosed (module docstring), around the nominal input
     speed ``input_hz``; ``baselines``: records of the machine in a known healthy state, as
     :func:`~pydiag.gear.machine_indicators.machine_record` sees them (made once for a
@@ -228,31 +162,32 @@ def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
     upsampled = upsampled_record(measurement, found, drop)  # once for every shaft and stage
-    verdicts, spread, names, judged = _judged(measurement, machine, found, speed, upsampled,
-                                              baselines)
+    judged = _judged(measurement, machine, found, speed, upsampled, baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
         problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
                                 feature_mode, fit_gain, drop, gain_curve=gain_curve,
                                 upsampled=upsampled)
         fit = diagnose(problem, estimator, speed_warning=False)
-        stages.append(stage_diagnosis(stage.name, problem, fit, verdicts[k]))
-    return MachineDiagnosis(machine, found, stages, names, spread, judged)
+        stages.append(stage_diagnosis(stage.name, problem, fit, _verdict(judged, k)))
+    return dataclasses.replace(judged, stages=tuple(stages))
 
 
 def _judged(measurement: Measurement, machine: Machine, found: SpeedEstimate,
             speed: SpeedSettings, upsampled: Upsampled | None,
-            baselines: Sequence[MachineRecord]
-            ) -> tuple[list[StageVerdict | None], float | None, tuple[str, ...],
-                       tuple[ComponentVerdict, ...]]:
-    """Each stage's verdict against ``baselines`` (None each without), the healthy
-    records' spread, the baselines' files, every component's verdict."""
+            baselines: Sequence[MachineRecord]) -> MachineReport:
+    """The record's report at speed ``found`` without a model: with ``baselines`` every
+    shaft's TSA and every stage and component judged against them; without, the speed
+    alone (no stage)."""
     if not baselines:
-        return [None] * len(machine.stages), None, (), ()
+        return MachineReport(machine, found, ())
     record = machine_record(measurement, machine, speed, found.nominal_hz, found, upsampled)
-    verdicts, spread = judge_stages(machine, record, list(baselines))
-    return (list(verdicts), spread, tuple(b.file for b in baselines),
-            judge_components(machine, record, list(baselines), verdicts))
+    return judged_report(machine, record, baselines)
+
+
+def _verdict(judged: MachineReport, stage: int) -> StageVerdict | None:
+    """Stage ``stage``'s verdict in ``judged`` (None: not judged)."""
+    return judged.stages[stage].verdict if judged.stages else None
 
 
 def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Measurement,
@@ -261,7 +196,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            estimator: FaultEstimator | None = None,
                            baselines: Sequence[MachineRecord] = (),
                            feature_mode: str = "lines", fit_gain: bool | None = None,
-                           gain_curve: bool | None = None) -> MachineDiagnosis:
+                           gain_curve: bool | None = None) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
@@ -271,8 +206,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     estimator = estimator or FaultEstimator()
     drop = (speed.tacho,) if speed.tacho else ()
     found = machine_speed(measurement, machine, input_hz, speed)
-    verdicts, spread, names, judged = _judged(measurement, machine, found, speed, None,
-                                              baselines)
+    judged = _judged(measurement, machine, found, speed, None, baselines)
     problem = machine_problem(fmu_path, model, measurement, machine, found, fit_gain,
                               feature_mode, drop, gain_curve)
     fit = fit_machine(problem, model, estimator, start=machine.fit_start())
@@ -284,27 +218,21 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
         prefix = f"{model.stages[k]}."
         stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
                                                                    prefix),
-                                      verdicts[k], prefix))
-    return MachineDiagnosis(machine, found, stages, names, spread, judged)
+                                      _verdict(judged, k), prefix))
+    return dataclasses.replace(judged, stages=tuple(stages))
 
 
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,
-                    verdict: StageVerdict | None = None, prefix: str = "") -> StageDiagnosis:
+                    verdict: StageVerdict | None = None, prefix: str = "") -> StageReport:
     """A stage called ``name``: ``fit``, the diagnosis of its pair's ``problem``, and what
-    the baselines say of it (``verdict``; module docstring). A gear pair diagnosed alone
-    (``diagnose --teeth``) is a machine of this one stage. ``prefix``: what the stage's
-    parameters' names begin with in ``fit`` (:attr:`StageDiagnosis.prefix`)."""
-    fault_mode, severity, suspect = fit.fault_mode, fit.severity, None
-    if verdict is not None:
-        suspect = verdict.suspect
-        if not verdict.changed:
-            fault_mode, severity = "healthy", "none"
-        elif fault_mode == "healthy":
-            fault_mode, severity = "changed", "unknown"
-    elif fit.explained and fault_mode != "healthy":
-        suspect = _sideband_suspect(problem)
+    the baselines say of it (``verdict``: :func:`~pydiag.gear.machine_report.stage_report`).
+    A gear pair diagnosed alone (``diagnose --teeth``) is a machine of this one stage.
+    Without a verdict, the suspect of a stage the model finds faulty is read from the
+    record's sidebands (module docstring). ``prefix``: what the stage's parameters' names
+    begin with in ``fit`` (:attr:`~pydiag.gear.machine_report.StageReport.prefix`)."""
+    suspect = (_sideband_suspect(problem) if verdict is None and fit.explained
+               and fit.fault_mode != "healthy" else None)
     kin = problem.kinematics  # at the model's speed if it cannot be set: the record's here
     pinion_hz = problem.speed.speed_hz if problem.speed is not None else kin.f_pinion_hz
-    return StageDiagnosis(name, kin.n_pinion, kin.n_gear, pinion_hz,
-                          pinion_hz * kin.n_pinion / kin.n_gear, pinion_hz * kin.n_pinion, fit,
-                          verdict, fault_mode, severity, suspect, prefix)
+    return stage_report(name, kin.n_pinion, kin.n_gear, pinion_hz, verdict, fit, suspect,
+                        prefix)

@@ -40,7 +40,7 @@ def test_a_kept_baseline_judges_as_the_file_it_was_kept_from(tmp_path):
         judged[how] = json.loads(out.read_text())
     kept, read = judged.values()
     assert kept["stages"] == read["stages"]
-    assert [s["verdict"] for s in kept["stages"]] == ["healthy", "changed"]
+    assert [s["baseline"]["verdict"] for s in kept["stages"]] == ["healthy", "changed"]
     assert kept["baselines"] == [f"kept 1: {read['baselines'][0]}"]
 
     # at another operating point the kept baseline is not used: said, and nothing judged

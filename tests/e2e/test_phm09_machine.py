@@ -43,15 +43,15 @@ def indicators(tmp_path, name: str, *extra: str) -> tuple[dict, str]:
 def test_stages_judged_against_a_repeated_healthy_run(tmp_path):
     baseline = ["--speed", "mesh", "--baseline", str(DATA / "spur 1_30hz_High_2.zip")]
     healthy, _ = indicators(tmp_path, "spur 1_30hz_High_1", *baseline)
-    assert [s["verdict"] for s in healthy["stages"]] == ["healthy", "healthy"], healthy["stages"]
+    assert [s["baseline"]["verdict"] for s in healthy["stages"]] == ["healthy", "healthy"], healthy["stages"]
     faulty, _ = indicators(tmp_path, "spur 2_30hz_High_1", *baseline)
     first, second = faulty["stages"]
     assert (first["name"], first["pinion_teeth"], first["gear_teeth"]) == ("input stage", 32, 96)
     # the chipped input pinion and the eccentric idler pinion: both of stage 1's shafts
     # changed, and stage 2's pinion (the idler) more than its gear (stage 1's suspect is
     # named with the tacho's angle: test_diagnose_fits_every_stage...)
-    assert first["verdict"] == "changed", first
-    assert second["verdict"] == "changed" and second["suspect"] == "pinion", second
+    assert first["baseline"]["verdict"] == first["fault_mode"] == "changed", first
+    assert second["baseline"]["verdict"] == "changed" and second["suspect"] == "pinion", second
     assert [s["name"] for s in faulty["shafts"]] == ["input", "idler", "output"]
     assert faulty["speed_method"].startswith("mesh") and faulty["speed_confidence_db"] > 1
     assert faulty["healthy_spread_db"] > 0 and faulty["baselines"]

@@ -10,7 +10,8 @@ from pydiag.fit.estimator import FitResult
 from pydiag.gear.machine_file import load_machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSource
 from pydiag.loop.diagnosis import Diagnosis, fit_warnings
-from pydiag.loop.stages import MachineDiagnosis, StageDiagnosis, stage_speed
+from pydiag.gear.machine_report import MachineReport, stage_report
+from pydiag.loop.stages import stage_speed
 from conftest import ROOT
 
 MACHINE = load_machine(ROOT / "examples" / "phm09_spur.toml")  # 32/96 then 48/80
@@ -23,17 +24,16 @@ def stage_fit_warnings(estimate: SpeedEstimate, k: int, **kwargs) -> list[str]:
     return fit_warnings(problem, 0.5, **kwargs)
 
 
-def machine_diagnosis(speed: SpeedEstimate) -> MachineDiagnosis:
+def machine_diagnosis(speed: SpeedEstimate) -> MachineReport:
     stages = []
     for k, stage in enumerate(MACHINE.stages):
         own = stage_speed(speed, MACHINE, k)
         said = stage_fit_warnings(speed, k, speed=False) + ["a fit's own warning"]
         fit = Diagnosis(FitResult({}, 0.5, 1, 0.0, [0.5]), "healthy", "none", "none", "none",
                         warnings=said)
-        stages.append(StageDiagnosis(stage.name, stage.pinion_teeth, stage.gear_teeth,
-                                     own.speed_hz, own.speed_hz, own.speed_hz, fit, None,
-                                     "healthy", "none", None))
-    return MachineDiagnosis(MACHINE, speed, stages, (), None)
+        stages.append(stage_report(stage.name, stage.pinion_teeth, stage.gear_teeth,
+                                   own.speed_hz, None, fit))
+    return MachineReport(MACHINE, speed, tuple(stages))
 
 
 @pytest.mark.parametrize("speed, said", [
