@@ -67,7 +67,7 @@ def apply_machine(args) -> Machine | None:
     if fits and not staged:
         stage = machine.stages[0]
         args.teeth = (stage.pinion_teeth, stage.gear_teeth)
-        bearing = next((b.bearing for b in machine.bearings if b.shaft == 0), None)
+        bearing = machine.pair_bearing(0)
         if bearing is not None and getattr(args, "bearing", "absent") is None:
             args.bearing = bearing
     return machine

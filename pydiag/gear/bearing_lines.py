@@ -81,7 +81,7 @@ def defect_orders(machine: Machine) -> dict[str, dict[str, float]]:
     """Each bearing's (by name) defect lines in orders of the input shaft."""
     out = {}
     for b in machine.bearings:
-        per_turn = b.bearing.frequencies(float(machine.shaft_ratio(b.shaft)))
+        per_turn = b.frequencies(float(machine.shaft_ratio(b.shaft)))
         out[b.name] = {defect: per_turn[key] * times
                        for defect, (key, times) in DEFECT_LINES.items()}
     return out
@@ -153,7 +153,7 @@ def bearing_records(measurement: Measurement, machine: Machine, estimate: SpeedE
             envelope = band_envelope(without_synchronous(y, count), rate_hz, band)
             parts.append(_levels_db(envelope, samples_per_rev, orders, shafts))
         whole[channel], halves[channel] = parts[0], (parts[1], parts[2])
-    return [BearingRecord(b.name, machine.shafts[b.shaft],
+    return [BearingRecord(b.name, b.shaft,
                           {c: whole[c][b.name] for c in names},
                           {c: {d: (halves[c][0][b.name][d], halves[c][1][b.name][d])
                                for d in DEFECT_LINES} for c in names})

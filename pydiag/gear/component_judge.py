@@ -97,8 +97,7 @@ def components(machine: Machine) -> tuple[Component, ...]:
                             s.pinion_teeth, s.name, "pinion"),
                   Component("gear", f"{s.gear_teeth}T gear of {s.name}", machine.shafts[k + 1],
                             s.gear_teeth, s.name, "gear")]
-    bearings = [Component("bearing", b.name, machine.shafts[b.shaft])
-                for b in machine.bearings]
+    bearings = [Component("bearing", b.name, b.shaft) for b in machine.bearings]
     return tuple(gears + bearings + [Component("shaft", name, name) for name in machine.shafts])
 
 

@@ -90,7 +90,7 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float,
             add(k * f_other, "other_shaft", k, f"{k}x other shaft")
     bearing = kin.bearing
     if bearing is not None:
-        f_shaft = fp if bearing.shaft == "pinion" else fg
+        f_shaft = kin.shaft_hz(bearing.shaft)
         for family, f in bearing.frequencies(f_shaft).items():
             for k in range(1, int(max_freq_hz / f) + 1):
                 add(k * f, family, k, f"{k}x {family.upper()}")
@@ -128,7 +128,7 @@ def _machine_lines(kin: GearKinematics, max_freq_hz: float, n_sidebands: int, ad
         for k in range(1, min(SHAFT_ORDERS, int(max_freq_hz / f)) + 1):
             add(k * f, "machine_shaft", k, f"{k}x {shaft.name}")
     for b in context.bearings:
-        for family, f in b.bearing.frequencies(b.shaft_ratio * fp).items():
+        for family, f in b.frequencies(kin.shaft_hz(b.shaft)).items():
             for k in range(1, int(max_freq_hz / f) + 1):
                 add(k * f, "machine_bearing", k, f"{k}x {family.upper()} {b.name} ({b.shaft})")
 

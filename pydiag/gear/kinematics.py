@@ -14,13 +14,16 @@ MESH_SIDEBANDS = 6
 
 @dataclass(frozen=True)
 class Bearing:
-    """Rolling bearing geometry, on the shaft that turns at ``shaft`` ("pinion" or "gear")."""
+    """A rolling bearing: its geometry, the shaft it is on by name (a gear pair's bearing:
+    "pinion" or "gear"; a machine's: the machine file's shaft) and its own name (a
+    machine's bearings are judged by it)."""
 
     n_balls: int
     ball_diameter_m: float
     pitch_diameter_m: float
     contact_angle_rad: float = 0.0
     shaft: str = "pinion"
+    name: str = ""
 
     def frequencies(self, f_shaft_hz: float) -> dict[str, float]:
         """BPFO, BPFI, BSF, FTF in Hz for an inner race turning at f_shaft (outer fixed)."""
@@ -74,17 +77,6 @@ class OtherShaft:
 
 
 @dataclass(frozen=True)
-class OtherBearing:
-    """A rolling bearing of the gearbox on a shaft the pair's own bearing is not on: its
-    name, geometry, the shaft's name and that shaft's speed over the pair's pinion speed."""
-
-    name: str
-    bearing: Bearing
-    shaft: str
-    shaft_ratio: float
-
-
-@dataclass(frozen=True)
 class MachineContext:
     """The rest of a gearbox around one of its stages: what puts lines in the stage's
     spectrum that are none of the pair's own (every speed relative to the pair's pinion,
@@ -93,12 +85,16 @@ class MachineContext:
     ``fundamental_order``: set when the model simulates every stage (a machine model,
     :mod:`pydiag.loop.machine_model`): the machine's fundamental frequency over the pair's
     pinion speed, with which every stage's lines repeat; the pair's kinematics then have
-    the machine's period and analyse every stage's bands. None: the pair's own."""
+    the machine's period and analyse every stage's bands. None: the pair's own.
+    ``bearings``: the gearbox's bearings but the pair's own, each on a shaft of the
+    machine by name: one of ``shafts`` or of ``pair_shafts`` (the pair's pinion and gear
+    shafts' names in the machine)."""
 
     stages: tuple[OtherStage, ...] = ()
     shafts: tuple[OtherShaft, ...] = ()
-    bearings: tuple[OtherBearing, ...] = ()
+    bearings: tuple[Bearing, ...] = ()
     fundamental_order: float | None = None
+    pair_shafts: tuple[str, str] = ("pinion", "gear")
 
 
 @dataclass(frozen=True)
@@ -136,6 +132,20 @@ class GearKinematics:
         ratio = self.other_shaft_ratio
         if ratio is not None and not (math.isfinite(ratio) and ratio > 0):
             raise UsageError(f"the other shaft's speed ratio must be positive, got {ratio}")
+
+    def shaft_hz(self, shaft: str) -> float:
+        """The speed of the shaft called ``shaft``: the pinion's or the gear's ("pinion",
+        "gear", or their names in the machine), or another shaft of the machine's."""
+        names = self.machine.pair_shafts if self.machine is not None else ()
+        if shaft in ("pinion", *names[:1]):
+            return self.f_pinion_hz
+        if shaft in ("gear", *names[1:]):
+            return self.f_pinion_hz * self.n_pinion / self.n_gear
+        other = next((s for s in self.machine.shafts if s.name == shaft), None) \
+            if self.machine is not None else None
+        if other is None:
+            raise UsageError(f"no shaft called {shaft!r} beside the pair")
+        return other.ratio * self.f_pinion_hz
 
     @property
     def pair(self) -> "GearKinematics":

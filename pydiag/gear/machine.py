@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from pydiag.core.errors import MachineError
-from pydiag.gear.kinematics import (Bearing, GearKinematics, MachineContext, OtherBearing,
+from pydiag.gear.kinematics import (Bearing, GearKinematics, MachineContext,
                                     OtherShaft, OtherStage)
 
 #: Stage types whose kinematics are those of a parallel-axis pair.
@@ -44,15 +44,6 @@ class Stage:
     gear_teeth: int
     name: str
     type: str = "spur"
-
-
-@dataclass(frozen=True)
-class MachineBearing:
-    """A rolling bearing on the shaft with index ``shaft`` (0: input)."""
-
-    bearing: Bearing
-    shaft: int
-    name: str
 
 
 @dataclass(frozen=True)
@@ -97,7 +88,7 @@ class Machine:
     stages: tuple[Stage, ...]
     shafts: tuple[str, ...]
     input_hz: float | None = None
-    bearings: tuple[MachineBearing, ...] = ()
+    bearings: tuple[Bearing, ...] = ()
     sensors: tuple[Sensor, ...] = ()
     tacho: Tacho | None = None
     source: str = "(in memory)"
@@ -126,8 +117,14 @@ class Machine:
         has none: what a fit of the machine's model polishes from besides its own swarm."""
         return dict(self.start) or None
 
-    def shaft_ratio(self, shaft: int) -> Fraction:
-        """Speed of shaft ``shaft`` over the input shaft's (exact)."""
+    def shaft_ratio(self, shaft: int | str) -> Fraction:
+        """Speed of shaft ``shaft`` (its index from 0 at the input, or its name) over the
+        input shaft's (exact)."""
+        if isinstance(shaft, str):
+            if shaft not in self.shafts:
+                raise MachineError(f"no shaft called {shaft!r}; the shafts are "
+                                   f"{', '.join(self.shafts)}")
+            shaft = self.shafts.index(shaft)
         ratio = Fraction(1)
         for stage in self.stages[:shaft]:
             ratio *= Fraction(stage.pinion_teeth, stage.gear_teeth)
@@ -163,7 +160,7 @@ class Machine:
         one upstream of its pinion; every other stage, shaft and bearing is its
         :class:`~pydiag.gear.kinematics.MachineContext`."""
         s = self.stages[stage]
-        own = next((b for b in self.bearings if b.shaft == stage), None)
+        own = self.pair_bearing(stage)
         base = self.shaft_ratio(stage)
 
         def ratio(shaft: int) -> float:
@@ -176,13 +173,19 @@ class Machine:
                              self.shafts[j + 1])
                   for j, o in enumerate(self.stages) if j != stage),
             tuple(OtherShaft(self.shafts[k], ratio(k)) for k in others),
-            tuple(OtherBearing(b.name, b.bearing, self.shafts[b.shaft], ratio(b.shaft))
-                  for b in self.bearings if b is not own))
+            tuple(b for b in self.bearings if own is None or b.name != own.name),
+            pair_shafts=(self.shafts[stage], self.shafts[stage + 1]))
         return GearKinematics(s.pinion_teeth, s.gear_teeth, float(input_hz * base),
                               other_shaft_ratio=ratio(neighbour) if others else None,
-                              bearing=None if own is None else own.bearing,
+                              bearing=own,
                               machine=context if len(self.stages) > 1 or context.bearings
                               else None)
+
+    def pair_bearing(self, stage: int) -> Bearing | None:
+        """Stage ``stage``'s bearing as its gear pair sees it: the first on its pinion
+        shaft, on the "pinion" (None: none there)."""
+        own = next((b for b in self.bearings if b.shaft == self.shafts[stage]), None)
+        return None if own is None else dataclasses.replace(own, shaft="pinion")
 
     def fundamental_order(self) -> Fraction:
         """The machine's fundamental frequency in input-shaft orders: the largest of which

@@ -11,7 +11,7 @@ from pathlib import Path
 from pydiag.core.errors import MachineError
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.kinematics import Bearing, crowded
-from pydiag.gear.machine import (LATER_TYPES, PARALLEL_TYPES, Machine, MachineBearing, Sensor,
+from pydiag.gear.machine import (LATER_TYPES, PARALLEL_TYPES, Machine, Sensor,
                                  Stage, StageEffect, Tacho)
 
 _TOP_KEYS = {"name", "input_rpm", "shafts", "stages", "bearings", "sensors", "tacho",
@@ -154,10 +154,9 @@ def machine_from_dict(data: dict, source: str = "(in memory)") -> Machine:
                 or not 0 <= angle < 90:
             raise MachineError(f"{_where(source, where, 'contact_angle_deg')}: must lie in "
                                f"[0, 90), got {angle!r}")
-        shaft = shaft_of(t, where)
-        bearings.append(MachineBearing(Bearing(n, d * 1e-3, pitch * 1e-3, math.radians(angle)),
-                                       shaft, _text(t.get("name", f"bearing {i + 1}"), source,
-                                                    where, "name")))
+        bearings.append(Bearing(n, d * 1e-3, pitch * 1e-3, math.radians(angle),
+                                machine.shafts[shaft_of(t, where)],
+                                _text(t.get("name", f"bearing {i + 1}"), source, where, "name")))
         if bearings[-1].name in [b.name for b in bearings[:-1]]:  # each is judged by name
             raise MachineError(f"{_where(source, where, 'name')}: another bearing is called "
                                f"{bearings[-1].name!r}: give each a name of its own")

@@ -25,7 +25,7 @@ def test_bearings_whose_balls_cannot_sit_on_their_pitch_circle_are_refused():
         machine_from_dict(crowded, "box.toml")
     fits = {**BOX, "bearings": [{"shaft": "input", "n_balls": 8, "ball_diameter_mm": 7.9375,
                                  "pitch_diameter_mm": 33.5026}]}  # PHM09's ER-10K
-    assert machine_from_dict(fits, "box.toml").bearings[0].bearing.n_balls == 8
+    assert machine_from_dict(fits, "box.toml").bearings[0].n_balls == 8
     res = run_cli("-m", "pydiag", "compare", "--measurement", "m.csv", "--bearing",
                   "40,7.94,39", "--fmu", "x.fmu")
     assert res.returncode == 2 and "do not fit on a pitch circle" in res.stderr
