@@ -148,7 +148,7 @@ def phm09_problems(path: Path, gain_curve: bool = False) -> dict:
 def budget(name: str, problem) -> None:
     c = compare(problem, FaultEstimator(seed=0))
     s = c.spectra[problem.channels[0]]
-    freqs, meas, model = (np.asarray(v, dtype=float) for v in (s.freq_hz, s.measured, s.model))
+    freqs, meas, model = s.freq_hz, s.amplitude, c.model_spectra[problem.channels[0]].amplitude
     noise, rate = s.noise_power, c.false_alarm_rate
     margin = np.sqrt(noise * np.log(meas.size / rate))
     bins = measured_spectra(problem, rate).featurizer.bins  # the error's (compare's) bins

@@ -41,8 +41,8 @@ from pydiag.gear.peaks import Peak
 from pydiag.loop.effect_fit import evidence_channels, fit_effect
 from pydiag.loop.residual import (NOT_KINEMATIC, MeasuredSpectra, bin_groups,
                                   describe_non_kinematic, measured_spectra, residual_shares)
-from pydiag.loop.results import ChannelSpectrum, Comparison, Suggestion
-from pydiag.signal.spectra import local_maxima
+from pydiag.loop.results import Comparison, Suggestion
+from pydiag.signal.spectra import Spectrum, local_maxima
 
 
 def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
@@ -72,12 +72,13 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
         gains = problem.gains(plant, x) if problem.fit_gain else {}
     lines = kinematic_map(kin, featurizer.max_freq_hz)
     bin_hz = 1.0 / featurizer.duration_s
-    candidates, spectra, errors, raw, by_family = [], {}, [], [], {}
+    candidates, spectra, model_spectra, errors, raw, by_family = [], {}, {}, [], [], {}
     for i, channel in enumerate(problem.channels):
         spectrum = measured.spectra[channel]
         freqs, meas, noise = spectrum.freq_hz, spectrum.amplitude, spectrum.noise_power
         model = featurizer.spectrum(y[i], rate).amplitude
-        spectra[channel] = ChannelSpectrum(freqs.tolist(), meas.tolist(), model.tolist(), noise)
+        spectra[channel] = spectrum
+        model_spectra[channel] = Spectrum(freqs, model, 0.0)
         groups = bin_groups(freqs, lines, bin_hz, meas, measured.margin[channel])
         by_family[channel] = residual_shares(groups, meas, model, bins, noise)
         errors.append(noise_corrected_error(model[bins], meas[bins], noise))
@@ -126,7 +127,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
                       float(np.sqrt(np.sum(np.square(raw)))), dict(parameters),
                       peaks, suggestions, false_alarm_rate, featurizer.n_periods,
                       featurizer.duration_s, bin_hz,
-                      int(np.count_nonzero(bins)), fit_error, gains, spectra, markers, by_family)
+                      int(np.count_nonzero(bins)), fit_error, gains, spectra=spectra,
+                      model_spectra=model_spectra, markers=markers, residual_by_family=by_family)
 
 
 def refit_with_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu: str,

@@ -18,6 +18,7 @@ import numpy as np
 from pydiag.io.outputs import write_text
 from pydiag.loop.residual import RESIDUAL_GROUPS
 from pydiag.loop.results import Comparison
+from pydiag.signal.spectra import Spectrum
 
 FAMILY_COLOURS = {"mesh": "#c0392b", "pinion": "#2e86c1", "mesh_sb_pinion": "#5dade2",
                   "gear": "#27ae60", "mesh_sb_gear": "#82e0aa", "bpfo": "#8e44ad",
@@ -41,13 +42,14 @@ def _html(fig, div_id: str) -> str:
                        config=PLOT_CONFIG)
 
 
-def _spectrum_figure(name: str, spec, markers: list[dict], peaks: list):
+def _spectrum_figure(name: str, spec: Spectrum, model_spec: Spectrum, markers: list[dict],
+                     peaks: list):
     """Measured and model spectra (log) above the residual, x shared: zoom one, both follow."""
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 
     f = np.asarray(spec.freq_hz)
-    meas, model = np.asarray(spec.measured), np.asarray(spec.model)
+    meas, model = spec.amplitude, model_spec.amplitude
     floor = max(np.sqrt(spec.noise_power), 1e-300)
     fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06,
                         row_heights=[0.62, 0.38])
@@ -154,7 +156,7 @@ def write_report(comparison: Comparison, out: str | Path, measurement: str = "",
              f"{c.error_raw:.4f} raw) on {c.n_error_bins} bins. Fitted parameters: "
              + ", ".join(f"{html.escape(k)} = {v:.4g}" for k, v in c.parameters.items()) + "</p>"]
     for k, (name, spec) in enumerate(c.spectra.items()):
-        fig = _spectrum_figure(name, spec, c.markers,
+        fig = _spectrum_figure(name, spec, c.model_spectra[name], c.markers,
                                [(i, p) for i, p in numbered if p.channel == name])
         parts.append(f"<h2>Channel {html.escape(name)}</h2>"
                      + _html(fig, f"spectrum-{k}"))

@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass, field, fields
 from enum import Enum
 
 from pydiag.gear.peaks import Peak
+from pydiag.signal.spectra import Spectrum
 
 #: The least share of the residual above noise on its own lines a confident effect removes.
 MIN_EXPLAINED = 0.5
@@ -211,14 +212,6 @@ class Suggestion:
 
 
 @dataclass
-class ChannelSpectrum:
-    freq_hz: list[float]
-    measured: list[float]
-    model: list[float]
-    noise_power: float
-
-
-@dataclass
 class Comparison:
     fmu: str
     error: float  # noise-corrected Eq. (12) on the comparison bins
@@ -233,7 +226,10 @@ class Comparison:
     n_error_bins: int
     fit_error: float | None = None
     gains: dict[str, float] = field(default_factory=dict)  # model -> measurement, per channel
-    spectra: dict[str, ChannelSpectrum] = field(default_factory=dict)
+    # channel -> the measured spectrum on the featurizer's frequencies (its noise power
+    # beside it), and the model's there
+    spectra: dict[str, Spectrum] = field(default_factory=dict)
+    model_spectra: dict[str, Spectrum] = field(default_factory=dict)
     markers: list[dict] = field(default_factory=list)  # main kinematic lines, for plots
     # channel -> group -> {"measured": share of sum R^2, "residual": share of sum (R-S)^2}
     residual_by_family: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
@@ -242,8 +238,12 @@ class Comparison:
         d = {f.name: getattr(self, f.name) for f in fields(self)}
         d["peaks"] = [asdict(p) for p in self.peaks]
         d["suggested_effects"] = [s.to_dict() for s in self.suggested_effects]
+        d.pop("model_spectra")
         if with_spectra:
-            d["spectra"] = {c: asdict(s) for c, s in self.spectra.items()}
+            d["spectra"] = {c: {"freq_hz": s.freq_hz.tolist(), "measured": s.amplitude.tolist(),
+                                "model": self.model_spectra[c].amplitude.tolist(),
+                                "noise_power": s.noise_power}
+                            for c, s in self.spectra.items()}
         else:
             d.pop("spectra")
             d.pop("markers")

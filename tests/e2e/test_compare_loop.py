@@ -405,8 +405,8 @@ def test_a_kinematic_line_is_a_peak_at_the_margin_of_the_lines_the_kinematics_na
     noisy["acc"] = y[0] + np.fft.irfft(spectrum, y.shape[1]) + amplitude * (
         np.sin(2 * np.pi * on_line * t) + np.sin(2 * np.pi * between * t + 1.0))
     c = compare(build_problem(str(gear_fmu), Measurement(noisy, rate)), parameters=BASE)
-    acc = c.spectra["acc"]
-    excess = {f: acc.measured[k] - acc.model[k] for k, f in enumerate(acc.freq_hz)
+    acc, model = c.spectra["acc"], c.model_spectra["acc"]
+    excess = {f: acc.amplitude[k] - model.amplitude[k] for k, f in enumerate(acc.freq_hz)
               if min(abs(f - on_line), abs(f - between)) < 1e-6}
     assert len(excess) == 2 and all(line_margin < e < bin_margin for e in excess.values()), \
         (line_margin, bin_margin, excess)
