@@ -68,6 +68,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from pydiag.fit.build import ProblemSettings  # noqa: E402
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
 from pydiag.fit.gain import curve_basis, curve_nodes, fitted_curve  # noqa: E402
 from pydiag.fit.objective import noise_corrected_error, spectral_residuals  # noqa: E402
@@ -139,10 +140,12 @@ def phm09_problems(path: Path, gain_curve: bool = False) -> dict:
     every mesh) of a 30 Hz PHM09 record, by the record's and the stage's names."""
     machine = load_machine(ROOT / "examples" / "phm09_spur.toml")
     m = read_measurement(path, PHM09_RATE_HZ)
-    found = machine_speed(m, machine, 30.0, SpeedSettings("mesh", tacho="ch3"))
+    speed = SpeedSettings("mesh", tacho="ch3")
+    found = machine_speed(m, machine, 30.0, speed)
+    settings = ProblemSettings(fit_gain=True, gain_curve=gain_curve, speed=speed)
     return {f"{path.name} {stage.name}": stage_problem(
-        str(ROOT / "build" / "GearPair.fmu"), m, machine, k, found, fit_gain=True,
-        drop=("ch3",), gain_curve=gain_curve) for k, stage in enumerate(machine.stages)}
+        str(ROOT / "build" / "GearPair.fmu"), m, machine, k, found, settings)
+        for k, stage in enumerate(machine.stages)}
 
 
 def budget(name: str, problem) -> None:

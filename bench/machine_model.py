@@ -29,6 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
+from pydiag.fit.build import ProblemSettings  # noqa: E402
 from pydiag.gear.machine import StageEffect  # noqa: E402
 from pydiag.gear.machine_file import load_machine  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
@@ -58,8 +59,8 @@ def errors(path: Path, channel: str, effects: tuple[StageEffect, ...], build: Pa
             out.append(None)
             continue
         model, built = machine_fmu(machine, ROOT / "modelica", build)
-        problem = machine_problem(built.fmu, model, m, machine, speed,
-                                  drop=(base.tacho.channel,))
+        problem = machine_problem(built.fmu, model, m, machine, speed, ProblemSettings(
+            speed=SpeedSettings(tacho=base.tacho.channel)))
         if machine is base:  # the other stages silenced: the first stage's model alone
             output = next(o for o in model.outputs if o.channel == channel)
             alone = problem.derive(

@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pydiag.fit.estimator import FaultEstimator  # noqa: E402
-from pydiag.fit.build import build_problem  # noqa: E402
+from pydiag.fit.build import ProblemSettings, build_problem  # noqa: E402
 from pydiag.fit.problem import ProblemObjective  # noqa: E402
 from pydiag.gear.conventions import kinematics_from  # noqa: E402
 from pydiag.core.measurement import Measurement  # noqa: E402
@@ -65,8 +65,8 @@ def _through_machine(m: Measurement, kin, sensors: tuple[str, ...], est: FaultEs
     root = ROOT / "modelica"
     model, built = machine_fmu(machine, root, default_build_dir(root))
     result = diagnose_machine_model(str(built.fmu), model, m, machine, kin.f_pinion_hz,
-                                    SpeedSettings("mesh"), est, feature_mode=features,
-                                    fit_gain=fit_gain)
+                                    ProblemSettings(features, fit_gain,
+                                                    speed=SpeedSettings("mesh")), est)
     stage = result.stages[0]
     return SimpleNamespace(parameters=unprefixed(stage.fit.parameters, stage.prefix),
                            fault_mode=stage.fault_mode, severity=stage.severity,

@@ -58,6 +58,7 @@ sys.path.insert(0, str(ROOT))
 
 from pydiag.gear.machine_file import load_machine  # noqa: E402
 from pydiag.gear.machine_indicators import machine_record  # noqa: E402
+from pydiag.fit.build import ProblemSettings  # noqa: E402
 from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
 from pydiag.gear.stage_judge import judge_stages  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
@@ -110,7 +111,8 @@ def main() -> int:
         model = None
         if args.model:
             fitted = diagnose_machine(str(ROOT / "build" / "GearPair.fmu"), m, machine,
-                                      float(hz), SpeedSettings("mesh", tacho="ch3"))
+                                      float(hz), ProblemSettings(
+                                          speed=SpeedSettings("mesh", tacho="ch3")))
             model = [st.fault_mode for st in fitted.stages]
         seen[path.name] = (int(case), hz, load, record, time.perf_counter() - started,
                            tacho.speed_hz, model)

@@ -30,13 +30,12 @@ from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.core.termination import deferred, raise_once
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.build import build_problem
+from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.gear.classify import SEVERITIES
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine_file import load_machine
 from pydiag.gear.machine_indicators import MachineRecord
-from pydiag.gear.speed import SpeedSettings
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
 from pydiag.loop.diagnosis import diagnose
@@ -57,7 +56,7 @@ class BatchTask:
     channels: tuple[str, ...] | None = None  # NAME or NAME=OUTPUT specs
     sample_rate_hz: float | None = None
     adapter: str | None = None  # path of an adapter TOML
-    problem: dict = field(default_factory=dict)  # build_problem settings (feature_mode, ...)
+    problem: ProblemSettings = ProblemSettings()  # how a record becomes a fit problem
     units: tuple[str, ...] | None = None  # UNIT or NAME=UNIT specs
     indicators: str | None = None  # the shaft whose condition indicators are columns too
     sensitivities: tuple[tuple[str, str], ...] = ()  # (NAME, sensitivity such as 100mV/g)
@@ -90,7 +89,7 @@ def diagnose_task(task: BatchTask) -> dict:
             row.update(_machine_row(task, m, adapter))
             row["elapsed_s"] = time.perf_counter() - started
             return row
-        problem = build_problem(task.fmu, m, adapter, **task.problem)
+        problem = build_problem(task.fmu, m, adapter, **task.problem.keywords())
         result = diagnose(problem, FaultEstimator(n_workers=1, **task.estimator))
         facts = {k: v for k, v in result.facts.items()
                  if k not in ("nominal_speed_hz", "gains")}
@@ -104,8 +103,8 @@ def diagnose_task(task: BatchTask) -> dict:
             kin = problem.kinematics
             nominal = GearKinematics(kin.n_pinion, kin.n_gear, problem.speed.nominal_hz
                                      if problem.speed is not None else kin.f_pinion_hz)
-            speed = task.problem.get("speed") or SpeedSettings()
-            row.update(condition_indicators(m, nominal, speed, task.indicators).columns())
+            row.update(condition_indicators(m, nominal, task.problem.tracking,
+                                            task.indicators).columns())
     except PydiagError as err:
         row.update(status="error", message=str(err))
     except Exception as err:  # a broken FMU must not take the batch down
@@ -124,13 +123,9 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     """Every stage of a machine's record (:func:`pydiag.loop.stages.diagnose_machine`): a
     column group a stage (``<stage>:fault_mode``, ...); the row's own fault mode is the
     first stage's that is not healthy, its severity and error the highest."""
-    settings = task.problem
     result = diagnose_machine(task.fmu, m, load_machine(task.machine), task.input_hz,
-                              settings.get("speed") or SpeedSettings(),
-                              FaultEstimator(n_workers=1, **task.estimator),
-                              task.baselines, adapter,
-                              settings.get("feature_mode", "lines"), settings.get("fit_gain"),
-                              settings.get("gain_curve", False))
+                              task.problem, FaultEstimator(n_workers=1, **task.estimator),
+                              task.baselines, adapter)
     row: dict = {"status": "ok", "message": "; ".join(result.warnings),
                  **{k: v for k, v in result.speed.to_dict().items()
                     if k != "nominal_speed_hz"}}

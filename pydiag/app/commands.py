@@ -19,7 +19,7 @@ from pydiag.app.reading import channels_to_read, read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.build import build_problem
+from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
 from pydiag.fmu.inspect import describe, format_info
@@ -104,12 +104,13 @@ def progress_bar(quiet: bool, desc: str = "diagnose"):
     return update, bar.close
 
 
-def problem_settings(args) -> dict:
-    """build_problem's settings from the command line (feature mode, operating point, speed,
-    gain); commands without record options (demo) take the record as it is."""
-    settings: dict = {"feature_mode": getattr(args, "features", "lines")}
+def problem_settings(args) -> ProblemSettings:
+    """How the command line makes a record a fit problem (feature mode, operating point,
+    speed, gain); commands without record options (demo) take the record as it is, its
+    level the model's."""
+    feature_mode = getattr(args, "features", "lines")
     if not hasattr(args, "speed"):
-        return settings
+        return ProblemSettings(feature_mode, fit_gain=False, gain_curve=False)
     op = {}
     if args.input_hz is not None:
         op["f_pinion_hz"] = args.input_hz
@@ -119,11 +120,11 @@ def problem_settings(args) -> dict:
         op["other_shaft_ratio"] = args.other_shaft
     if getattr(args, "bearing", None) is not None:  # compare and discover
         op["bearing"] = args.bearing
-    gain = {"auto": None, "fit": True, "curve": True, "fixed": False}[args.gain]
-    return {**settings, "operating_point": op or None, "fit_gain": gain,
-            "gain_curve": {"auto": None, "curve": True}.get(args.gain, False),
-            "speed": SpeedSettings(args.speed, tacho=args.tacho,
-                                   pulses_per_rev=args.pulses_per_rev)}
+    return ProblemSettings(
+        feature_mode, fit_gain={"auto": None, "fit": True, "curve": True, "fixed": False}[args.gain],
+        gain_curve={"auto": None, "curve": True}.get(args.gain, False),
+        speed=SpeedSettings(args.speed, tacho=args.tacho, pulses_per_rev=args.pulses_per_rev),
+        operating_point=op or None)
 
 
 def problem_of(args, measurement: Measurement,
@@ -131,14 +132,11 @@ def problem_of(args, measurement: Measurement,
     """The fit problem of the command line: its pair's, or a machine's stage's (--stage)."""
     machine, settings = getattr(args, "machine_description", None), problem_settings(args)
     if machine is None or len(machine.stages) == 1:
-        return build_problem(args.fmu, measurement, adapter_of(args), **settings,
+        return build_problem(args.fmu, measurement, adapter_of(args), **settings.keywords(),
                              fixed_values=fixed_values)
-    speed = settings["speed"]
     return stage_problem(args.fmu, measurement, machine, args.stage_index,
-                         machine_speed(measurement, machine, args.input_hz, speed),
-                         adapter_of(args), settings["feature_mode"], settings["fit_gain"],
-                         (speed.tacho,) if speed.tacho else (), fixed_values,
-                         settings["gain_curve"])
+                         machine_speed(measurement, machine, args.input_hz, settings.tracking),
+                         settings, adapter_of(args), fixed_values)
 
 
 def fit(args, problem: FitProblem) -> Diagnosis:
@@ -205,21 +203,17 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     """diagnose --machine stage by stage (:func:`_staged`): every stage fitted, judged
     against the baselines when there are some."""
     settings = problem_settings(args)
-    baselines = baseline_records(args, machine, settings["speed"])
+    baselines = baseline_records(args, machine, settings.tracking)
     model = None if args.fmu else machine_models(args)(machine)
     update, close = progress_bar(args.quiet)
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
         if model is None:
-            result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings["speed"],
-                                      estimator, baselines, adapter_of(args),
-                                      settings["feature_mode"], settings["fit_gain"],
-                                      settings["gain_curve"])
+            result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
+                                      estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
             result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
-                                            args.input_hz, settings["speed"], estimator,
-                                            baselines, settings["feature_mode"],
-                                            settings["fit_gain"], settings["gain_curve"])
+                                            args.input_hz, settings, estimator, baselines)
     finally:
         close()
     print(format_machine_report(result))
@@ -285,7 +279,7 @@ def cmd_batch(args) -> int:
     machine = args.machine_description
     staged = _staged(args)
     problem = problem_settings(args)
-    baselines = tuple(baseline_records(args, machine, problem["speed"]))
+    baselines = tuple(baseline_records(args, machine, problem.tracking))
     tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,

@@ -15,6 +15,7 @@ from pydiag.app.models import effect_models, library, machine_models
 from pydiag.app.reading import read_input
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.core.measurement import Measurement
+from pydiag.fit.build import ProblemSettings
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.description import read_model_description
@@ -65,9 +66,8 @@ def _machine_problem(args, m: Measurement, build: Callable[[Machine], tuple[Mach
                          f"{args.machine}: " + ", ".join(s.name for s in machine.stages)
                          + ") and --fmu")
     model, built = build(machine)
-    found, settings, drop = _machine_record(args, m)
-    problem = machine_problem(built.fmu, model, m, machine, found, settings["fit_gain"],
-                              settings["feature_mode"], drop, settings["gain_curve"])
+    found, settings = _machine_record(args, m)
+    problem = machine_problem(built.fmu, model, m, machine, found, settings)
     return problem, (model, built)
 
 
@@ -86,13 +86,11 @@ def _model_fact(args, built: BuiltModel) -> str:
                else "; a machine file takes effects: docs/machine-file.md)"))
 
 
-def _machine_record(args, m: Measurement) -> tuple[SpeedEstimate, dict, tuple[str, ...]]:
+def _machine_record(args, m: Measurement) -> tuple[SpeedEstimate, ProblemSettings]:
     """How the machine's own model sees the record ``m``: its input speed (from the tacho,
-    else from every mesh), the problem's settings, the channels that are no sensor's."""
+    else from every mesh), and the problem's settings."""
     settings = problem_settings(args)
-    speed = settings["speed"]
-    return (machine_speed(m, args.machine_description, args.input_hz, speed), settings,
-            (speed.tacho,) if speed.tacho else ())
+    return machine_speed(m, args.machine_description, args.input_hz, settings.tracking), settings
 
 
 def _stage_fact(args) -> dict:
@@ -275,18 +273,15 @@ def _machine_loop(args) -> tuple[list, str]:
         raise OutputError(f"{err} (--out names another)") from err
     m = read_input(args)
     machines = machine_models(args)
-    found, settings, drop = _machine_record(args, m)
+    found, settings = _machine_record(args, m)
     write_text(str(copy), source.read_text(encoding="utf-8"), True)
     print(f"machine    : {copy} (a copy of {source}; every effect accepted goes into it)")
     for warning in _start_warnings(args.machine_description,
                                    machines(args.machine_description)[0]):
         print(f"pydiag loop: warning: {warning}", file=sys.stderr)
-    steps = machine_loop(copy, m, found, machines,
-                         args.max_steps, FaultEstimator(**estimator_settings(args)),
-                         _effect_estimator(args), settings["fit_gain"],
-                         settings["feature_mode"], drop,
-                         progress=lambda step: print(format_loop_step(step), flush=True),
-                         gain_curve=settings["gain_curve"])
+    steps = machine_loop(copy, m, found, machines, settings, args.max_steps,
+                         FaultEstimator(**estimator_settings(args)), _effect_estimator(args),
+                         progress=lambda step: print(format_loop_step(step), flush=True))
     return steps, str(copy)
 
 

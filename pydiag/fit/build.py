@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 from pydiag.core.errors import AdapterError, EstimationError, PlantError
 from pydiag.core.measurement import Measurement
@@ -23,6 +24,48 @@ from pydiag.gear.speed import SpeedEstimate, SpeedSettings
 from pydiag.model.adapter import Adapter, check_against_fmu, check_units, gear_default
 from pydiag.model.simulate import SIMULATED_SOURCE
 from pydiag.signal.features import Featurizer, SpectrumFeaturizer
+
+
+@dataclass(frozen=True)
+class ProblemSettings:
+    """How a record becomes a fit problem, set once (the command line's ``--features``,
+    ``--gain``, ``--speed``/``--tacho``, ``--teeth``/``--rpm``) and the same for every
+    command, stage and machine model.
+
+    Attributes:
+        feature_mode: "lines" or "paper" (:mod:`pydiag.gear.features`)
+        fit_gain: fit each channel's level; None: unless ``pydiag simulate`` made the
+            record (:func:`build_problem`)
+        gain_curve: the fitted gain a curve over frequency: True on every channel; None
+            the model's default (a machine's own: on the accelerometers its file places,
+            :func:`pydiag.loop.machine_fit.machine_problem`; a pair's: none); False none
+        speed: how the speed is found in the record; None: the record at the nominal
+            speed as it is (a gear pair's; a machine's speed is always found)
+        operating_point: overrides of the nominal operating point
+            (:func:`build_problem`'s)
+    """
+
+    feature_mode: str = "lines"
+    fit_gain: bool | None = None
+    gain_curve: bool | None = None
+    speed: SpeedSettings | None = None
+    operating_point: dict | None = None
+
+    @property
+    def tracking(self) -> SpeedSettings:
+        """How a machine's speed is found: ``speed``, else the defaults."""
+        return self.speed or SpeedSettings()
+
+    @property
+    def dropped(self) -> tuple[str, ...]:
+        """The channels that are no sensor: the tacho's."""
+        return (self.speed.tacho,) if self.speed is not None and self.speed.tacho else ()
+
+    def keywords(self) -> dict:
+        """:func:`build_problem`'s keywords for a pair's problem."""
+        return {"feature_mode": self.feature_mode, "fit_gain": self.fit_gain,
+                "gain_curve": self.gain_curve, "speed": self.speed,
+                "operating_point": self.operating_point}
 
 
 def _check_rate(measurement: Measurement, featurizer: Featurizer, what: str,

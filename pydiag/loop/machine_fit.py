@@ -21,7 +21,7 @@ from pydiag.core.measurement import Measurement
 from pydiag.core.parameters import fmu_values
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator, FitResult
-from pydiag.fit.build import build_problem
+from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate
@@ -34,24 +34,25 @@ from pydiag.model.simulate import SIMULATED_SOURCE
 
 
 def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Measurement,
-                    machine: Machine, speed: SpeedEstimate, fit_gain: bool | None = None,
-                    feature_mode: str = "lines", drop: tuple[str, ...] = (),
-                    gain_curve: bool | list[str] | None = None) -> FitProblem:
+                    machine: Machine, speed: SpeedEstimate,
+                    settings: ProblemSettings = ProblemSettings()) -> FitProblem:
     """The fit problem of ``measurement`` on the machine model ``model`` (its FMU at
     ``fmu_path``): the record order-tracked at the input shaft (``speed``, found from every
-    mesh or the tacho; the channels ``drop`` left out), every stage's lines analysed over
+    mesh or the tacho; the tacho's channel left out), every stage's lines analysed over
     the machine's fundamental period
-    (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``gain_curve``: the fitted
-    gains are curves with a node at every stage's mesh harmonics (:mod:`pydiag.fit.gain`);
-    None (the default): curves where the gain is fitted on the accelerometers the machine
-    file places (``[[sensors]]``, output ``acc``): they sit on its housing, which passes
-    each band of the meshes differently; one gain a channel for a record whose sensors the
-    file does not place (a simulator's mesh acceleration) and for a sensor of the mesh's
-    deflection (``disp``: no housing between), and none for a record ``pydiag simulate``
-    made (its level is the model's)."""
+    (:meth:`~pydiag.gear.machine.Machine.model_kinematics`); ``settings.gain_curve``: the
+    fitted gains are curves with a node at every stage's mesh harmonics
+    (:mod:`pydiag.fit.gain`); None (the default): curves where the gain is fitted on the
+    accelerometers the machine file places (``[[sensors]]``, output ``acc``): they sit on
+    its housing, which passes each band of the meshes differently; one gain a channel for
+    a record whose sensors the file does not place (a simulator's mesh acceleration) and
+    for a sensor of the mesh's deflection (``disp``: no housing between), and none for a
+    record ``pydiag simulate`` made (its level is the model's)."""
+    drop = settings.dropped
     tracked = order_track(measurement, speed, drop=drop)
     channels = [c for c in tracked.channels if c not in drop]
     adapter = model.adapter(channels)
+    fit_gain, gain_curve = settings.fit_gain, settings.gain_curve
     if fit_gain is None:
         fit_gain = tracked.metadata.get("source") != SIMULATED_SOURCE
     if gain_curve is None and machine.sensors:
@@ -61,7 +62,8 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
     return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
                          fixed_values=model.fixed_values,
                          kinematics=machine.model_kinematics(speed.speed_hz),
-                         feature_mode=feature_mode, fit_gain=fit_gain, speed_estimate=speed,
+                         feature_mode=settings.feature_mode, fit_gain=fit_gain,
+                         speed_estimate=speed,
                          gain_curve=gain_curve)
 
 

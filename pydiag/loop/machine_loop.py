@@ -23,6 +23,7 @@ from typing import Callable
 
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.build import ProblemSettings
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_file import load_machine
 from pydiag.gear.speed import SpeedEstimate
@@ -37,25 +38,23 @@ from pydiag.loop.machine_model import MachineModel, possible_parameters
 
 def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,
                  build: Callable[[Machine], tuple[MachineModel, BuiltModel]],
-                 max_steps: int = 4, estimator: FaultEstimator | None = None,
-                 refit: FaultEstimator | None = None, fit_gain: bool | None = None,
-                 feature_mode: str = "lines", drop: tuple[str, ...] = (),
-                 progress: Callable[[LoopStep], None] | None = None,
-                 gain_curve: bool | None = None) -> list[LoopStep]:
+                 settings: ProblemSettings = ProblemSettings(), max_steps: int = 4,
+                 estimator: FaultEstimator | None = None,
+                 refit: FaultEstimator | None = None,
+                 progress: Callable[[LoopStep], None] | None = None) -> list[LoopStep]:
     """The loop (module docstring) on the machine file ``path``, which gets every accepted
     effect: its steps, the last the comparison nothing more was accepted after (or the
     ``max_steps``-th). ``speed``: the input shaft's in ``measurement``; ``build``: a
     machine's model and its FMU; ``estimator``: the stages' fit; ``refit``: the effects'
-    (default EFFECT_REFIT's); ``drop``: channels that are not sensors (the tacho);
-    ``gain_curve``: :func:`~pydiag.loop.machine_fit.machine_problem`'s."""
+    (default EFFECT_REFIT's); ``settings``: how the record becomes a fit problem
+    (:func:`~pydiag.loop.machine_fit.machine_problem`)."""
     estimator = estimator or FaultEstimator()
     refit = refit or FaultEstimator(**EFFECT_REFIT)
     steps: list[LoopStep] = []
     while True:
         machine = load_machine(path)  # its start: the fit before, and the accepted effect's
         model, built = build(machine)
-        problem = machine_problem(built.fmu, model, measurement, machine, speed, fit_gain,
-                                  feature_mode, drop, gain_curve)
+        problem = machine_problem(built.fmu, model, measurement, machine, speed, settings)
         c = compare_machine(problem, model, estimator, refit,
                             start=machine.fit_start())
         c = validate_machine(problem, machine, model, c,

@@ -31,7 +31,7 @@ import numpy as np
 
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
-from pydiag.fit.build import build_problem
+from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
@@ -83,28 +83,26 @@ def stage_speed(speed: SpeedEstimate, machine: Machine, stage: int) -> SpeedEsti
 
 
 def stage_problem(fmu_path: str, measurement: Measurement, machine: Machine, stage: int,
-                  speed: SpeedEstimate, adapter: Adapter | None = None,
-                  feature_mode: str = "lines", fit_gain: bool | None = None,
-                  drop: tuple[str, ...] = (),
+                  speed: SpeedEstimate, settings: ProblemSettings = ProblemSettings(),
+                  adapter: Adapter | None = None,
                   fixed_values: dict[str, float] | None = None,
-                  gain_curve: bool = False, upsampled: Upsampled | None = None) -> FitProblem:
+                  upsampled: Upsampled | None = None) -> FitProblem:
     """The fit problem of stage ``stage``: the record tracked at its pinion shaft, the
     other stages' lines left out (module docstring); its kinematics name every line of
-    the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`); ``gain_curve``:
-    :func:`~pydiag.fit.build.build_problem`'s; ``upsampled``: the record upsampled for
-    tracking at ``speed`` (:func:`~pydiag.gear.tracking.upsampled_record`), when made once
-    for every stage."""
+    the machine (:meth:`~pydiag.gear.machine.Machine.stage_kinematics`); ``upsampled``: the
+    record upsampled for tracking at ``speed``
+    (:func:`~pydiag.gear.tracking.upsampled_record`), when made once for every stage."""
     estimate = stage_speed(speed, machine, stage)
     kin = machine.stage_kinematics(stage, speed.speed_hz)
     top = max_band_freq_hz(kin)
     others = tuple(f for j in range(len(machine.stages)) if j != stage
                    for f in machine.stage_lines(j, speed.speed_hz, top))
-    tracked = _stage_channels(order_track(measurement, estimate, drop, upsampled), machine,
-                              stage)
+    tracked = _stage_channels(order_track(measurement, estimate, settings.dropped, upsampled),
+                              machine, stage)
     return build_problem(fmu_path, tracked, adapter, kinematics=kin,
-                         featurizer=KinematicFeaturizer(kin, feature_mode, others),
-                         fit_gain=fit_gain, speed_estimate=estimate, fixed_values=fixed_values,
-                         gain_curve=gain_curve)
+                         featurizer=KinematicFeaturizer(kin, settings.feature_mode, others),
+                         fit_gain=settings.fit_gain, speed_estimate=estimate,
+                         fixed_values=fixed_values, gain_curve=settings.gain_curve)
 
 
 def _stage_channels(measurement: Measurement, machine: Machine, stage: int) -> Measurement:
@@ -149,24 +147,22 @@ def _sideband_suspect(problem: FitProblem) -> str | None:
 
 
 def diagnose_machine(fmu_path: str, measurement: Measurement, machine: Machine,
-                     input_hz: float, speed: SpeedSettings = SpeedSettings(),
+                     input_hz: float, settings: ProblemSettings = ProblemSettings(),
                      estimator: FaultEstimator | None = None,
-                     baselines: Sequence[MachineRecord] = (), adapter: Adapter | None = None,
-                     feature_mode: str = "lines", fit_gain: bool | None = None,
-                     gain_curve: bool = False) -> MachineReport:
+                     baselines: Sequence[MachineRecord] = (),
+                     adapter: Adapter | None = None) -> MachineReport:
     """Every stage of ``measurement`` diagnosed (module docstring), around the nominal input
     speed ``input_hz``; ``baselines``: records of the machine in a known healthy state, as
     :func:`~pydiag.gear.machine_indicators.machine_record` sees them (made once for a
     batch of records)."""
     estimator = estimator or FaultEstimator()
-    drop = (speed.tacho,) if speed.tacho else ()
-    found = machine_speed(measurement, machine, input_hz, speed)
-    upsampled = upsampled_record(measurement, found, drop)  # once for every shaft and stage
-    judged = _judged(measurement, machine, found, speed, upsampled, baselines)
+    found = machine_speed(measurement, machine, input_hz, settings.tracking)
+    # once for every shaft and stage
+    upsampled = upsampled_record(measurement, found, settings.dropped)
+    judged = _judged(measurement, machine, found, settings.tracking, upsampled, baselines)
     stages = []
     for k, stage in enumerate(machine.stages):
-        problem = stage_problem(fmu_path, measurement, machine, k, found, adapter,
-                                feature_mode, fit_gain, drop, gain_curve=gain_curve,
+        problem = stage_problem(fmu_path, measurement, machine, k, found, settings, adapter,
                                 upsampled=upsampled)
         fit = diagnose(problem, estimator, speed_warning=False)
         stages.append(stage_diagnosis(stage.name, problem, fit, _verdict(judged, k)))
@@ -192,11 +188,9 @@ def _verdict(judged: MachineReport, stage: int) -> StageVerdict | None:
 
 def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Measurement,
                            machine: Machine, input_hz: float,
-                           speed: SpeedSettings = SpeedSettings(),
+                           settings: ProblemSettings = ProblemSettings(),
                            estimator: FaultEstimator | None = None,
-                           baselines: Sequence[MachineRecord] = (),
-                           feature_mode: str = "lines", fit_gain: bool | None = None,
-                           gain_curve: bool | None = None) -> MachineReport:
+                           baselines: Sequence[MachineRecord] = ()) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
@@ -204,11 +198,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     seen from its own shafts (:func:`~pydiag.loop.machine_fit.stage_view`), and judged
     against ``baselines`` as :func:`diagnose_machine` judges."""
     estimator = estimator or FaultEstimator()
-    drop = (speed.tacho,) if speed.tacho else ()
-    found = machine_speed(measurement, machine, input_hz, speed)
-    judged = _judged(measurement, machine, found, speed, None, baselines)
-    problem = machine_problem(fmu_path, model, measurement, machine, found, fit_gain,
-                              feature_mode, drop, gain_curve)
+    found = machine_speed(measurement, machine, input_hz, settings.tracking)
+    judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
+    problem = machine_problem(fmu_path, model, measurement, machine, found, settings)
     fit = fit_machine(problem, model, estimator, start=machine.fit_start())
     facts = problem.facts(fit.parameters)
     stages = []

@@ -8,6 +8,7 @@ import pytest
 from conftest import ROOT, run_cli
 
 from pydiag.gear.machine_file import load_machine
+from pydiag.fit.build import ProblemSettings
 from pydiag.gear.speed import SpeedSettings, estimate_speed
 from pydiag.io.readers import read_measurement
 
@@ -147,6 +148,7 @@ def test_a_stages_class_does_not_hang_on_the_last_bits_of_the_speed(gear_fmu):
     classes = set()
     for shift in (1e-13, -1e-13):
         moved = dataclasses.replace(found, speed_hz=found.speed_hz * (1 + shift))
-        result = diagnose(stage_problem(str(gear_fmu), m, machine, 1, moved, drop=("ch3",)))
+        result = diagnose(stage_problem(str(gear_fmu), m, machine, 1, moved,
+                                        ProblemSettings(speed=SpeedSettings(tacho="ch3"))))
         classes.add((result.fault_mode, result.severity, result.te_severity))
     assert len(classes) == 1 and classes.pop()[2] == "none", classes

@@ -9,6 +9,7 @@ from boxes import MACHINE
 from truth.gearbox import INPUT_HZ, gearbox_record
 
 from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.build import ProblemSettings
 from pydiag.gear.features import KinematicFeaturizer
 from pydiag.gear.machine_indicators import machine_record
 from pydiag.gear.speed import SpeedSettings
@@ -37,7 +38,7 @@ def test_a_stage_is_fitted_at_its_own_shafts_without_the_other_stages_lines(gear
 
 def test_every_stage_diagnosed_and_the_broken_one_judged_changed(gear_fmu):
     result = diagnose_machine(str(gear_fmu), gearbox_record(3, faulty_shaft=2, stage=1),
-                              MACHINE, INPUT_HZ, SpeedSettings("mesh"),
+                              MACHINE, INPUT_HZ, ProblemSettings(speed=SpeedSettings("mesh")),
                               FaultEstimator(**SMALL),
                               baselines=[machine_record(gearbox_record(1), MACHINE,
                                                         SpeedSettings("mesh"), INPUT_HZ)])
