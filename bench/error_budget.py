@@ -80,7 +80,7 @@ from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.residual import RESIDUAL_GROUPS, bin_groups, measured_spectra  # noqa: E402
-from pydiag.loop.stages import machine_speed, stage_problem  # noqa: E402
+from pydiag.diagnose.stages import machine_speed, stage_problem  # noqa: E402
 from pydiag.signal.spectra import Spectrum, local_maxima, whole_periods  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd

@@ -37,7 +37,7 @@ from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare  # noqa: E402
 from pydiag.loop.machine_fit import fit_machine, machine_problem  # noqa: E402
 from pydiag.loop.machine_model import machine_fmu  # noqa: E402
-from pydiag.loop.stages import machine_speed  # noqa: E402
+from pydiag.diagnose.stages import machine_speed  # noqa: E402
 
 NAME = re.compile(r"spur \d+_(\d+)hz_(High|Low)_\d+")
 RATE_HZ = 200_000 / 3

@@ -43,13 +43,13 @@ from pydiag.core.measurement import Measurement  # noqa: E402
 from pydiag.signal.noise import add_white_noise  # noqa: E402
 from pydiag.gear.paper_cases import TABLE1, case  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
-from pydiag.loop.diagnosis import classified  # noqa: E402
+from pydiag.diagnose.diagnosis import classified  # noqa: E402
 from pydiag.fmu.plant import FmuPlant  # noqa: E402
 from pydiag.gear.machine_file import machine_from_dict  # noqa: E402
 from pydiag.loop.discover import default_build_dir  # noqa: E402
 from pydiag.loop.machine_model import machine_fmu  # noqa: E402
-from pydiag.loop.stages import diagnose_machine_model  # noqa: E402
-from pydiag.loop.support import unprefixed  # noqa: E402
+from pydiag.diagnose.stages import diagnose_machine_model  # noqa: E402
+from pydiag.diagnose.support import unprefixed  # noqa: E402
 
 NAMES = ("a_f", "f_f", "f_ate", "f_dte")
 

@@ -62,7 +62,7 @@ from pydiag.fit.build import ProblemSettings  # noqa: E402
 from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
 from pydiag.gear.stage_judge import judge_stages  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.stages import diagnose_machine  # noqa: E402
+from pydiag.diagnose.stages import diagnose_machine  # noqa: E402
 
 NAME = re.compile(r"spur (\d+)_(\d+)hz_(High|Low)_(\d+)")
 RATE_HZ = 200_000 / 3

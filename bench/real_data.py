@@ -39,7 +39,7 @@ from pydiag.gear.speed import SpeedSettings, estimate_speed  # noqa: E402
 from pydiag.gear.tracking import order_track  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
 from pydiag.loop.compare import compare, refit_with_effect  # noqa: E402
-from pydiag.loop.diagnosis import diagnose  # noqa: E402
+from pydiag.diagnose.diagnosis import diagnose  # noqa: E402
 
 OPERATING_POINT = {"n_pinion": 32, "n_gear": 80, "f_pinion_hz": 30.0}  # README of gfd
 SAMPLE_RATE_HZ = 12_900.0  # inferred in that README, not documented

@@ -37,7 +37,7 @@ from pydiag.gear.indicators import INDICATORS, condition_indicators  # noqa: E40
 from pydiag.gear.kinematics import GearKinematics  # noqa: E402
 from pydiag.gear.speed import SpeedSettings  # noqa: E402
 from pydiag.io.readers import read_measurement  # noqa: E402
-from pydiag.loop.diagnosis import diagnose  # noqa: E402
+from pydiag.diagnose.diagnosis import diagnose  # noqa: E402
 
 NAME = re.compile(r"^(?P<condition>[a-z])(?P<speed>\d+)hz(?P<load>\d+)\.", re.IGNORECASE)
 MODEL = ("a_f", "a0", "tooth_contrast")

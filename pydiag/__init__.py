@@ -9,9 +9,10 @@ signal      amplitude spectra, noise floors, local maxima, synthetic noise, feat
 io          measurement files and the output policy for every file pydiag writes
 fmu         FMU archives, descriptions, the plant, the compiled engine, worker isolation
 gear        kinematics, named lines, the paper's features and classes, effect catalogue
-model       adapters (what an FMU is to pydiag) and records simulated from an FMU
+model       adapters (what an FMU is to pydiag), records simulated from it, regression
 fit         Eq. (12), the fit problem, particle swarm, the estimator
-loop        compare, discover, regress, run history, HTML report
+loop        compare, discover, the machine's own model and its loop, run history, report
+diagnose    a fit classified, each fault group tested; every stage of a machine diagnosed
 app         the command line and batch diagnosis
 ==========  ==============================================================================
 """

@@ -12,7 +12,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "pydiag"
 #: The stages, lowest first (the order of pydiag/__init__.py's table).
-STAGES = ("core", "signal", "io", "fmu", "gear", "model", "fit", "loop", "app")
+STAGES = ("core", "signal", "io", "fmu", "gear", "model", "fit", "loop", "diagnose", "app")
 MAX_CLI_LINES = 400
 
 

@@ -5,7 +5,7 @@ With ``indicators`` set to a shaft, each row also holds the condition indicators
 a fleet's records can be trended in one table.
 
 With a machine file of several stages (``batch --machine``), every stage of every record
-is diagnosed (:mod:`pydiag.loop.stages`), against the ``--baseline`` records when given:
+is diagnosed (:mod:`pydiag.diagnose.stages`), against the ``--baseline`` records when given:
 a column group a stage.
 
 Every measurement is one task; inside a task the estimator runs in a single process
@@ -38,8 +38,8 @@ from pydiag.gear.machine_file import load_machine
 from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
-from pydiag.loop.diagnosis import diagnose
-from pydiag.loop.stages import diagnose_machine
+from pydiag.diagnose.diagnosis import diagnose
+from pydiag.diagnose.stages import diagnose_machine
 from pydiag.model.adapter import load_adapter
 
 ROW_COLUMNS = ("measurement", "status", "message", "fault_mode", "severity", "error",
@@ -120,7 +120,7 @@ def _read(task: BatchTask, path: str) -> Measurement:
 
 
 def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
-    """Every stage of a machine's record (:func:`pydiag.loop.stages.diagnose_machine`): a
+    """Every stage of a machine's record (:func:`pydiag.diagnose.stages.diagnose_machine`): a
     column group a stage (``<stage>:fault_mode``, ...); the row's own fault mode is the
     first stage's that is not healthy, its severity and error the highest."""
     result = diagnose_machine(task.fmu, m, load_machine(task.machine), task.input_hz,

@@ -32,7 +32,7 @@ from pydiag.gear.indicators import SHAFTS
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
 from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE
-from pydiag.loop.regress import DEFAULT_RTOL
+from pydiag.model.regress import DEFAULT_RTOL
 
 
 # ---------------------------------------------------------------------- parser

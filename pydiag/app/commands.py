@@ -33,9 +33,9 @@ from pydiag.gear.machine_report import machine_report
 from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
-from pydiag.loop import regress
-from pydiag.loop.diagnosis import Diagnosis, diagnose
-from pydiag.loop.stages import (diagnose_machine, diagnose_machine_model, machine_speed,
+from pydiag.model import regress
+from pydiag.diagnose.diagnosis import Diagnosis, diagnose
+from pydiag.diagnose.stages import (diagnose_machine, diagnose_machine_model, machine_speed,
                                 pair_json, stage_problem)
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement

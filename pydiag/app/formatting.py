@@ -6,11 +6,11 @@ from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.component_judge import ComponentVerdict
 from pydiag.gear.machine_report import MachineReport
-from pydiag.loop.diagnosis import Diagnosis
+from pydiag.diagnose.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.results import Comparison, Status, Suggestion
-from pydiag.loop.regress import RegressionReport
+from pydiag.model.regress import RegressionReport
 
 
 def format_result(result: Diagnosis, truth: dict | None = None) -> str:

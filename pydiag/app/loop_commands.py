@@ -26,7 +26,7 @@ from pydiag.io.outputs import check_output, write_text
 from pydiag.loop import history
 from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
-from pydiag.loop.diagnosis import fit_warnings
+from pydiag.diagnose.diagnosis import fit_warnings
 from pydiag.loop.effect_fit import EFFECT_REFIT, check_transfer_base, with_effect
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.machine_discover import check_effects, discover_machine, validate_machine
@@ -34,7 +34,7 @@ from pydiag.loop.machine_loop import machine_loop
 from pydiag.loop.machine_edits import accept
 from pydiag.loop.machine_fit import compare_machine, machine_problem
 from pydiag.loop.machine_model import MachineModel
-from pydiag.loop.stages import machine_speed
+from pydiag.diagnose.stages import machine_speed
 from pydiag.loop.discover import (as_dict, discover)
 from pydiag.loop.validate import validate
 from pydiag.loop.report import write_report

@@ -65,7 +65,7 @@ SWARM_TOLERANCE = 1e-4
 @dataclass
 class FitResult:
     """Plain-data result of :meth:`FaultEstimator.fit`: the estimate and how it was found
-    (what it means for the machine is :mod:`pydiag.loop.diagnosis`'s)."""
+    (what it means for the machine is :mod:`pydiag.diagnose.diagnosis`'s)."""
 
     parameters: dict[str, float]
     error: float

@@ -24,7 +24,7 @@ which then is the shape of every tooth's stiffness wave, fitted to the real gear
 The parameters fall in two groups, the tooth's (``a_f``, and ``f_f`` when ``a0`` is
 known) and the transmission error's (``f_ate``, ``f_dte``); :func:`healthy` puts one
 group at its healthy values, the model that group's level is judged against
-(:mod:`pydiag.loop.support`).
+(:mod:`pydiag.diagnose.support`).
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ SCALE_NONE = "none: without a baseline no stage is judged"
 
 class StageFit(Protocol):
     """What a stage's report takes of a model's fit of the stage
-    (:class:`pydiag.loop.diagnosis.Diagnosis` is one)."""
+    (:class:`pydiag.diagnose.diagnosis.Diagnosis` is one)."""
 
     fault_mode: str
     severity: str

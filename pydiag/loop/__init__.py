@@ -1,3 +1,3 @@
 """Stage 7: the model-improvement loop: compare a fitted model with a measurement,
-discover the missing effect, check exported FMUs against goldens, keep the run history,
+discover the missing effect, write it into the machine's model, keep the run history,
 render the report."""

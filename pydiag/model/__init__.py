@@ -1,2 +1,2 @@
-"""Stage 5: what an FMU is to pydiag (adapters, the GearDiag defaults) and records made
-from it."""
+"""Stage 5: what an FMU is to pydiag (adapters, the GearDiag defaults), records made from
+it, and its regression check against golden records."""

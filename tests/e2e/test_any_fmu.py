@@ -15,7 +15,7 @@ from fmus import casadi_gear, pythonfmu_gear
 from pydiag.core.errors import AdapterError, PlantError
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import build_problem
-from pydiag.loop.diagnosis import diagnose
+from pydiag.diagnose.diagnosis import diagnose
 from pydiag.fmu.inspect import describe
 from pydiag.fmu.plant import FmuPlant
 from pydiag.io.readers import read_measurement

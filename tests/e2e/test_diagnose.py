@@ -9,7 +9,7 @@ from conftest import NAMES, noisy_measurement, run_cli
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import build_problem
 from pydiag.gear.paper_cases import TABLE1, case
-from pydiag.loop.diagnosis import diagnose
+from pydiag.diagnose.diagnosis import diagnose
 
 
 @pytest.mark.parametrize("number", [3, 6])

@@ -19,7 +19,7 @@ from pydiag.io.readers import read_measurement
 from pydiag.loop.compare import compare
 from pydiag.loop.machine_fit import machine_problem
 from pydiag.loop.machine_model import machine_fmu, machine_model
-from pydiag.loop.stages import machine_speed
+from pydiag.diagnose.stages import machine_speed
 
 ROOT = Path(__file__).resolve().parents[2]
 MODELICA = ROOT / "modelica"

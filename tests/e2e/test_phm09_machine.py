@@ -136,11 +136,11 @@ def test_a_stages_class_does_not_hang_on_the_last_bits_of_the_speed(gear_fmu):
     """The output stage of the 45 Hz healthy record: its fitted transmission error was 0.005
     or 0.28 as the speed moved by 1e-13 either way (the record barely sees it), and its
     class with it; the class is read only from what the record supports
-    (pydiag.loop.support)."""
+    (pydiag.diagnose.support)."""
     import dataclasses
 
-    from pydiag.loop.diagnosis import diagnose
-    from pydiag.loop.stages import machine_speed, stage_problem
+    from pydiag.diagnose.diagnosis import diagnose
+    from pydiag.diagnose.stages import machine_speed, stage_problem
 
     machine = load_machine(MACHINE)
     m = read_measurement(DATA / "spur 1_45hz_Low_1.zip", float(RATE))

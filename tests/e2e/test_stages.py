@@ -1,4 +1,4 @@
-"""diagnose of a two-stage machine, stage by stage (:mod:`pydiag.loop.stages`), on records
+"""diagnose of a two-stage machine, stage by stage (:mod:`pydiag.diagnose.stages`), on records
 of :mod:`truth.gearbox` (written from the shafts' angles, not by the pair model fitted):
 each stage fitted at its own shafts on its own lines, and judged against a healthy
 baseline."""
@@ -13,7 +13,7 @@ from pydiag.fit.build import ProblemSettings
 from pydiag.gear.features import KinematicFeaturizer
 from pydiag.gear.machine_indicators import machine_record
 from pydiag.gear.speed import SpeedSettings
-from pydiag.loop.stages import diagnose_machine, stage_problem
+from pydiag.diagnose.stages import diagnose_machine, stage_problem
 
 SMALL = dict(n_particles=8, iterations=6, polish_evaluations=60)
 

@@ -9,7 +9,7 @@ from truth.gearbox import INPUT_HZ, gearbox_record
 
 from pydiag.gear.speed import SpeedSettings, estimate_speed
 from pydiag.gear.tracking import order_track, track_revolutions, upsampled_record
-from pydiag.loop.stages import stage_speed
+from pydiag.diagnose.stages import stage_speed
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ top of its range (the model's form or range is wrong there)."""
 from types import SimpleNamespace
 
 from pydiag.core.parameters import Parameter
-from pydiag.loop.diagnosis import fit_warnings
+from pydiag.diagnose.diagnosis import fit_warnings
 
 
 def problem(*parameters: Parameter) -> SimpleNamespace:

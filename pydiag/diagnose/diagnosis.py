@@ -13,7 +13,7 @@ from pydiag.fit.estimator import FaultEstimator, FitResult
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.classify import GROUPS, classify, group_level, healthy, tooth_contrast
 from pydiag.gear.conventions import CLASSIFIED_PARAMETERS
-from pydiag.loop.support import GroupSupport, fault_support, unprefixed
+from pydiag.diagnose.support import GroupSupport, fault_support, unprefixed
 
 #: A fit whose relative error (Eq. 12, root-mean-square over channels) reaches this is
 #: not a diagnosis: a model with no lines at all scores about 1.
@@ -46,7 +46,7 @@ class Diagnosis:
     :attr:`explained`); ``tooth_contrast``: |a_f/a0 - 1| when the tooth was estimated;
     ``facts``: what was analysed (speed, periods, gains); ``warnings``: why it may not be
     trusted; ``support``: the test of each group the fit found faulty
-    (:mod:`pydiag.loop.support`): a group the record does not support is classified
+    (:mod:`pydiag.diagnose.support`): a group the record does not support is classified
     healthy."""
 
     fit: FitResult

@@ -9,9 +9,9 @@ import pytest
 from pydiag.fit.estimator import FitResult
 from pydiag.gear.machine_file import load_machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSource
-from pydiag.loop.diagnosis import Diagnosis, fit_warnings
+from pydiag.diagnose.diagnosis import Diagnosis, fit_warnings
 from pydiag.gear.machine_report import MachineReport, stage_report
-from pydiag.loop.stages import stage_speed
+from pydiag.diagnose.stages import stage_speed
 from conftest import ROOT
 
 MACHINE = load_machine(ROOT / "examples" / "phm09_spur.toml")  # 32/96 then 48/80

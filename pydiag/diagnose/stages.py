@@ -7,7 +7,7 @@ found from every mesh or from the tacho, times the shaft's speed ratio); the pai
 the stage's teeth and speed fitted on the stage's kinematic bands, without the other
 stages' mesh harmonics and sidebands that are none of its own lines
 (:class:`~pydiag.gear.features.KinematicFeaturizer`); the fit classified on the paper's
-simulated scale (:mod:`pydiag.loop.diagnosis`).
+simulated scale (:mod:`pydiag.diagnose.diagnosis`).
 
 With baselines, each stage is also judged by the change of its shafts' residual energy
 against them (:mod:`pydiag.gear.stage_judge`): a stage that did not change is
@@ -41,7 +41,7 @@ from pydiag.gear.machine_report import (SCALE_PAPER, MachineReport, StageReport,
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.stage_judge import StageVerdict
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
-from pydiag.loop.diagnosis import Diagnosis, classified, diagnose
+from pydiag.diagnose.diagnosis import Diagnosis, classified, diagnose
 from pydiag.loop.machine_fit import fit_machine, machine_problem, stage_view
 from pydiag.loop.machine_model import MachineModel
 from pydiag.model.adapter import Adapter

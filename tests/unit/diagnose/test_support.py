@@ -1,5 +1,5 @@
 """A fault group is classified only when the record pins it down
-(:mod:`pydiag.loop.support`): a transmission error that an acceleration record barely
+(:mod:`pydiag.diagnose.support`): a transmission error that an acceleration record barely
 sees is read as healthy, one the record shows is kept."""
 
 import dataclasses
@@ -10,8 +10,8 @@ from conftest import NAMES, noisy_measurement
 from pydiag.fit.estimator import FitResult
 from pydiag.fit.build import build_problem
 from pydiag.gear.paper_cases import case
-from pydiag.loop.diagnosis import classified
-from pydiag.loop.support import fault_support
+from pydiag.diagnose.diagnosis import classified
+from pydiag.diagnose.support import fault_support
 
 
 def acc_only(gear_fmu, number: int):

@@ -6,7 +6,7 @@ from conftest import inspected, run_cli
 
 from fmu_build import build_fmu
 from pydiag.fmu.plant import FmuPlant
-from pydiag.loop import regress
+from pydiag.model import regress
 
 GOLDEN = "tests/golden/GearPair.json"
 
