@@ -142,12 +142,16 @@ def alive(pid: int) -> bool:
     return state not in ("Z", "X")
 
 
-#: The tests that take the longest (the loop on the independent simulator, a minute each on
-#: 2 cores), by name, and then their files: collected first, so that under xdist none of
-#: them starts last and runs alone.
-LONGEST_FIRST = ("test_cli_loop_adds", "test_compare_and_discover_find", "test_cli_compare_shows",
-                 "test_compare_with_a_speed_fluctuation", "test_no_hidden_effect",
-                 "test_truth_loop.py", "test_compare_loop.py", "test_phm09_machine.py",
+#: The tests that take the longest (the loops on the independent simulator and on a real
+#: record, up to a minute each on 2 cores), by name, longest first, and then their files:
+#: collected first, so that under xdist none of them starts last and runs alone.
+LONGEST_FIRST = ("test_the_loop_on_a_machine_of_one_stage", "test_the_loop_with_its_defaults",
+                 "test_cli_loop_adds", "test_compare_with_a_speed_fluctuation",
+                 "test_a_fit_written_as_the_machine_files_start", "test_cli_compare_shows",
+                 "test_compare_and_discover_find", "test_hidden_effect_is_the_one_confident",
+                 "test_no_hidden_effect", "test_two_hidden_effects",
+                 "test_compare_fits_the_machines_model", "test_truth_loop.py",
+                 "test_machine_model.py", "test_compare_loop.py", "test_phm09_machine.py",
                  "test_shared_records.py", "test_stages.py")
 
 
