@@ -36,7 +36,7 @@ from pydiag.io.outputs import check_output, write_text
 from pydiag.model import regress
 from pydiag.diagnose.diagnosis import Diagnosis, diagnose
 from pydiag.diagnose.stages import (diagnose_machine, diagnose_machine_model, machine_speed,
-                                pair_json, stage_problem)
+                                    pair_json, stage_problem)
 from pydiag.model.adapter import Adapter, load_adapter
 from pydiag.model.simulate import simulate_measurement
 
