@@ -35,7 +35,7 @@ from pydiag.gear.bearing_lines import DEFECT_LINES, defect_orders
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import (SHAFT_ORDERS, MachineRecord, faster_shafts,
                                            finite_or_none)
-from pydiag.gear.stage_judge import K_SPREAD, MIN_SPREAD_DB, StageVerdict
+from pydiag.gear.stage_judge import K_SPREAD, MIN_SPREAD_DB, StageVerdict, healthy_differences
 
 #: Shaft orders a bearing's line is checked against (each shaft's, up to this order).
 CHECKED_ORDERS = 20
@@ -165,13 +165,13 @@ def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[Machine
     if any(not s.order_halves for b in baselines for s in b.shafts):
         return [ComponentVerdict(c, NOT_JUDGED, reason="a baseline was kept before pydiag "
                                  "read a shaft's orders: keep it again") for c in shafts]
-    diffs = [_ratio_db(h[0][k - 1], h[1][k - 1]) for b in baselines for s in b.shafts
-             for h in s.order_halves.values() for k in _own_orders(machine, s.index)]
-    for i, one in enumerate(baselines):
-        for other in baselines[i + 1:]:
-            diffs += [_ratio_db(a.orders[c][k - 1], o.orders[c][k - 1])
-                      for a, o in zip(one.shafts, other.shafts) for c in a.orders
-                      if c in o.orders for k in _own_orders(machine, a.index)]
+    diffs = healthy_differences(
+        baselines, lambda rec: rec.shafts,
+        lambda s: {(c, k): (h[0][k - 1], h[1][k - 1]) for c, h in s.order_halves.items()
+                   for k in _own_orders(machine, s.index)},
+        lambda s: {(c, k): o[k - 1] for c, o in s.orders.items()
+                   for k in _own_orders(machine, s.index)},
+        _ratio_db)
     threshold = K_SPREAD * _rms(diffs)
     out = []
     for c, s in zip(shafts, record.shafts):
@@ -217,13 +217,13 @@ def _bearings(machine: Machine, record: MachineRecord, baselines: Sequence[Machi
                "a baseline was kept before pydiag read the bearings' lines: keep it again")
         return [ComponentVerdict(c, NOT_JUDGED, reason=why) for c in bearings]
     told = _told(machine)
-    diffs = [h[0] - h[1] for b in baselines for br in b.bearings
-             for ch, t in br.halves_db.items() for d, h in t.items() if not told[br.bearing][d]]
-    for i, one in enumerate(baselines):
-        for other in baselines[i + 1:]:
-            diffs += [a.levels_db[ch][d] - o.levels_db[ch][d]
-                      for a, o in zip(one.bearings, other.bearings) for ch in a.levels_db
-                      if ch in o.levels_db for d in DEFECT_LINES if not told[a.bearing][d]]
+    diffs = healthy_differences(
+        baselines, lambda rec: rec.bearings,
+        lambda br: {(c, d): h for c, t in br.halves_db.items() for d, h in t.items()
+                    if not told[br.bearing][d]},
+        lambda br: {(c, d): t[d] for c, t in br.levels_db.items() for d in DEFECT_LINES
+                    if not told[br.bearing][d]},
+        lambda a, b: a - b)
     threshold = K_SPREAD * _rms(diffs)
     out = []
     for i, (c, br) in enumerate(zip(bearings, record.bearings)):

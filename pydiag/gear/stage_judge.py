@@ -117,19 +117,21 @@ def at_speed(baselines: Sequence[MachineRecord], nominal_hz: float) -> list[Mach
             if abs(b.speed.speed_hz / nominal_hz - 1) <= BASELINE_SPEED_SHARE]
 
 
-def _differences(baselines: list[MachineRecord],
-                 halves: Callable[[ShaftRecord], dict[str, tuple[float, float]]],
-                 whole: Callable[[ShaftRecord], dict[str, float]],
-                 difference: Callable[[float, float], float]) -> list[float]:
-    """How one healthy record differs from another, by a shaft's measure: each baseline's
-    halves (``halves``) against each other, and with several baselines each pair's
-    whole records (``whole``), every shaft and channel."""
-    diffs = [difference(a, b) for rec in baselines for shaft in rec.shafts
-             for a, b in halves(shaft).values()]
+def healthy_differences(baselines: Sequence[MachineRecord],
+                        parts: Callable[[MachineRecord], Sequence],
+                        halves: Callable[[object], dict[object, tuple[float, float]]],
+                        whole: Callable[[object], dict[object, float]],
+                        difference: Callable[[float, float], float]) -> list[float]:
+    """How one healthy record differs from another, by a measure of each of a record's
+    ``parts`` (its shafts, its bearings): each baseline's halves (``halves``, keyed by
+    channel and what is measured) against each other, and with several baselines each
+    pair's whole records (``whole``, keyed alike), every part and key both have."""
+    diffs = [difference(a, b) for rec in baselines for part in parts(rec)
+             for a, b in halves(part).values()]
     for i, first in enumerate(baselines):
         for second in baselines[i + 1:]:
-            for s1, s2 in zip(first.shafts, second.shafts):
-                one, other = whole(s1), whole(s2)
+            for p1, p2 in zip(parts(first), parts(second)):
+                one, other = whole(p1), whole(p2)
                 diffs += [difference(one[c], other[c]) for c in one if c in other]
     return diffs
 
@@ -142,8 +144,8 @@ def healthy_spread_db(baselines: list[MachineRecord]) -> float:
     """The RMS difference in residual energy (dB) between two healthy records of the
     machine, estimated from the baselines' halves and, with several, from each pair of
     baselines (module docstring)."""
-    return _rms(_differences(baselines, lambda s: s.halves, lambda s: s.residual_energy,
-                             _db), MIN_SPREAD_DB)
+    return _rms(healthy_differences(baselines, lambda rec: rec.shafts, lambda s: s.halves,
+                                    lambda s: s.residual_energy, _db), MIN_SPREAD_DB)
 
 
 def healthy_fm4_spread(baselines: list[MachineRecord]) -> float | None:
@@ -152,9 +154,9 @@ def healthy_fm4_spread(baselines: list[MachineRecord]) -> float | None:
     its halves' FM4 or any is not a number."""
     if any(set(s.fm4_halves) != set(s.residual_energy) for b in baselines for s in b.shafts):
         return None
-    diffs = _differences(baselines, lambda s: s.fm4_halves,
-                         lambda s: {c: t["fm4"] for c, t in s.indicators.items()},
-                         lambda a, b: a - b)
+    diffs = healthy_differences(baselines, lambda rec: rec.shafts, lambda s: s.fm4_halves,
+                                lambda s: {c: t["fm4"] for c, t in s.indicators.items()},
+                                lambda a, b: a - b)
     if not diffs or not np.all(np.isfinite(diffs)):
         return None
     return _rms(diffs, MIN_FM4_SPREAD)
