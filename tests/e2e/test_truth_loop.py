@@ -234,13 +234,13 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
             [(s.effect, round(s.score, 2), s.message) for s in c.suggested_effects]
 
 
-#: A hidden effect's seeds in make test-slow only (make test stays under its 8 minutes):
-#: the ripple's try simulates its model over the whole record at every evaluation, and
-#: polishes every base parameter free with it (effect_fit.free_polish): 25-40 s a seed,
-#: the costliest of the catalogue's; in make test a ripple is confirmed on seed 5 beside a
-#: runout, by the machine's own model
+#: A hidden effect's seeds in make test-slow only (make test stays under its 8 minutes;
+#: their costs: bench/CHANGELOG.md, 2026-11-28): the ripple's try simulates its model over
+#: the whole record at every evaluation, and polishes every base parameter free with it
+#: (effect_fit.free_polish), the costliest of the catalogue's; in make test a ripple is
+#: confirmed on seed 5 beside a runout, by the machine's own model
 #: (test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple). The housing
-#: mode's and the outer race's second and third (8-19 s each) are the next costliest.
+#: mode's and the outer race's second and third are the next costliest.
 SLOW_SEEDS = {"speed_fluctuation": SEEDS, "housing_sensor": SEEDS[1:],
               "bearing_outer_race": SEEDS[1:]}
 
