@@ -39,12 +39,13 @@ from pydiag.core.parameters import Parameter, fmu_values
 from pydiag.fit.gain import apply_curve, curve_basis, curve_nodes, fitted_curve, fitted_gain
 from pydiag.fit.objective import spectral_residuals
 from pydiag.fmu.description import read_model_description
-from pydiag.fmu.periodic import simulate_periodic
+from pydiag.fmu.periodic import simulate_period, simulate_periodic
 from pydiag.fmu.plant import FmuPlant, PlantSpec
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.model.adapter import Adapter
 from pydiag.signal.features import Featurizer
+from pydiag.signal.ripple import OVERSAMPLE, SpeedRipple
 from pydiag.signal.spectra import Spectrum, whole_periods
 from pydiag.signal.transfer import HousingMode
 
@@ -79,6 +80,9 @@ class FitProblem:
         gain_curve: the channels whose fitted gain (with ``fit_gain``) is a curve over
             frequency with a node at every mesh harmonic (module docstring); the others'
             is one number
+        ripple: a speed ripple the model has (its depth and frequency among the FMU's
+            values), read from the model's periodic response without it
+            (:mod:`pydiag.signal.ripple`) instead of simulated over the whole record
     """
 
     spec: PlantSpec
@@ -97,6 +101,7 @@ class FitProblem:
     fixed_gains: dict[str, float] = field(default_factory=dict)
     transfer: tuple[HousingMode, ...] = ()
     gain_curve: frozenset[str] = frozenset()
+    ripple: SpeedRipple | None = None
 
     @property
     def lows(self) -> np.ndarray:
@@ -144,9 +149,11 @@ class FitProblem:
     def _simulate(self, plant: FmuPlant, x: np.ndarray, duration_s: float) -> np.ndarray:
         values = {p.fmu_variable: p.fmu_value(v) for p, v in zip(self.parameters, x)}
         paths = {v for path in self.transfer for v in path.variables}
-        y = simulate_periodic(plant, {k: v for k, v in values.items() if k not in paths},
-                              duration_s, self.warmup_s,
-                              None if self.kinematics is None else self.kinematics.period_s)
+        fmu = {k: v for k, v in values.items() if k not in paths}
+        y = self._rippled(plant, fmu, duration_s) if self.ripple is not None else None
+        if y is None:
+            y = simulate_periodic(plant, fmu, duration_s, self.warmup_s,
+                                  None if self.kinematics is None else self.kinematics.period_s)
         if self.transfer:
             y = np.array(y, dtype=float)
             at = {**self.fixed_values, **values}
@@ -154,6 +161,25 @@ class FitProblem:
                 i = self.spec.sensors.index(path.output)
                 y[i] = path.apply(y[i], self.spec.sample_rate_hz, at)
         return np.asarray(self.scales)[:, None] * y
+
+    def _rippled(self, plant: FmuPlant, values: dict[str, float], duration_s: float
+                 ) -> np.ndarray | None:
+        """The model's outputs with its :attr:`ripple`, read from one period of its
+        response without it; None when that response does not repeat (the whole record
+        is then simulated with the ripple in the model)."""
+        if self.kinematics is None:
+            return None
+        ripple = self.ripple
+        at = {name: float(plant.variables[name].start)
+              for name in (ripple.depth_variable, ripple.freq_variable)}
+        at.update({k: v for k, v in {**plant.fixed_values, **values}.items() if k in at})
+        period = simulate_period(plant, {**values, ripple.depth_variable: 0.0},
+                                 self.warmup_s, self.kinematics.period_s, OVERSAMPLE)
+        if period is None:
+            return None
+        fs = self.spec.sample_rate_hz
+        return ripple.apply(period, fs * OVERSAMPLE, self.spec.sensors,
+                            int(round(duration_s * fs)), fs, self.warmup_s, at)
 
     def _clean(self, channel: str) -> np.ndarray:
         ref = self.reference[channel]
@@ -261,12 +287,14 @@ class FitProblem:
                fixed_values: dict[str, float] | None = None,
                featurizer: Featurizer | None = None,
                fixed_gains: dict[str, float] | None = None,
-               transfer: tuple[HousingMode, ...] | None = None) -> "FitProblem":
+               transfer: tuple[HousingMode, ...] | None = None,
+               ripple: SpeedRipple | None = None) -> "FitProblem":
         """The same record, adapter and settings with another FMU (an effect's model, which
         has every variable of this one), other parameters, more fixed values (in FMU
         variable names), another featurizer (the record's features computed again) or
         more channel gains held (:attr:`fixed_gains`), other transfer paths (to the
-        sensors: their variables are not the FMU's). Nothing is simulated, and the FMU
+        sensors: their variables are not the FMU's), a speed ripple (:attr:`ripple`, kept
+        when None). Nothing is simulated, and the FMU
         is not opened: its model description is read (once a file) to check that it has
         the variables set."""
         spec = self.spec if fmu_path is None else dataclasses.replace(self.spec,
@@ -293,7 +321,7 @@ class FitProblem:
                                    fixed_values=fixed, featurizer=featurizer or self.featurizer,
                                    reference=reference,
                                    fixed_gains={**self.fixed_gains, **(fixed_gains or {})},
-                                   transfer=transfer)
+                                   transfer=transfer, ripple=ripple or self.ripple)
 
 
 def _check_variables(fmu_path: str, names: list[str]) -> None:

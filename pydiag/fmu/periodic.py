@@ -40,15 +40,28 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     """
     fs = plant.sample_rate_hz
     total = int(round(duration_s * fs))
-    if period_s is not None:
-        per = period_s * fs
-        n = int(round(per))
-        if n > 1 and abs(per - n) <= 1e-6 * per and total > 3 * n:
-            y = plant.simulate_periods(values, n, warmup_s, STATE_TOLERANCE)
-            if y.shape[1] == n:
-                return np.tile(y, (1, -(-total // n)))[:, :total]
-            first, last = y[:, :n], y[:, n:2 * n]
-            peak = np.max(np.abs(last), axis=1)
-            if np.all(np.max(np.abs(last - first), axis=1) <= PERIODIC_TOLERANCE * peak):
-                return np.tile(last, (1, -(-total // n)))[:, :total]
+    if period_s is not None and total > 3 * period_s * fs:
+        y = simulate_period(plant, values, warmup_s, period_s)
+        if y is not None:
+            return np.tile(y, (1, -(-total // y.shape[1])))[:, :total]
     return plant.simulate(values, duration_s, warmup_s)
+
+
+def simulate_period(plant: FmuPlant, values: dict[str, float], warmup_s: float,
+                    period_s: float, oversample: int = 1) -> np.ndarray | None:
+    """One period of the model's response from the warm-up on, sampled at ``oversample``
+    times the plant's rate (:func:`simulate_periodic`'s tests of a response that repeats),
+    or None when the response does not repeat in ``period_s`` or the period is no whole
+    number of samples."""
+    per = period_s * plant.sample_rate_hz * oversample
+    n = int(round(per))
+    if n <= 1 or abs(per - n) > 1e-6 * per:
+        return None
+    y = plant.simulate_periods(values, n, warmup_s, STATE_TOLERANCE, oversample)
+    if y.shape[1] == n:
+        return y
+    first, last = y[:, :n], y[:, n:2 * n]
+    peak = np.max(np.abs(last), axis=1)
+    if np.all(np.max(np.abs(last - first), axis=1) <= PERIODIC_TOLERANCE * peak):
+        return last
+    return None

@@ -192,7 +192,8 @@ class FmuPlant:
                             int(round(duration_s * self.sample_rate_hz)))
 
     def simulate_periods(self, parameters: dict[str, float], period_samples: int,
-                         start_s: float, state_tolerance: float) -> np.ndarray:
+                         start_s: float, state_tolerance: float,
+                         oversample: int = 1) -> np.ndarray:
         """Sensor signals from ``start_s`` over two periods of the model's forcing
         (``period_samples`` each), shape (n_sensors, 2 * period_samples); or over one,
         shape (n_sensors, period_samples), when the native engine finds that the response
@@ -200,32 +201,39 @@ class FmuPlant:
         derivatives and outputs the same at the same state a period later, to within
         ``state_tolerance`` of their ranges (:meth:`pydiag.fmu.native_engine.
         NativeMeRunner.run`); half the simulation is saved. fmpy gives no states: always
-        two periods."""
+        two periods. ``oversample``: samples at that many times the plant's rate (a period
+        of ``period_samples`` of them), for a signal read between its samples."""
         if period_samples < 2:
             raise PlantError(f"a period needs at least two samples, got {period_samples}")
-        return self._cached(parameters, int(round(start_s * self.sample_rate_hz)),
-                            2 * period_samples, (period_samples, state_tolerance))
+        rate = self.sample_rate_hz * oversample
+        return self._cached(parameters, int(round(start_s * rate)), 2 * period_samples,
+                            (period_samples, state_tolerance), rate)
 
     def _cached(self, parameters: dict[str, float], first: int, n: int,
-                check: tuple[int, float] = (0, 0.0)) -> np.ndarray:
+                check: tuple[int, float] = (0, 0.0), rate_hz: float | None = None
+                ) -> np.ndarray:
         """:meth:`_simulate`, or the last run's signals again when it had these values."""
         values = {**self.fixed_values, **parameters}
         self._check_settable(values)
-        key = (tuple(sorted(values.items())), first, n, check)
+        rate_hz = rate_hz or self.sample_rate_hz
+        key = (tuple(sorted(values.items())), first, n, check, rate_hz)
         if self._last is not None and self._last[0] == key:
             return self._last[1].copy()
-        y = self._simulate(values, first, n, check)
+        y = self._simulate(values, first, n, check, rate_hz)
         self._last = (key, y.copy())
         return y
 
     def _simulate(self, values: dict[str, float], first: int, n: int,
-                  check: tuple[int, float] = (0, 0.0)) -> np.ndarray:
-        """Signals at samples first..first+n-1; with a ``check`` (period in samples,
-        state tolerance), the native engine may return the first period alone."""
-        stop = (first + n) / self.sample_rate_hz
+                  check: tuple[int, float] = (0, 0.0), rate_hz: float | None = None
+                  ) -> np.ndarray:
+        """Signals at samples first..first+n-1 at ``rate_hz`` (default the plant's); with a
+        ``check`` (period in samples, state tolerance), the native engine may return the
+        first period alone."""
+        rate_hz = rate_hz or self.sample_rate_hz
+        stop = (first + n) / rate_hz
         if self._native is not None:
             try:
-                return self._simulate_native(values, first, n, check)
+                return self._simulate_native(values, first, n, check, rate_hz)
             except native_engine.NeedsEvents as err:
                 if self._engine_requested == "native":
                     raise PlantError(f"{self.fmu_path.name}: {err}; the native engine does not "
@@ -234,7 +242,7 @@ class FmuPlant:
         if not self._fresh:
             self._instance.reset()
         self._fresh = False
-        step = 1.0 / (self.sample_rate_hz * self.substeps)
+        step = 1.0 / (rate_hz * self.substeps)
         try:
             result = fmpy.simulate_fmu(
                 self._unzipdir, validate=False, start_time=0.0, stop_time=stop,
@@ -269,13 +277,12 @@ class FmuPlant:
                              f"with {values}: diverged{cs}")
 
     def _simulate_native(self, values: dict[str, float], first: int, n: int,
-                         check: tuple[int, float]) -> np.ndarray:
+                         check: tuple[int, float], rate_hz: float) -> np.ndarray:
         if not self._fresh:
             self._instance.reset()
         self._fresh = False
         try:
-            y = self._native.run(values, first / self.sample_rate_hz, 1.0 / self.sample_rate_hz, n,
-                                 *check)
+            y = self._native.run(values, first / rate_hz, 1.0 / rate_hz, n, *check)
         except native_engine.NeedsEvents:
             raise
         except Exception as err:

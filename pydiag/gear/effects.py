@@ -19,6 +19,7 @@ from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPP
                                     ripple_hint, second_pinion_tooth, shaft_swing,
                                     stiffness_shape, tooth_hint)
 from pydiag.gear.kinematic_map import SHAFT_ORDERS
+from pydiag.signal.ripple import SpeedRipple
 from pydiag.signal.transfer import HousingMode
 
 
@@ -82,7 +83,8 @@ EFFECTS = {e.key: e for e in (
     Effect("speed_fluctuation", "GearDiag.Effects.SpeedFluctuation",
            "the shafts' speed fluctuates (phase modulation of every line)",
            (Parameter("ds", 0.0, 0.05), Parameter("f_speed", 0.5, MAX_RIPPLE_HZ)),
-           load_fluctuation, ripple_hint("f_speed"), synchronous=False, reshapes_base=True),
+           load_fluctuation, ripple_hint("f_speed"), synchronous=False, reshapes_base=True,
+           ripple=SpeedRipple("ds", "f_speed")),
     # a torsional swing at each shaft's own speed (a misaligned coupling, a bent shaft): the
     # mesh's phase modulated once a turn of either shaft, synchronous with the pair. Deep
     # (the gear's swing is Ng times deeper in the mesh's phase), so far from affine, and it

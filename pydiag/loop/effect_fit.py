@@ -85,7 +85,7 @@ def with_effect(problem: FitProblem, base: Comparison, effect: Effect,
     own = tuple(p for p in effect_parameters(problem, base, effect) if p.name not in names)
     return problem.derive(fmu_path=effect_fmu, parameters=problem.parameters + own,
                           fixed_values=effect.values_from(problem.kinematics),
-                          transfer=_transfer(problem, effect))
+                          transfer=_transfer(problem, effect), ripple=effect.ripple)
 
 
 def _transfer(problem: FitProblem, effect: Effect) -> tuple[HousingMode, ...]:
@@ -114,14 +114,14 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     transfer = _transfer(problem, effect)
     held = problem.derive(fmu_path=effect_fmu, parameters=own, featurizer=featurizer,
                           fixed_values={**problem.fmu_values(base.parameters), **machine},
-                          transfer=transfer)
+                          transfer=transfer, ripple=effect.ripple)
     if not effect.reshapes_base:
         return held, (fit_affine(held).values if effect.affine else estimator.fit(held).parameters)
     fitted = estimator.replace(polish_starts=RESHAPE_STARTS, polish_evaluations=max(
         1, estimator.polish_evaluations // (2 * RESHAPE_STARTS))).fit(held).parameters
     names = {p.name for p in own}
     free = problem.derive(fmu_path=effect_fmu, featurizer=featurizer, fixed_values=machine,
-                          transfer=transfer,
+                          transfer=transfer, ripple=effect.ripple,
                           parameters=tuple(p for p in problem.parameters
                                            if p.name not in names) + own)
     polish = free_polish(estimator, len(free.parameters))

@@ -59,12 +59,12 @@ def machine_problem(fmu_path: str | Path, model: MachineModel, measurement: Meas
         housing = {o.name for o in model.outputs if o.quantity == "acc"}
         gain_curve = [s.channel for s in adapter.sensors if s.variable in housing]
     parameters = model.parameters(fit_gain, {s.variable for s in adapter.sensors})
-    return build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
-                         fixed_values=model.fixed_values,
-                         kinematics=machine.model_kinematics(speed.speed_hz),
-                         feature_mode=settings.feature_mode, fit_gain=fit_gain,
-                         speed_estimate=speed,
-                         gain_curve=gain_curve)
+    problem = build_problem(str(fmu_path), tracked, adapter, parameters=parameters,
+                            fixed_values=model.fixed_values,
+                            kinematics=machine.model_kinematics(speed.speed_hz),
+                            feature_mode=settings.feature_mode, fit_gain=fit_gain,
+                            speed_estimate=speed, gain_curve=gain_curve)
+    return problem.derive(ripple=model.ripple) if model.ripple is not None else problem
 
 
 def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,

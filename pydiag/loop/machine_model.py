@@ -60,6 +60,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
+from pydiag.signal.ripple import SpeedRipple
 
 #: The model's speed parameter: the input shaft's, Hz.
 SPEED_PARAMETER = "f_input"
@@ -121,6 +122,8 @@ class MachineModel:
     fixed_values: dict[str, float] = field(default_factory=dict)
     # those of the effect parameters the outputs are affine in (an affine effect's)
     affine_parameters: frozenset[str] = frozenset()
+    # a speed ripple the model has, read from its periodic response (stage_effect)
+    ripple: SpeedRipple | None = None
 
     def parameters(self, with_healthy_tooth: bool, outputs: set[str]
                    ) -> tuple[Parameter, ...]:
@@ -341,9 +344,12 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
               "  // Written by pydiag from a machine file (pydiag/loop/machine_model.py).\n"
               + body + f"\nend {name};\n")
     first = machine.stages[0]
+    ripples = [stage_effect(EFFECTS[e.key], stages[e.stage], tuple(outputs),
+                            len(stages) == 1).ripple for e in machine.effects]
     return MachineModel(name, source, stages, tuple(outputs),
                         (first.pinion_teeth, first.gear_teeth),
-                        tuple(phases) + tuple(effect_parameters), fixed, frozenset(affine))
+                        tuple(phases) + tuple(effect_parameters), fixed, frozenset(affine),
+                        next((r for r in ripples if r is not None), None))
 
 
 def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
@@ -372,15 +378,25 @@ def _free_start(effect: Effect, instance: str, top_hz: float) -> dict:
     return _prefixed(instance, effect.free_start(top_hz))
 
 
-def stage_effect(effect: Effect, instance: str, outputs: tuple[SensorOutput, ...]) -> Effect:
+def stage_effect(effect: Effect, instance: str, outputs: tuple[SensorOutput, ...],
+                 alone: bool = False) -> Effect:
     """``effect`` as the stage ``instance`` of a machine's model has it: its parameters, and
     the values its hint, the kinematics and its free start give, named
-    ``<instance>.<name>``; the outputs it changes, the sensors' that measure them."""
+    ``<instance>.<name>``; the outputs it changes, the sensors' that measure them. A speed
+    ripple (``Effect.ripple``) is read from the model's periodic response only on a stage
+    ``alone`` in its machine, where it is the whole model's; on a stage among others its
+    model ripples that stage alone, and is simulated whole."""
     def renamed(p: Parameter) -> Parameter:
         return dataclasses.replace(p, name=f"{instance}.{p.name}",
                                    variable=f"{instance}.{p.fmu_variable}")
+    ripple = None
+    if effect.ripple is not None and alone:
+        ripple = dataclasses.replace(
+            effect.ripple, depth_variable=f"{instance}.{effect.ripple.depth_variable}",
+            freq_variable=f"{instance}.{effect.ripple.freq_variable}",
+            accelerations=tuple(o.name for o in outputs if o.quantity == "acc"))
     return dataclasses.replace(
-        effect, parameters=tuple(renamed(p) for p in effect.parameters),
+        effect, parameters=tuple(renamed(p) for p in effect.parameters), ripple=ripple,
         hint=None if effect.hint is None else functools.partial(_hint, effect, instance),
         machine_values=None if effect.machine_values is None else
         functools.partial(_machine_values, effect, instance),
@@ -393,5 +409,5 @@ def stage_effect(effect: Effect, instance: str, outputs: tuple[SensorOutput, ...
 def stage_effects(model: MachineModel, stage: int) -> dict[str, Effect]:
     """The catalogue as stage ``stage`` of ``model`` has it: the effects a stage can have
     (:func:`on_a_stage`), named for it (:func:`stage_effect`)."""
-    return {key: stage_effect(e, model.stages[stage], model.outputs)
+    return {key: stage_effect(e, model.stages[stage], model.outputs, len(model.stages) == 1)
             for key, e in EFFECTS.items() if on_a_stage(e)}

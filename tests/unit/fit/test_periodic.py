@@ -20,7 +20,8 @@ class Plant:
         self.durations = []
         self.states_return = states_return
 
-    def simulate_periods(self, values, period_samples, start_s, state_tolerance):
+    def simulate_periods(self, values, period_samples, start_s, state_tolerance, oversample=1):
+        assert oversample == 1
         periods = 1 if self.states_return else 2
         return self.simulate(values, periods * period_samples / RATE_HZ, start_s)
 
