@@ -157,7 +157,8 @@ def shared_halves(problem: FitProblem, base: Comparison, keys: list[str],
 def discovery_cost(effect: Effect) -> int:
     """How long an effect's held-out fit takes, in rough units, so the longest start first
     and the short ones fill the cores at the end: one that is not synchronous is simulated
-    over the whole record, the others over one period (twice the weight), one that
+    over the whole record, the others over one period (twice the weight; a speed ripple,
+    read from one period, is weighed so still: its polish frees the base), one that
     reshapes the base is polished with the base parameters free as well, and one with a
     free start polished so twice."""
     return (2 * (not effect.synchronous) + effect.reshapes_base

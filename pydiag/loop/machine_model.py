@@ -24,7 +24,9 @@ model (:func:`pydiag.loop.compose.compose` on :data:`~pydiag.loop.compose.MESH`,
 inside the machine's), one of the base model's own parameters frees them; their parameters
 are fitted as ``<stage>.<name>``, after the stages
 (:func:`pydiag.loop.machine_fit.fit_machine`). A ripple's lines need not repeat with the
-machine (the model is then simulated whole, not one period repeated); an effect that
+machine: a torque ripple's model is simulated whole, not one period repeated, and so is a
+speed ripple's on a stage among others; a machine of one stage reads a speed ripple from
+one period of its response (:func:`stage_effect`, :mod:`pydiag.signal.ripple`). An effect that
 needs a component the stage does not describe (a bearing's geometry, another shaft's
 ratio) or that is a sensor's path (the housing) is not a stage's in this model yet. The
 catalogue as a stage has it (its parameters named for the stage) is

@@ -184,11 +184,11 @@ def assert_discovered_first(found, effect):
     assert np.isfinite(found[0].held_out.delta_bic) and found[0].held_out.delta_bic < 0
 
 
-#: Hidden effects whose discovery (every catalogue effect tried held out, the ripples'
-#: simulated whole) runs in make test too, one of the spectrum's and one of the envelope's;
+#: Hidden effects whose discovery (every catalogue effect tried held out, a torque
+#: ripple's simulated whole) runs in make test too, one of the spectrum's and one of the envelope's;
 #: the others' in make test-slow (make test stays under its budget), their first seed
 #: validated in make test as their others are (below; the outer race's from the command
-#: line). The speed fluctuation's refit in make test-slow frees the base it bent; the
+#: line). The speed fluctuation's refit frees the base it bent (below); the
 #: housing mode's discovery (49 s, the costliest after the loop's since the loop tries
 #: every synchronous effect) has its record fitted with a gain curve in make test too.
 DISCOVERED_IN_MAKE_TEST = ("gear_tooth_fault", "bearing_inner_race")
@@ -235,14 +235,10 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
 
 
 #: A hidden effect's seeds in make test-slow only (make test stays under its 8 minutes;
-#: their costs: bench/CHANGELOG.md, 2026-11-28): the ripple's try simulates its model over
-#: the whole record at every evaluation, and polishes every base parameter free with it
-#: (effect_fit.free_polish), the costliest of the catalogue's; in make test a ripple is
-#: confirmed on seed 5 beside a runout, by the machine's own model
-#: (test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple). The housing
-#: mode's and the outer race's second and third are the next costliest.
-SLOW_SEEDS = {"speed_fluctuation": SEEDS, "housing_sensor": SEEDS[1:],
-              "bearing_outer_race": SEEDS[1:]}
+#: their costs: bench/CHANGELOG.md, 2026-11-28): the housing mode's and the outer race's
+#: second and third, the costliest of the catalogue's now that a speed ripple is read from
+#: one period of its model (12-14 s a seed; simulated whole, 29-48 s).
+SLOW_SEEDS = {"housing_sensor": SEEDS[1:], "bearing_outer_race": SEEDS[1:]}
 
 
 def _seeded(effect: str, seed: int):
@@ -392,17 +388,14 @@ def test_a_strong_torque_ripple_is_named_with_its_swing_and_its_form(gear_fmu, e
     assert top.confident or "form" in top.message, top.message
 
 
-@pytest.mark.slow
 def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth_records,
                                                                  effect_fmu_of):
     """The base fit of the ripple's record, without the effect, is bent (the faulty
     tooth's d_f and f_f near 0 to make up for the lines the speed fluctuation moved);
     compare with the effect (``compare --effect``) frees the base parameters with it and
-    explains the record. In make test-slow (35-50 s: the ripple's model is simulated whole
-    at every step), as is the ripple's discovery held out with the base freed the same
-    way (test_compare_and_discover_find_the_hidden_effect); make test ranks a torque
-    ripple first on a record of the catalogue's own ripple model
-    (tests/e2e/test_compare_loop.py: plumbing, not diagnosis)."""
+    explains the record (6 s; 35-50 s while the ripple's model was simulated whole at
+    every step). The ripple's discovery held out with the base freed the same way
+    (test_compare_and_discover_find_the_hidden_effect) is in make test-slow."""
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["speed_fluctuation"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                             operating_point={"bearing": BEARING})
