@@ -45,7 +45,7 @@ from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.model.adapter import Adapter
 from pydiag.signal.features import Featurizer
-from pydiag.signal.ripple import OVERSAMPLE, SpeedRipple
+from pydiag.signal.ripple import OVERSAMPLE, Ripple
 from pydiag.signal.spectra import Spectrum, whole_periods
 from pydiag.signal.transfer import HousingMode
 
@@ -80,8 +80,8 @@ class FitProblem:
         gain_curve: the channels whose fitted gain (with ``fit_gain``) is a curve over
             frequency with a node at every mesh harmonic (module docstring); the others'
             is one number
-        ripple: a speed ripple the model has (its depth and frequency among the FMU's
-            values), read from the model's periodic response without it
+        ripple: a speed or torque ripple the model has (its size and frequency among the
+            FMU's values), read from the model's periodic response without it
             (:mod:`pydiag.signal.ripple`) instead of simulated over the whole record
     """
 
@@ -101,7 +101,7 @@ class FitProblem:
     fixed_gains: dict[str, float] = field(default_factory=dict)
     transfer: tuple[HousingMode, ...] = ()
     gain_curve: frozenset[str] = frozenset()
-    ripple: SpeedRipple | None = None
+    ripple: Ripple | None = None
 
     @property
     def lows(self) -> np.ndarray:
@@ -164,22 +164,18 @@ class FitProblem:
 
     def _rippled(self, plant: FmuPlant, values: dict[str, float], duration_s: float
                  ) -> np.ndarray | None:
-        """The model's outputs with its :attr:`ripple`, read from one period of its
-        response without it; None when that response does not repeat (the whole record
-        is then simulated with the ripple in the model)."""
+        """The model's outputs with its :attr:`ripple`, read from periods of its response
+        without it; None when that response does not repeat (the whole record is then
+        simulated with the ripple in the model)."""
         if self.kinematics is None:
             return None
         ripple = self.ripple
-        at = {name: float(plant.variables[name].start)
-              for name in (ripple.depth_variable, ripple.freq_variable)}
+        at = {name: float(plant.variables[name].start) for name in ripple.variables}
         at.update({k: v for k, v in {**plant.fixed_values, **values}.items() if k in at})
-        period = simulate_period(plant, {**values, ripple.depth_variable: 0.0},
-                                 self.warmup_s, self.kinematics.period_s, OVERSAMPLE)
-        if period is None:
-            return None
         fs = self.spec.sample_rate_hz
-        return ripple.apply(period, fs * OVERSAMPLE, self.spec.sensors,
-                            int(round(duration_s * fs)), fs, self.warmup_s, at)
+        return ripple.read(lambda changes: simulate_period(
+            plant, {**values, **changes}, self.warmup_s, self.kinematics.period_s, OVERSAMPLE),
+            at, self.spec.sensors, int(round(duration_s * fs)), fs, self.warmup_s)
 
     def _clean(self, channel: str) -> np.ndarray:
         ref = self.reference[channel]
@@ -288,12 +284,12 @@ class FitProblem:
                featurizer: Featurizer | None = None,
                fixed_gains: dict[str, float] | None = None,
                transfer: tuple[HousingMode, ...] | None = None,
-               ripple: SpeedRipple | None = None) -> "FitProblem":
+               ripple: Ripple | None = None) -> "FitProblem":
         """The same record, adapter and settings with another FMU (an effect's model, which
         has every variable of this one), other parameters, more fixed values (in FMU
         variable names), another featurizer (the record's features computed again) or
         more channel gains held (:attr:`fixed_gains`), other transfer paths (to the
-        sensors: their variables are not the FMU's), a speed ripple (:attr:`ripple`, kept
+        sensors: their variables are not the FMU's), a ripple (:attr:`ripple`, kept
         when None). Nothing is simulated, and the FMU
         is not opened: its model description is read (once a file) to check that it has
         the variables set."""

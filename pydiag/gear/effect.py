@@ -13,7 +13,7 @@ from pydiag.core.parameters import Parameter
 from pydiag.gear.kinematic_map import KinematicLine
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.peaks import Peak
-from pydiag.signal.ripple import SpeedRipple
+from pydiag.signal.ripple import Ripple
 from pydiag.signal.transfer import HousingMode
 
 
@@ -63,10 +63,10 @@ class Effect:
             built into an FMU of its own: it adds to any model, and costs no integration
             of a stiff or slowly settling mode (its ``model`` is the Modelica model that
             says the same, which a test holds it to)
-        ripple: it is a speed ripple its model's values size, read from the model's
-            periodic response without it (:mod:`pydiag.signal.ripple`) rather than
-            simulated over the whole record (its ``model`` has it inside, which a test
-            holds it to)
+        ripple: it is a speed or torque ripple its model's values size, read from the
+            model's periodic response without it (:mod:`pydiag.signal.ripple`) rather
+            than simulated over the whole record (its ``model`` has it inside, which a
+            test holds it to)
     """
 
     key: str
@@ -85,7 +85,7 @@ class Effect:
     machine_values: Callable[[GearKinematics | None], dict[str, float]] | None = None
     missing: Callable[[GearKinematics | None], str] | None = None
     transfer: HousingMode | None = None
-    ripple: SpeedRipple | None = None
+    ripple: Ripple | None = None
 
     @property
     def own_fmu(self) -> bool:

@@ -19,7 +19,7 @@ from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPP
                                     ripple_hint, second_pinion_tooth, shaft_swing,
                                     stiffness_shape, tooth_hint)
 from pydiag.gear.kinematic_map import SHAFT_ORDERS
-from pydiag.signal.ripple import SpeedRipple
+from pydiag.signal.ripple import LoadRipple, SpeedRipple
 from pydiag.signal.transfer import HousingMode
 
 
@@ -77,7 +77,8 @@ EFFECTS = {e.key: e for e in (
            machine_values=bearing_values, missing=bearing_missing),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,
-           ripple_hint("f_load"), synchronous=False),
+           ripple_hint("f_load"), synchronous=False,
+           ripple=LoadRipple("dT", "f_load", "T")),
     # the same lines as a torque ripple (they compete): a ripple the shafts' inertia turns
     # into a speed fluctuation modulates the mesh's phase rather than its force
     Effect("speed_fluctuation", "GearDiag.Effects.SpeedFluctuation",

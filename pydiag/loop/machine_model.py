@@ -24,9 +24,10 @@ model (:func:`pydiag.loop.compose.compose` on :data:`~pydiag.loop.compose.MESH`,
 inside the machine's), one of the base model's own parameters frees them; their parameters
 are fitted as ``<stage>.<name>``, after the stages
 (:func:`pydiag.loop.machine_fit.fit_machine`). A ripple's lines need not repeat with the
-machine: a torque ripple's model is simulated whole, not one period repeated, and so is a
-speed ripple's on a stage among others; a machine of one stage reads a speed ripple from
-one period of its response (:func:`stage_effect`, :mod:`pydiag.signal.ripple`). An effect that
+machine: a torque ripple is read from periods of the model's response without it, and so
+is a speed ripple on a machine of one stage; on a stage among others a speed ripple's model
+is simulated whole, not one period repeated (:func:`stage_effect`,
+:mod:`pydiag.signal.ripple`). An effect that
 needs a component the stage does not describe (a bearing's geometry, another shaft's
 ratio) or that is a sensor's path (the housing) is not a stage's in this model yet. The
 catalogue as a stage has it (its parameters named for the stage) is
@@ -62,7 +63,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
-from pydiag.signal.ripple import SpeedRipple
+from pydiag.signal.ripple import Ripple
 
 #: The model's speed parameter: the input shaft's, Hz.
 SPEED_PARAMETER = "f_input"
@@ -124,8 +125,8 @@ class MachineModel:
     fixed_values: dict[str, float] = field(default_factory=dict)
     # those of the effect parameters the outputs are affine in (an affine effect's)
     affine_parameters: frozenset[str] = frozenset()
-    # a speed ripple the model has, read from its periodic response (stage_effect)
-    ripple: SpeedRipple | None = None
+    # a ripple the model has, read from its periodic response (stage_effect)
+    ripple: Ripple | None = None
 
     def parameters(self, with_healthy_tooth: bool, outputs: set[str]
                    ) -> tuple[Parameter, ...]:
@@ -387,16 +388,16 @@ def stage_effect(effect: Effect, instance: str, outputs: tuple[SensorOutput, ...
     ``<instance>.<name>``; the outputs it changes, the sensors' that measure them. A speed
     ripple (``Effect.ripple``) is read from the model's periodic response only on a stage
     ``alone`` in its machine, where it is the whole model's; on a stage among others its
-    model ripples that stage alone, and is simulated whole."""
+    model ripples that stage alone, and is simulated whole. A torque ripple is read so on
+    any stage: the stages' meshes are not coupled, so the response to its torque is its
+    mesh's."""
     def renamed(p: Parameter) -> Parameter:
         return dataclasses.replace(p, name=f"{instance}.{p.name}",
                                    variable=f"{instance}.{p.fmu_variable}")
     ripple = None
-    if effect.ripple is not None and alone:
-        ripple = dataclasses.replace(
-            effect.ripple, depth_variable=f"{instance}.{effect.ripple.depth_variable}",
-            freq_variable=f"{instance}.{effect.ripple.freq_variable}",
-            accelerations=tuple(o.name for o in outputs if o.quantity == "acc"))
+    if effect.ripple is not None and (alone or not effect.ripple.whole_model):
+        ripple = effect.ripple.renamed(instance, tuple(o.name for o in outputs
+                                                       if o.quantity == "acc"))
     return dataclasses.replace(
         effect, parameters=tuple(renamed(p) for p in effect.parameters), ripple=ripple,
         hint=None if effect.hint is None else functools.partial(_hint, effect, instance),

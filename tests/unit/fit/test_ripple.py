@@ -1,7 +1,8 @@
-"""A speed ripple read from the model's periodic response is the Modelica model with the
-ripple inside it (GearDiag.Effects.SpeedFluctuation) integrated over the whole record:
-two implementations, one of a modulated angle in the equations, one of a periodic signal
-read along it (pydiag.signal.ripple)."""
+"""A speed or torque ripple read from the model's periodic response is the Modelica model
+with the ripple inside it (GearDiag.Effects.SpeedFluctuation, LoadFluctuation) integrated
+over the whole record: two implementations, one of a modulated angle or a force in the
+equations, one of periodic signals read along the angle or weighted by the force
+(pydiag.signal.ripple)."""
 
 import dataclasses
 
@@ -13,7 +14,8 @@ from pydiag.core.parameters import Parameter
 from pydiag.fit.build import build_problem
 from pydiag.fmu.periodic import simulate_period
 from pydiag.fmu.plant import FmuPlant
-from pydiag.signal.ripple import OVERSAMPLE, SpeedRipple, along_angle, modulated_angle
+from pydiag.signal.ripple import (OVERSAMPLE, LoadRipple, SpeedRipple, along_angle,
+                                  modulated_angle)
 
 RATE_HZ = 10_000.0
 PERIOD_S = 0.12  # GearPair's fundamental period by default: 3 pinion turns at 25 Hz
@@ -21,15 +23,24 @@ WARMUP_S, DURATION_S = 0.4, 2.0
 FAULT = {"a_f": 0.3, "f_ate": 0.2, "f_dte": 0.3}  # a faulty tooth and errors: many lines
 
 
-@pytest.fixture(scope="module")
-def ripple_fmu(effects_dir):
-    fmu = effects_dir / "SpeedFluctuation.fmu"
+def effect_fmu(effects_dir, name: str):
+    fmu = effects_dir / f"{name}.fmu"
     if not fmu.exists():
         from fmu_build import build_fmu
         from tests.conftest import ROOT
-        build_fmu(ROOT / "modelica" / "GearDiag" / "Effects" / "SpeedFluctuation.mo",
-                  "GearDiag.Effects.SpeedFluctuation", fmu)
+        build_fmu(ROOT / "modelica" / "GearDiag" / "Effects" / f"{name}.mo",
+                  f"GearDiag.Effects.{name}", fmu)
     return fmu
+
+
+@pytest.fixture(scope="module")
+def ripple_fmu(effects_dir):
+    return effect_fmu(effects_dir, "SpeedFluctuation")
+
+
+@pytest.fixture(scope="module")
+def torque_ripple_fmu(effects_dir):
+    return effect_fmu(effects_dir, "LoadFluctuation")
 
 
 def spectrum(y: np.ndarray) -> np.ndarray:
@@ -62,6 +73,25 @@ def test_the_ripple_read_along_the_angle_is_the_modelica_speed_fluctuation(
         error = band_error(spectrum(read[i]), b, 4000.0)
         assert error < tolerance
         # and the ripple changed them: a copy of the steady response is far further off
+        assert band_error(spectrum(steady[i]), b, 4000.0) > 10 * error
+
+
+@pytest.mark.parametrize("d_t,f_load,tolerance", [(5.0, 7.3, 0.01), (20.0, 3.1, 0.01)])
+def test_the_torque_ripple_read_from_two_periods_is_the_modelica_load_fluctuation(
+        torque_ripple_fmu, d_t, f_load, tolerance):
+    outputs = ("acc", "disp")
+    with FmuPlant(str(torque_ripple_fmu), outputs, RATE_HZ) as plant:
+        inside = plant.simulate({**FAULT, "dT": d_t, "f_load": f_load}, DURATION_S, WARMUP_S)
+        steady = plant.simulate({**FAULT, "dT": 0.0}, DURATION_S, WARMUP_S)
+        read = LoadRipple().read(
+            lambda changes: simulate_period(plant, {**FAULT, **changes}, WARMUP_S, PERIOD_S,
+                                            OVERSAMPLE),
+            {"dT": d_t, "f_load": f_load, "T": 50.0}, outputs, inside.shape[1], RATE_HZ,
+            WARMUP_S)
+    for i in range(2):
+        b = spectrum(inside[i])
+        error = band_error(spectrum(read[i]), b, 4000.0)
+        assert error < tolerance
         assert band_error(spectrum(steady[i]), b, 4000.0) > 10 * error
 
 
