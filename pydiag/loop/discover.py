@@ -157,11 +157,11 @@ def shared_halves(problem: FitProblem, base: Comparison, keys: list[str],
 def discovery_cost(effect: Effect) -> int:
     """How long an effect's held-out fit takes, in rough units, so the longest start first
     and the short ones fill the cores at the end: one that is not synchronous is simulated
-    over the whole record, the others over one period (twice the weight; a speed ripple,
-    read from one period, is weighed so still: its polish frees the base), one that
-    reshapes the base is polished with the base parameters free as well, and one with a
-    free start polished so twice."""
-    return (2 * (not effect.synchronous) + effect.reshapes_base
+    over the whole record (twice the weight), unless it is a ripple read from periods of
+    the model (``Effect.ripple``), the others over one period; one that reshapes the base
+    is polished with the base parameters free as well, and one with a free start polished
+    so twice."""
+    return (2 * (not effect.synchronous and effect.ripple is None) + effect.reshapes_base
             + (effect.free_start is not None))
 
 
