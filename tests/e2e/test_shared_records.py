@@ -72,8 +72,7 @@ def test_the_loop_with_its_defaults_accepts_an_effect_on_a_real_record(tmp_path)
     record without load the loop accepts an effect confirmed held out (its held-out error
     falls), and the model with it fits the record better than the model without; the
     user's machine file is left as it was, the copy gets the effect (bench/RESULTS.md
-    section 14 has whole loops: at 90 % load, where the residual points to a ripple too,
-    whose tries are simulated whole, the same two steps take three times as long)."""
+    section 14 has whole loops)."""
     machine = tmp_path / "gfd.toml"
     text = (ROOT / "examples" / "gfd_spectraquest.toml").read_text()
     machine.write_text(text)
