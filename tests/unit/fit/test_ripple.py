@@ -38,11 +38,6 @@ def ripple_fmu(effects_dir):
     return effect_fmu(effects_dir, "SpeedFluctuation")
 
 
-@pytest.fixture(scope="module")
-def torque_ripple_fmu(effects_dir):
-    return effect_fmu(effects_dir, "LoadFluctuation")
-
-
 def spectrum(y: np.ndarray) -> np.ndarray:
     """Of the signal's variation (a displacement's static deflection left out)."""
     return np.abs(np.fft.rfft((y - y.mean()) * np.hanning(y.size))) / y.size
@@ -57,41 +52,26 @@ def band_error(a: np.ndarray, b: np.ndarray, top_hz: float) -> float:
     return float(np.linalg.norm(a[band] - b[band]) / np.linalg.norm(b[band]))
 
 
-@pytest.mark.parametrize("ds,f_speed,tolerance", [(0.002, 7.3, 0.03), (0.01, 3.1, 0.06)])
-def test_the_ripple_read_along_the_angle_is_the_modelica_speed_fluctuation(
-        ripple_fmu, ds, f_speed, tolerance):
+@pytest.mark.parametrize("model,ripple,values,tolerance", [
+    ("SpeedFluctuation", SpeedRipple(), {"ds": 0.002, "f_speed": 7.3}, 0.03),
+    ("SpeedFluctuation", SpeedRipple(), {"ds": 0.01, "f_speed": 3.1}, 0.06),  # near the mode
+    ("LoadFluctuation", LoadRipple(), {"dT": 5.0, "f_load": 7.3}, 0.01),
+    ("LoadFluctuation", LoadRipple(), {"dT": 20.0, "f_load": 3.1}, 0.01)])
+def test_the_ripple_read_from_periods_is_the_modelica_model_integrated_whole(
+        effects_dir, model, ripple, values, tolerance):
     outputs = ("acc", "disp")
-    with FmuPlant(str(ripple_fmu), outputs, RATE_HZ) as plant:
-        inside = plant.simulate({**FAULT, "ds": ds, "f_speed": f_speed}, DURATION_S, WARMUP_S)
-        steady = plant.simulate({**FAULT, "ds": 0.0}, DURATION_S, WARMUP_S)
-        period = simulate_period(plant, {**FAULT, "ds": 0.0}, WARMUP_S, PERIOD_S, OVERSAMPLE)
-    assert period is not None
-    read = SpeedRipple().apply(period, RATE_HZ * OVERSAMPLE, outputs, inside.shape[1],
-                               RATE_HZ, WARMUP_S, {"ds": ds, "f_speed": f_speed})
+    with FmuPlant(str(effect_fmu(effects_dir, model)), outputs, RATE_HZ) as plant:
+        inside = plant.simulate({**FAULT, **values}, DURATION_S, WARMUP_S)
+        steady = plant.simulate({**FAULT, ripple.variables[0]: 0.0}, DURATION_S, WARMUP_S)
+        read = ripple.read(lambda changes: simulate_period(plant, {**FAULT, **changes}, WARMUP_S,
+                                                           PERIOD_S, OVERSAMPLE),
+                           {"T": 50.0, **values}, outputs, inside.shape[1], RATE_HZ, WARMUP_S)
+    assert read is not None  # the model without the ripple repeats
     for i in range(2):
         b = spectrum(inside[i])
         error = band_error(spectrum(read[i]), b, 4000.0)
         assert error < tolerance
         # and the ripple changed them: a copy of the steady response is far further off
-        assert band_error(spectrum(steady[i]), b, 4000.0) > 10 * error
-
-
-@pytest.mark.parametrize("d_t,f_load,tolerance", [(5.0, 7.3, 0.01), (20.0, 3.1, 0.01)])
-def test_the_torque_ripple_read_from_two_periods_is_the_modelica_load_fluctuation(
-        torque_ripple_fmu, d_t, f_load, tolerance):
-    outputs = ("acc", "disp")
-    with FmuPlant(str(torque_ripple_fmu), outputs, RATE_HZ) as plant:
-        inside = plant.simulate({**FAULT, "dT": d_t, "f_load": f_load}, DURATION_S, WARMUP_S)
-        steady = plant.simulate({**FAULT, "dT": 0.0}, DURATION_S, WARMUP_S)
-        read = LoadRipple().read(
-            lambda changes: simulate_period(plant, {**FAULT, **changes}, WARMUP_S, PERIOD_S,
-                                            OVERSAMPLE),
-            {"dT": d_t, "f_load": f_load, "T": 50.0}, outputs, inside.shape[1], RATE_HZ,
-            WARMUP_S)
-    for i in range(2):
-        b = spectrum(inside[i])
-        error = band_error(spectrum(read[i]), b, 4000.0)
-        assert error < tolerance
         assert band_error(spectrum(steady[i]), b, 4000.0) > 10 * error
 
 
