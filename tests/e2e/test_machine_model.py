@@ -337,6 +337,14 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     shafts = stage_effect(EFFECTS["pinion_shaft_orders"], "output_stage", model.outputs)
     assert shafts.outputs == ("acc_ch1", "acc_ch2")
     assert dataclasses.replace(shafts, outputs=None).changes("acc_ch1")
+    # a torque ripple is read from periods on any stage (the meshes are not coupled), a
+    # speed ripple only on a stage alone in its machine (else its model ripples that stage)
+    load = effects["load_fluctuation"].ripple
+    assert load.variables == ("output_stage.dT", "output_stage.f_load", "output_stage.T")
+    assert load.accelerations == ("acc_ch1", "acc_ch2")
+    assert effects["speed_fluctuation"].ripple is None
+    alone = stage_effect(EFFECTS["speed_fluctuation"], "stage", model.outputs, alone=True)
+    assert alone.ripple.variables == ("stage.ds", "stage.f_speed")
 
 
 @pytest.mark.slow
