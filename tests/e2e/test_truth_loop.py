@@ -184,9 +184,9 @@ def assert_discovered_first(found, effect):
     assert np.isfinite(found[0].held_out.delta_bic) and found[0].held_out.delta_bic < 0
 
 
-#: Hidden effects whose discovery (every catalogue effect tried held out, a torque
-#: ripple's simulated whole) runs in make test too, one of the spectrum's and one of the envelope's;
-#: the others' in make test-slow (make test stays under its budget), their first seed
+#: Hidden effects whose discovery (every catalogue effect tried held out, a bearing's
+#: strikes simulated whole) runs in make test too, one of the spectrum's and one of the
+#: envelope's; the others' in make test-slow (make test stays under its budget), their first seed
 #: validated in make test as their others are (below; the outer race's from the command
 #: line). The speed fluctuation's refit frees the base it bent (below); the
 #: housing mode's discovery (49 s, the costliest after the loop's since the loop tries
@@ -234,10 +234,10 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
             [(s.effect, round(s.score, 2), s.message) for s in c.suggested_effects]
 
 
-#: A hidden effect's seeds in make test-slow only (make test stays under its 8 minutes;
-#: their costs: bench/CHANGELOG.md, 2026-11-28): the housing mode's and the outer race's
-#: second and third, the costliest of the catalogue's now that a speed ripple is read from
-#: one period of its model (12-14 s a seed; simulated whole, 29-48 s).
+#: A hidden effect's seeds in make test-slow only, so that make test stays under its 8
+#: minutes (bench/CHANGELOG.md, 2026-11-28): the housing mode's and the outer race's second
+#: and third (8-10.5 s each, 37 s in all). The speed ripple's three seeds are in make test
+#: since it is read from one period of its model (11-12 s each; 29-48 s simulated whole).
 SLOW_SEEDS = {"housing_sensor": SEEDS[1:], "bearing_outer_race": SEEDS[1:]}
 
 
