@@ -3,6 +3,7 @@ in one Modelica model written by pydiag, built once per content, fitted to a rec
 :mod:`truth.gearbox` (written from the shafts' angles, not by the pair model) over the
 machine's period; and `pydiag compare --machine` without --fmu, which fits it."""
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -141,8 +142,6 @@ def test_an_effect_the_box_has_lowers_the_error_more_than_one_it_lacks(tmp_path)
     pair's stiffness wave cannot make: the even harmonics of the wave (mesh_stiffness_shape)
     on the second stage lower the error; a gear runout (which the box lacks) does not, fitted
     the same way."""
-    import dataclasses
-
     from pydiag.gear.machine import StageEffect
     from pydiag.loop.machine_fit import fit_machine
     m = gearbox_record(5, faulty_shaft=2, stage=1, box=SHORT_BOX)
@@ -186,8 +185,6 @@ def test_a_stage_with_effects_is_their_model_and_fits_their_parameters():
     index ranges over the stage's own teeth; an effect with nothing to fit on the stage
     (every one of the first ten orders of a 6-tooth pinion is a mesh harmonic or one of
     their sidebands) is refused; the parameters of an affine effect are known as such."""
-    import dataclasses
-
     from pydiag.core.errors import UsageError
     from pydiag.gear.machine import StageEffect
     phm = load_machine(ROOT / "examples" / "phm09_spur.toml")
@@ -230,8 +227,6 @@ def test_each_parameter_of_the_machines_model_is_one_stages_own():
     """What a stage's try frees (stage_view): its fault parameters, its effects', its mesh
     phase and its level at the sensors it is not near; every parameter a fit of both
     sensors estimates is exactly one stage's."""
-    import dataclasses
-
     from pydiag.gear.machine import StageEffect
     phm = load_machine(ROOT / "examples" / "phm09_spur.toml")
     model = machine_model(dataclasses.replace(phm, effects=(
@@ -316,8 +311,6 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     """Seen from the output stage, its mesh is "mesh" and the input stage's a stage_mesh
     line; the catalogue named for it fits ``output_stage.<name>``, its hint's ranges named
     so too, and an effect on the acceleration changes every sensor's acceleration."""
-    import dataclasses
-
     from pydiag.gear.effects import EFFECTS
     from pydiag.gear.kinematic_map import kinematic_map, match
     from pydiag.loop.machine_model import stage_effect, stage_effects
@@ -345,6 +338,40 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     assert effects["speed_fluctuation"].ripple is None
     alone = stage_effect(EFFECTS["speed_fluctuation"], "stage", model.outputs, alone=True)
     assert alone.ripple.variables == ("stage.ds", "stage.f_speed")
+
+
+def test_a_torque_ripple_on_one_stage_is_read_from_periods_of_the_machines_model(tmp_path):
+    """A torque ripple on the second of two stages, read from two periods of the machine's
+    model without it (the stage's torque stepped: its load follows, the other stage's mesh
+    does not see it), is the machine's model with the ripple integrated whole."""
+    from pydiag.fmu.periodic import simulate_period
+    from pydiag.fmu.plant import FmuPlant
+    from pydiag.gear.machine import StageEffect
+    from pydiag.signal.ripple import OVERSAMPLE
+    machine = dataclasses.replace(SHORT_MACHINE,
+                                  effects=(StageEffect("load_fluctuation", 1),))
+    model, built = machine_fmu(machine, MODELICA, tmp_path)
+    ripple = model.ripple
+    assert ripple.torque_variable == f"{model.stages[1]}.T"
+    outputs, rate_hz, warmup_s = tuple(o.name for o in model.outputs), 20_000.0, 0.3
+    period_s = machine.model_kinematics(INPUT_HZ).period_s
+    values = {ripple.amplitude_variable: 10.0, ripple.freq_variable: 4.0}
+    with FmuPlant(str(built.fmu), outputs, rate_hz) as plant:
+        torque = float(plant.variables[ripple.torque_variable].start)
+        whole = plant.simulate(values, 1.0, warmup_s)
+        steady = plant.simulate({ripple.amplitude_variable: 0.0}, 1.0, warmup_s)
+        read = ripple.read(lambda changes: simulate_period(
+            plant, {**values, **changes}, warmup_s, period_s, OVERSAMPLE),
+            {**values, ripple.torque_variable: torque}, outputs, whole.shape[1], rate_hz,
+            warmup_s)
+
+    def spectrum(y):
+        return np.abs(np.fft.rfft((y - y.mean()) * np.hanning(y.size)))
+    for i in range(len(outputs)):
+        b = spectrum(whole[i])
+        error = np.linalg.norm(spectrum(read[i]) - b) / np.linalg.norm(b)
+        assert error < 0.01
+        assert np.linalg.norm(spectrum(steady[i]) - b) / np.linalg.norm(b) > 10 * error
 
 
 @pytest.mark.slow
@@ -477,8 +504,6 @@ def test_any_machine_name_builds_and_two_machines_of_one_name_are_two_models(tmp
     digits and single underscores); its name is kept for people in the model's
     description. Two machine files of one name with other teeth are two models, each
     with a source of its own: an edit of one's is never fitted for the other."""
-    import dataclasses
-
     from pydiag.gear.machine import StageEffect
     one = load_machine(ROOT / "examples" / "gfd_spectraquest.toml")
     named = dataclasses.replace(one, name='SpectraQuest GFD (inferred teeth) "b\\ox" né',
