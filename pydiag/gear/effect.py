@@ -37,7 +37,7 @@ class Effect:
         synchronous: every line it makes is an order of the fundamental period, so its
             model is simulated over one period and repeated; False for a bearing's strikes
             or a ripple at a frequency of its own, simulated whole (discover starts those
-            first)
+            first) unless it is a ``ripple`` read from periods of the model
         outputs: the GearPair outputs whose lines it changes (None: all): a housing mode or
             a bearing's strikes ring the acceleration at the sensor, not the mesh's
             displacement, so peaks of disp are no evidence for them

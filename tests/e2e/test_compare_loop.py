@@ -63,8 +63,8 @@ def record(fmu, seed=5, periods=20):
 
 #: Hidden effects ranked in make test-slow only: their records are made by the catalogue's
 #: own models (plumbing, an inverse crime as evidence), and the independent simulator's
-#: records of each (a runout, a ripple, an outer race) are checked on three seeds in make
-#: test (tests/e2e/test_truth_loop.py).
+#: records of each (a runout, a ripple, an outer race) are checked in make test, the outer
+#: race on its first seed, the others on three (tests/e2e/test_truth_loop.py).
 @pytest.mark.slow
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect_fmu_of, effect):

@@ -235,9 +235,8 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
 
 
 #: A hidden effect's seeds in make test-slow only, so that make test stays under its 8
-#: minutes (bench/CHANGELOG.md, 2026-11-28): the housing mode's and the outer race's second
-#: and third (8-10.5 s each, 37 s in all). The speed ripple's three seeds are in make test
-#: since it is read from one period of its model (11-12 s each; 29-48 s simulated whole).
+#: minutes (their costs: bench/CHANGELOG.md, 2026-11-28): the housing mode's and the outer
+#: race's second and third.
 SLOW_SEEDS = {"housing_sensor": SEEDS[1:], "bearing_outer_race": SEEDS[1:]}
 
 
@@ -393,8 +392,7 @@ def test_compare_with_a_speed_fluctuation_frees_the_base_it_bent(gear_fmu, truth
     """The base fit of the ripple's record, without the effect, is bent (the faulty
     tooth's d_f and f_f near 0 to make up for the lines the speed fluctuation moved);
     compare with the effect (``compare --effect``) frees the base parameters with it and
-    explains the record (6 s; 35-50 s while the ripple's model was simulated whole at
-    every step). The ripple's discovery held out with the base freed the same way
+    explains the record. The ripple's discovery held out with the base freed the same way
     (test_compare_and_discover_find_the_hidden_effect) is in make test-slow."""
     m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["speed_fluctuation"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
