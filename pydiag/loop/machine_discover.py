@@ -5,7 +5,7 @@ each stage's residual points to).
 For each stage, the model's problem is seen from that stage's shafts, its own parameters
 free and the other stages' held at the machine's fit
 (:func:`~pydiag.loop.machine_fit.stage_view`), with the catalogue named for it
-(:func:`~pydiag.loop.machine_model.stage_effects`); each effect the stage lacks is fitted
+(:func:`~pydiag.loop.machine_model.MachineModel.stage_effects`); each effect the stage lacks is fitted
 on half of the periods on the model with it on that stage and scored on the other half
 (:func:`pydiag.loop.held_out.held_out`), whatever its score on the residual (compare
 tries only those its residual points to). The models are built here, one after the
@@ -40,7 +40,8 @@ from pydiag.loop.discover import (discovery_cost, failed_row, held_out_row, shar
                                   side_by_side)
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
 from pydiag.loop.machine_fit import stage_view
-from pydiag.loop.machine_model import MachineModel, nothing_to_fit, on_a_stage, stage_effects
+from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.stage_catalogue import nothing_to_fit, on_a_stage
 from pydiag.loop.results import Comparison, Status, Suggestion
 from pydiag.loop.validate import effects_to_fit, validate
 
@@ -60,21 +61,21 @@ def _try_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key
     """:func:`~pydiag.loop.discover.held_out_row` of the effect ``key`` on stage ``index``
     (called ``name``). Takes the key, not the effect (whose hints are closures): it runs in
     a worker process."""
-    return held_out_row(stage.view, stage.seen, stage_effects(model, index)[key], fmu,
+    return held_out_row(stage.view, stage.seen, model.stage_effects(index)[key], fmu,
                         estimator, stage.memo, name)
 
 
 def lacking(machine: Machine, model: MachineModel, stage: int) -> dict[str, Effect]:
     """The catalogue as stage ``stage`` of ``model`` has it
-    (:func:`~pydiag.loop.machine_model.stage_effects`) but the effects the machine file
+    (:func:`~pydiag.loop.machine_model.MachineModel.stage_effects`) but the effects the machine file
     already gives it, whatever parameters of theirs it holds off."""
     has = machine.effect_keys(stage)
-    return {key: e for key, e in stage_effects(model, stage).items() if key not in has}
+    return {key: e for key, e in model.stage_effects(stage).items() if key not in has}
 
 
 def check_effects(effects: list[str] | None) -> None:
     """A UsageError naming those of ``effects`` no stage of a machine's model can have
-    (:func:`~pydiag.loop.machine_model.on_a_stage`), before any work."""
+    (:func:`~pydiag.loop.stage_catalogue.on_a_stage`), before any work."""
     allowed = [key for key, effect in EFFECTS.items() if on_a_stage(effect)]
     unknown = [key for key in effects or () if key not in allowed]
     if unknown:
@@ -170,7 +171,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                 pass  # validate builds it again, and says why it cannot
         stages[k] = _Stage(view, seen, shared_halves(view, seen, keys, estimator, effects))
         tasks += [(k, key) for key in keys]
-    tasks.sort(key=lambda task: -discovery_cost(stage_effects(model, task[0])[task[1]]))
+    tasks.sort(key=lambda task: -discovery_cost(model.stage_effects(task[0])[task[1]]))
     name = [s.name for s in machine.stages]
     for k, key in tasks:
         if progress:

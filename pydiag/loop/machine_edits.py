@@ -17,7 +17,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_file import load_machine, machine_from_dict
 from pydiag.io.outputs import edit_in_place
-from pydiag.loop.machine_model import not_on_a_stage, on_a_stage
+from pydiag.loop.stage_catalogue import not_on_a_stage, on_a_stage
 
 
 def accept(path: str | Path, key: str, stage: str | None = None,

@@ -6,7 +6,7 @@ problem seen from one stage's shafts.
 What the residual points to on each stage is tried held out as on a pair
 (:func:`pydiag.loop.machine_discover.validate_machine`): the model's problem seen from
 that stage's shafts (:func:`stage_view`: its kinematics name the lines), the catalogue
-named for it (:func:`pydiag.loop.machine_model.stage_effect`), the model with the effect
+named for it (:func:`pydiag.loop.stage_catalogue.stage_effect`), the model with the effect
 on the stage built for it.
 """
 

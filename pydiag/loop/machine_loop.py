@@ -33,7 +33,8 @@ from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.machine_discover import validate_machine
 from pydiag.loop.machine_edits import accept, record_start
 from pydiag.loop.machine_fit import compare_machine, machine_problem
-from pydiag.loop.machine_model import MachineModel, possible_parameters
+from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.stage_catalogue import possible_parameters
 
 
 def machine_loop(path: str | Path, measurement: Measurement, speed: SpeedEstimate,

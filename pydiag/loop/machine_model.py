@@ -26,12 +26,12 @@ are fitted as ``<stage>.<name>``, after the stages
 (:func:`pydiag.loop.machine_fit.fit_machine`). A ripple's lines need not repeat with the
 machine: a torque ripple is read from periods of the model's response without it, and so
 is a speed ripple on a machine of one stage; on a stage among others a speed ripple's model
-is simulated whole, not one period repeated (:func:`stage_effect`,
+is simulated whole, not one period repeated (:func:`~pydiag.loop.stage_catalogue.stage_effect`,
 :mod:`pydiag.signal.ripple`). An effect that
 needs a component the stage does not describe (a bearing's geometry, another shaft's
 ratio) or that is a sensor's path (the housing) is not a stage's in this model yet. The
 catalogue as a stage has it (its parameters named for the stage) is
-:func:`stage_effect`'s.
+:mod:`pydiag.loop.stage_catalogue`'s.
 
 The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
 shaft's torsion between two stages (``GearDiag.Components.Shaft``,
@@ -47,8 +47,6 @@ accepted, a fit to start from) are :mod:`pydiag.loop.machine_edits`'.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import hashlib
 import re
 from collections.abc import Iterable
@@ -62,6 +60,8 @@ from pydiag.gear.effect import Effect
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.loop.compose import MESH, BuiltModel, built_fmu, compose
+from pydiag.loop.stage_catalogue import (nothing_to_fit, not_on_a_stage, on_a_stage,
+                                         stage_effect)
 from pydiag.model.adapter import Adapter, Quantity, SensorMap
 from pydiag.signal.ripple import Ripple
 
@@ -158,6 +158,18 @@ class MachineModel:
         known = {p.name for p in self.parameters(True, {o.name for o in self.outputs})}
         return sorted(set(names) - known)
 
+    @property
+    def quantities(self) -> dict[str, str]:
+        """Each output's name and the quantity it measures (``acc``, ``disp``)."""
+        return {o.name: o.quantity for o in self.outputs}
+
+    def stage_effects(self, stage: int) -> dict[str, Effect]:
+        """The catalogue as stage ``stage`` has it: the effects a stage can have
+        (:func:`~pydiag.loop.stage_catalogue.on_a_stage`), named for it
+        (:func:`~pydiag.loop.stage_catalogue.stage_effect`)."""
+        return {key: stage_effect(e, self.stages[stage], self.quantities, len(self.stages) == 1)
+                for key, e in EFFECTS.items() if on_a_stage(e)}
+
     def adapter(self, channels: list[str]) -> Adapter:
         """The model described to a fit of ``channels``: each mapped to its sensor's output
         (of a machine file without sensors, a channel named ``disp`` to the deflection and
@@ -176,19 +188,6 @@ class MachineModel:
                        {"n_pinion": Quantity(value=first[0]), "n_gear": Quantity(value=first[1]),
                         "f_pinion_hz": Quantity(parameter=SPEED_PARAMETER)},
                        source=f"the machine model {self.name}")
-
-
-def on_a_stage(effect: Effect) -> bool:
-    """Whether a machine's model can give ``effect`` to a stage (module docstring): an
-    effect of the mesh or its shafts, not one that needs a component the stage does not
-    describe (a bearing's geometry, another shaft's ratio) nor a sensor's path."""
-    return effect.machine_values is None and effect.transfer is None
-
-
-def not_on_a_stage(key: str) -> str:
-    """Why the effect ``key`` cannot be a stage's (one that :func:`on_a_stage` refuses)."""
-    return (f"{key} is not a stage's in a machine's model yet (a bearing's lines need its "
-            "geometry, another shaft's its ratio; the housing is a sensor's path)")
 
 
 def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
@@ -212,22 +211,6 @@ def _stage_class(machine: Machine, k: int, modelica_root: Path | None,
     return composed.name
 
 
-def possible_parameters(machine: Machine, k: int, key: str) -> tuple[Parameter, ...]:
-    """The parameters of the effect ``key`` that stage ``k`` of ``machine`` may fit, as the
-    stage's kinematics alone say (no record's spectrum), named as the catalogue names them."""
-    return EFFECTS[key].bounds([], 0.0, machine.stage_kinematics(k, machine.input_hz or 1.0))
-
-
-def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
-    """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine`` (every line
-    it would fit is another's of the stage: each of the first ten orders of a 6-tooth
-    pinion is a mesh harmonic or one of its sidebands), or "" when it has."""
-    if EFFECTS[key].parameters and not possible_parameters(machine, k, key):
-        return (f"{key} has nothing to fit on {machine.stages[k].name} (its lines are all "
-                "another's of the stage's)")
-    return ""
-
-
 def _effect_parameters(machine: Machine, k: int, instance: str
                        ) -> tuple[list[Parameter], dict[str, float], set[str]]:
     """Stage ``k``'s effects' parameters as ``<instance>.<name>`` (ranges as the stage's
@@ -238,7 +221,7 @@ def _effect_parameters(machine: Machine, k: int, instance: str
     for accepted in machine.effects:
         if accepted.stage != k:
             continue
-        e = stage_effect(EFFECTS[accepted.key], instance, ())
+        e = stage_effect(EFFECTS[accepted.key], instance, {})
         if why := nothing_to_fit(machine, k, e.key):
             raise UsageError(f"{machine.source}: effects: {why}")
         held = {f"{instance}.{name}" for name in accepted.off}
@@ -347,7 +330,8 @@ def machine_model(machine: Machine, modelica_root: Path | None = None) -> Machin
               "  // Written by pydiag from a machine file (pydiag/loop/machine_model.py).\n"
               + body + f"\nend {name};\n")
     first = machine.stages[0]
-    ripples = [stage_effect(EFFECTS[e.key], stages[e.stage], tuple(outputs),
+    quantities = {o.name: o.quantity for o in outputs}
+    ripples = [stage_effect(EFFECTS[e.key], stages[e.stage], quantities,
                             len(stages) == 1).ripple for e in machine.effects]
     return MachineModel(name, source, stages, tuple(outputs),
                         (first.pinion_teeth, first.gear_teeth),
@@ -363,54 +347,3 @@ def machine_fmu(machine: Machine, modelica_root: Path, build_dir: Path
     model = machine_model(machine, modelica_root)
     return model, built_fmu(model.name, model.source, modelica_root,
                             Path(build_dir) / "machines")
-
-
-def _prefixed(instance: str, values: dict) -> dict:
-    return {f"{instance}.{name}": value for name, value in values.items()}
-
-
-def _hint(effect: Effect, instance: str, peaks, bin_hz, kinematics) -> dict:
-    return _prefixed(instance, effect.hint(peaks, bin_hz, kinematics))
-
-
-def _machine_values(effect: Effect, instance: str, kinematics) -> dict:
-    return _prefixed(instance, effect.machine_values(kinematics))
-
-
-def _free_start(effect: Effect, instance: str, top_hz: float) -> dict:
-    return _prefixed(instance, effect.free_start(top_hz))
-
-
-def stage_effect(effect: Effect, instance: str, outputs: tuple[SensorOutput, ...],
-                 alone: bool = False) -> Effect:
-    """``effect`` as the stage ``instance`` of a machine's model has it: its parameters, and
-    the values its hint, the kinematics and its free start give, named
-    ``<instance>.<name>``; the outputs it changes, the sensors' that measure them. A speed
-    ripple (``Effect.ripple``) is read from the model's periodic response only on a stage
-    ``alone`` in its machine, where it is the whole model's; on a stage among others its
-    model ripples that stage alone, and is simulated whole. A torque ripple is read so on
-    any stage: the stages' meshes are not coupled, so the response to its torque is its
-    mesh's."""
-    def renamed(p: Parameter) -> Parameter:
-        return dataclasses.replace(p, name=f"{instance}.{p.name}",
-                                   variable=f"{instance}.{p.fmu_variable}")
-    ripple = None
-    if effect.ripple is not None and (alone or not effect.ripple.whole_model):
-        ripple = effect.ripple.renamed(instance, tuple(o.name for o in outputs
-                                                       if o.quantity == "acc"))
-    return dataclasses.replace(
-        effect, parameters=tuple(renamed(p) for p in effect.parameters), ripple=ripple,
-        hint=None if effect.hint is None else functools.partial(_hint, effect, instance),
-        machine_values=None if effect.machine_values is None else
-        functools.partial(_machine_values, effect, instance),
-        free_start=None if effect.free_start is None else
-        functools.partial(_free_start, effect, instance),
-        outputs=None if effect.outputs is None else
-        tuple(o.name for o in outputs if o.quantity in effect.outputs))
-
-
-def stage_effects(model: MachineModel, stage: int) -> dict[str, Effect]:
-    """The catalogue as stage ``stage`` of ``model`` has it: the effects a stage can have
-    (:func:`on_a_stage`), named for it (:func:`stage_effect`)."""
-    return {key: stage_effect(e, model.stages[stage], model.outputs, len(model.stages) == 1)
-            for key, e in EFFECTS.items() if on_a_stage(e)}

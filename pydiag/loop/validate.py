@@ -60,7 +60,7 @@ def validate(problem: FitProblem, comparison: Comparison,
     an effect tried beside those ``present`` (without it, such an effect is not
     validated). An FMU that is not a GearDiag.GearPair model gets every suggestion
     "not validated": the effects extend it. ``effects``: the catalogue as the model names
-    it (a stage of a machine's model: :func:`pydiag.loop.machine_model.stage_effect`; its
+    it (a stage of a machine's model: :func:`pydiag.loop.stage_catalogue.stage_effect`; its
     FMU is then not checked to be a GearPair), default the catalogue itself;
     ``every_synchronous``: every synchronous effect that leaves the base as it is
     (``Effect.reshapes_base``) is tried whatever its score (the loop's: a fit over one

@@ -313,7 +313,7 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     so too, and an effect on the acceleration changes every sensor's acceleration."""
     from pydiag.gear.effects import EFFECTS
     from pydiag.gear.kinematic_map import kinematic_map, match
-    from pydiag.loop.machine_model import stage_effect, stage_effects
+    from pydiag.loop.stage_catalogue import stage_effect
     phm = load_machine(ROOT / "examples" / "phm09_spur.toml")
     model = machine_model(phm)
     views = [phm.model_kinematics(30.0, k) for k in (0, 1)]
@@ -322,12 +322,12 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     bin_hz = 1 / views[0].period_s
     assert [match(480.0, ln, bin_hz).family for ln in lines] == ["stage_mesh", "mesh"]
     assert [match(960.0, ln, bin_hz).family for ln in lines] == ["mesh", "mesh"]  # shared
-    effects = stage_effects(model, 1)
+    effects = model.stage_effects(1)
     assert "housing_sensor" not in effects and "bearing_outer_race" not in effects
     tooth = effects["gear_tooth_fault"]
     assert [p.name for p in tooth.parameters] == ["output_stage.d_g", "output_stage.tooth_g"]
     assert tooth.hint([], 0.0, views[1]) == {"output_stage.tooth_g": (0.0, 80.0)}
-    shafts = stage_effect(EFFECTS["pinion_shaft_orders"], "output_stage", model.outputs)
+    shafts = stage_effect(EFFECTS["pinion_shaft_orders"], "output_stage", model.quantities)
     assert shafts.outputs == ("acc_ch1", "acc_ch2")
     assert dataclasses.replace(shafts, outputs=None).changes("acc_ch1")
     # a torque ripple is read from periods on any stage (the meshes are not coupled), a
@@ -336,7 +336,7 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     assert load.variables == ("output_stage.dT", "output_stage.f_load", "output_stage.T")
     assert load.accelerations == ("acc_ch1", "acc_ch2")
     assert effects["speed_fluctuation"].ripple is None
-    alone = stage_effect(EFFECTS["speed_fluctuation"], "stage", model.outputs, alone=True)
+    alone = stage_effect(EFFECTS["speed_fluctuation"], "stage", model.quantities, alone=True)
     assert alone.ripple.variables == ("stage.ds", "stage.f_speed")
 
 

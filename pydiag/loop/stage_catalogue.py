@@ -1,0 +1,91 @@
+"""The effect catalogue as a stage of a machine's model has it: which effects a stage can
+carry (:func:`on_a_stage`), which of their parameters its kinematics leave to fit
+(:func:`possible_parameters`), and each effect with its parameters, hint, values and
+outputs named for the stage (:func:`stage_effect`). The model itself is
+:mod:`pydiag.loop.machine_model`'s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+from pydiag.core.parameters import Parameter
+from pydiag.gear.effect import Effect
+from pydiag.gear.effects import EFFECTS
+from pydiag.gear.machine import Machine
+
+
+def on_a_stage(effect: Effect) -> bool:
+    """Whether a machine's model can give ``effect`` to a stage
+    (:mod:`pydiag.loop.machine_model`'s docstring): an
+    effect of the mesh or its shafts, not one that needs a component the stage does not
+    describe (a bearing's geometry, another shaft's ratio) nor a sensor's path."""
+    return effect.machine_values is None and effect.transfer is None
+
+
+def not_on_a_stage(key: str) -> str:
+    """Why the effect ``key`` cannot be a stage's (one that :func:`on_a_stage` refuses)."""
+    return (f"{key} is not a stage's in a machine's model yet (a bearing's lines need its "
+            "geometry, another shaft's its ratio; the housing is a sensor's path)")
+
+
+def possible_parameters(machine: Machine, k: int, key: str) -> tuple[Parameter, ...]:
+    """The parameters of the effect ``key`` that stage ``k`` of ``machine`` may fit, as the
+    stage's kinematics alone say (no record's spectrum), named as the catalogue names them."""
+    return EFFECTS[key].bounds([], 0.0, machine.stage_kinematics(k, machine.input_hz or 1.0))
+
+
+def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
+    """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine`` (every line
+    it would fit is another's of the stage: each of the first ten orders of a 6-tooth
+    pinion is a mesh harmonic or one of its sidebands), or "" when it has."""
+    if EFFECTS[key].parameters and not possible_parameters(machine, k, key):
+        return (f"{key} has nothing to fit on {machine.stages[k].name} (its lines are all "
+                "another's of the stage's)")
+    return ""
+
+
+def _prefixed(instance: str, values: dict) -> dict:
+    return {f"{instance}.{name}": value for name, value in values.items()}
+
+
+def _hint(effect: Effect, instance: str, peaks, bin_hz, kinematics) -> dict:
+    return _prefixed(instance, effect.hint(peaks, bin_hz, kinematics))
+
+
+def _machine_values(effect: Effect, instance: str, kinematics) -> dict:
+    return _prefixed(instance, effect.machine_values(kinematics))
+
+
+def _free_start(effect: Effect, instance: str, top_hz: float) -> dict:
+    return _prefixed(instance, effect.free_start(top_hz))
+
+
+def stage_effect(effect: Effect, instance: str, outputs: dict[str, str],
+                 alone: bool = False) -> Effect:
+    """``effect`` as the stage ``instance`` of a machine's model has it: its parameters, and
+    the values its hint, the kinematics and its free start give, named
+    ``<instance>.<name>``; the outputs it changes, those of the model's ``outputs`` (each
+    output's name and the quantity it measures: ``acc``, ``disp``) that measure them. A speed
+    ripple (``Effect.ripple``) is read from the model's periodic response only on a stage
+    ``alone`` in its machine, where it is the whole model's; on a stage among others its
+    model ripples that stage alone, and is simulated whole. A torque ripple is read so on
+    any stage: the stages' meshes are not coupled, so the response to its torque is its
+    mesh's."""
+    def renamed(p: Parameter) -> Parameter:
+        return dataclasses.replace(p, name=f"{instance}.{p.name}",
+                                   variable=f"{instance}.{p.fmu_variable}")
+    ripple = None
+    if effect.ripple is not None and (alone or not effect.ripple.whole_model):
+        ripple = effect.ripple.renamed(instance, tuple(name for name, quantity
+                                                       in outputs.items() if quantity == "acc"))
+    return dataclasses.replace(
+        effect, parameters=tuple(renamed(p) for p in effect.parameters), ripple=ripple,
+        hint=None if effect.hint is None else functools.partial(_hint, effect, instance),
+        machine_values=None if effect.machine_values is None else
+        functools.partial(_machine_values, effect, instance),
+        free_start=None if effect.free_start is None else
+        functools.partial(_free_start, effect, instance),
+        outputs=None if effect.outputs is None else
+        tuple(name for name, quantity in outputs.items() if quantity in effect.outputs))
