@@ -5,7 +5,7 @@ model Backlash "Contact loss: the teeth separate when the mesh deflection turns 
   // contact (0.01 um) to the roughness of ground teeth (0.3 um). The teeth separate only
   // where the dynamic deflection outgrows the static one: with the mesh at a resonance.
   extends GearDiag.GearPair(contact = 0.5*(1 + tanh((x - e_ate - e_dte - e_extra)/delta_c)));
-  parameter Real delta_c(unit="m", min=0.01e-6, max=0.3e-6) = 0.1e-6 "Width of the contact transition";
+  parameter Real delta_c(unit="m", min=1e-12) = 0.1e-6 "Width of the contact transition";
   annotation(Documentation(info="<html>
 <p>Contact loss: the teeth separate when the mesh deflection turns negative.</p>
 <pre>

@@ -5,7 +5,7 @@ model BearingInnerRace "Inner-race defect of the pinion bearing: strikes at BPFI
   extends GearDiag.GearPair(acc_sensor = der(v)
     + A_b*(1 - m_shaft/2*(1 - cos(2*pi*f_pinion*t_angle - phi_zone)))
       *GearDiag.Functions.ringDown(t_angle, f_bpfi, f_mode, zeta_mode));
-  parameter Real A_b(unit="m/s2", min=0, max=5000) = 60 "Peak acceleration of one strike's ring-down in the load zone";
+  parameter Real A_b(unit="m/s2", min=0) = 60 "Peak acceleration of one strike's ring-down in the load zone";
   parameter Real m_shaft(unit="1", min=0, max=1) = 1 "Modulation depth by the load zone, once per turn (1: no strike opposite it)";
   parameter Real phi_zone(unit="rad") = 0 "Pinion angle of the load zone";
   parameter Real f_mode(unit="Hz") = 3000 "Natural frequency of the structural mode the strikes ring";

@@ -4,8 +4,8 @@ model HousingSensor "The acceleration sensor sits on the housing, behind one hou
   // accelerometer is on the housing. Here acc is the housing mode's response to the
   // dynamic mesh force (GearDiag.Components.HousingMode); disp stays the mesh's.
   extends GearDiag.GearPair(acc_sensor = housing.a);
-  parameter Real f_housing(unit="Hz", min=20, max=10000) = 2500 "Natural frequency of the housing mode";
-  parameter Real zeta_housing(unit="1", min=0.005, max=0.5) = 0.05 "Damping ratio of the housing mode";
+  parameter Real f_housing(unit="Hz", min=1) = 2500 "Natural frequency of the housing mode";
+  parameter Real zeta_housing(unit="1", min=1e-4, max=1) = 0.05 "Damping ratio of the housing mode";
   GearDiag.Components.HousingMode housing(f_n = f_housing, zeta = zeta_housing, m_h = m,
     F_0 = T/r_p, F = mesh_force) "Housing between the mesh and the sensor";
   annotation(Documentation(info="<html>

@@ -9,9 +9,9 @@ model MeshModulation "The mesh stiffness modulated once per turn of each shaft"
   // instead).
   extends GearDiag.GearPair(k_mod = (1 + a*sigma)*(m_p*cos(2*pi*f_pinion*t_angle + phi_p)
     + m_g*cos(2*pi*f_wheel*t_angle + phi_g)));
-  parameter Real m_p(unit="1", min=0, max=0.5) = 0 "Depth of the stiffness's modulation once per pinion turn";
+  parameter Real m_p(unit="1", min=0, max=1) = 0 "Depth of the stiffness's modulation once per pinion turn";
   parameter Real phi_p(unit="rad") = 0 "Phase of the pinion turn's modulation";
-  parameter Real m_g(unit="1", min=0, max=0.5) = 0 "Depth of the stiffness's modulation once per gear turn";
+  parameter Real m_g(unit="1", min=0, max=1) = 0 "Depth of the stiffness's modulation once per gear turn";
   parameter Real phi_g(unit="rad") = 0 "Phase of the gear turn's modulation";
   parameter Real f_wheel(unit="Hz") = f_mesh/Ng "Gear shaft speed";
   annotation(Documentation(info="<html>

@@ -11,9 +11,9 @@ model ShaftSwing "Each shaft's speed swings once a turn: the mesh runs on an ang
   // runout's transmission error). SpeedFluctuation is the same at a frequency of its own.
   extends GearDiag.GearPair(t_angle = time + s_p/(2*pi*f_pinion)*sin(2*pi*f_pinion*time + psi_p)
     + s_g/(2*pi*f_wheel)*sin(2*pi*f_wheel*time + psi_g));
-  parameter Real s_p(unit="1", min=0, max=0.05) = 0 "Pinion shaft's speed swing once a turn, relative to its mean speed";
+  parameter Real s_p(unit="1", min=0, max=1) = 0 "Pinion shaft's speed swing once a turn, relative to its mean speed";
   parameter Real psi_p(unit="rad") = 0 "Phase of the pinion shaft's swing";
-  parameter Real s_g(unit="1", min=0, max=0.05) = 0 "Gear shaft's speed swing once a turn, relative to its mean speed";
+  parameter Real s_g(unit="1", min=0, max=1) = 0 "Gear shaft's speed swing once a turn, relative to its mean speed";
   parameter Real psi_g(unit="rad") = 0 "Phase of the gear shaft's swing";
   parameter Real f_wheel(unit="Hz") = f_mesh/Ng "Gear shaft speed";
   annotation(Documentation(info="<html>

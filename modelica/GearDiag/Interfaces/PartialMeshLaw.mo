@@ -17,9 +17,9 @@ partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness 
   // ---- shape of the mesh stiffness wave beyond the paper's ----
   // A contact ratio other than 1.5 (or tip relief) gives the healthy mesh's stiffness even
   // harmonics that no form factor can: 0 is the paper's wave.
-  parameter Real k2(unit="1", min=0, max=0.3) = 0 "Second mesh harmonic of the stiffness, relative to K";
+  parameter Real k2(unit="1", min=0, max=1) = 0 "Second mesh harmonic of the stiffness, relative to K";
   parameter Real phi2(unit="rad") = 0 "Phase of the second mesh harmonic of the stiffness";
-  parameter Real k4(unit="1", min=0, max=0.1) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
+  parameter Real k4(unit="1", min=0, max=1) = 0 "Fourth mesh harmonic of the stiffness, relative to K";
   parameter Real phi4(unit="rad") = 0 "Phase of the fourth mesh harmonic of the stiffness";
   // A cracked or chipped tooth is also softer over its whole contact, which the paper's
   // amplitude a_f cannot say: the mesh stiffness drops by d_f of K while the faulty tooth
@@ -27,10 +27,10 @@ partial model PartialMeshLaw "The law of a gear mesh: its parameters, stiffness 
   // is 2 for two equal pairs on rigid shafts; shafts and bearings in series make it
   // larger); w0 is that two-level loss over eps_c mesh cycles, its steps eased over r_c
   // cycles (GearDiag.Functions.toothWindow). 0 is the paper's tooth.
-  parameter Real d_f(unit="1", min=0, max=0.6) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is alone in contact";
-  parameter Real eps_c(unit="1", min=1.1, max=1.9) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
-  parameter Real q_c(unit="1", min=1, max=5) = 2 "Loss while the faulty tooth is alone in contact over its loss in double contact";
-  parameter Real r_c(unit="1", min=0.02, max=0.5) = 0.1 "Mesh cycles over which the load passes between tooth pairs";
+  parameter Real d_f(unit="1", min=0, max=1) = 0 "Relative loss of mesh stiffness while the faulty pinion tooth is alone in contact";
+  parameter Real eps_c(unit="1", min=1, max=2) = 1.5 "Contact ratio: mesh cycles a tooth is in contact for";
+  parameter Real q_c(unit="1", min=1) = 2 "Loss while the faulty tooth is alone in contact over its loss in double contact";
+  parameter Real r_c(unit="1", min=1e-3, max=1) = 0.1 "Mesh cycles over which the load passes between tooth pairs";
 
   // ---- kinematics ----
   parameter Integer Np = 14 "Number of pinion teeth";

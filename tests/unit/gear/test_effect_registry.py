@@ -1,7 +1,9 @@
 """The effect catalogue, the Modelica package and the Makefile name the same effects, and
-each fitted parameter's range is the same in the catalogue and in its Modelica declaration
-(docs/effects.md: an effect is one Modelica file and one catalogue entry)."""
+each fitted parameter's range searched (the catalogue's, written there alone) lies where
+its Modelica declaration says the model holds (docs/effects.md: an effect is one Modelica
+file and one catalogue entry)."""
 
+import math
 import re
 import subprocess
 from pathlib import Path
@@ -50,15 +52,19 @@ def test_make_builds_the_effects_the_package_lists():
 
 
 @pytest.mark.parametrize("key", sorted(EFFECTS))
-def test_each_fitted_range_is_its_modelica_declarations(key):
-    """A range searched (min/max in Modelica, low/high in the catalogue) is written twice
-    only where the test holds them equal; an angle (one turn) and a tooth's index (the
-    wheel's teeth, from the kinematics) take their range from elsewhere."""
+def test_each_range_searched_lies_where_the_model_holds(key):
+    """The catalogue writes the range a fit searches; the Modelica declaration writes where
+    the model holds (its ``min``/``max``: an amplitude not negative, a relative loss at most
+    1, a contact ratio between 1 and 2). Each parameter is declared, and its search lies
+    within; an angle (one turn) and a tooth's index (the wheel's teeth) are searched over
+    what the kinematics give."""
     effect = EFFECTS[key]
     for p in effect.parameters:
         declared = declaration(effect, p.fmu_variable)
         assert declared is not None, f"{key}: {p.fmu_variable} is not declared in {effect.model}"
         if p.periodic or p.step is not None:
             continue
-        assert declared == {"min": pytest.approx(p.low), "max": pytest.approx(p.high)}, \
+        assert "min" in declared, (key, p.name, "no lower bound where the model holds")
+        assert declared["min"] <= p.low < p.high <= declared.get("max", math.inf), \
             (key, p.name, declared, (p.low, p.high))
+
