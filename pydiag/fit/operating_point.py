@@ -93,4 +93,4 @@ def at_model_speed(measurement: Measurement, kin: GearKinematics,
             * model_kinematics.f_pinion_hz / kin.f_pinion_hz)
     return measurement, dataclasses.replace(model_kinematics,
                                             other_shaft_ratio=kin.other_shaft_ratio,
-                                            bearing=kin.bearing, machine=kin.machine)
+                                            bearing=kin.bearing, surroundings=kin.surroundings)

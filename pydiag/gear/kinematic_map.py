@@ -12,7 +12,7 @@ Families (each line carries its family and order):
 - ``other_shaft``: k*f_other, the orders of another shaft of the machine (when its speed
   ratio is given: ``GearKinematics.other_shaft_ratio``), up to :data:`SHAFT_ORDERS`
 
-The rest of a gearbox (``GearKinematics.machine``), lines no effect of the pair models:
+The rest of a gearbox (``GearKinematics.surroundings``), lines no effect of the pair models:
 
 - ``stage_mesh``: another stage's mesh harmonics; ``stage_mesh_sb``: their sidebands at
   both of its shafts' orders (order = k, signed)
@@ -98,14 +98,14 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float,
                     for sign in (-1, 1):
                         add(k * f + sign * f_shaft, "bpfi_sb", sign * k,
                             f"{k}x BPFI {'+' if sign > 0 else '-'} shaft")
-    if kin.machine is not None:
+    if kin.surroundings is not None:
         _machine_lines(kin, max_freq_hz, n_sidebands, add)
     return coinciding(lines)
 
 
 def _machine_lines(kin: GearKinematics, max_freq_hz: float, n_sidebands: int, add) -> None:
     """The lines of the rest of the gearbox (module docstring), through ``add``."""
-    fp, context = kin.f_pinion_hz, kin.machine
+    fp, context = kin.f_pinion_hz, kin.surroundings
     for stage in context.stages:
         f_in, f_out = stage.pinion_ratio * fp, stage.gear_ratio * fp
         fm = stage.pinion_teeth * f_in

@@ -77,10 +77,11 @@ class OtherShaft:
 
 
 @dataclass(frozen=True)
-class MachineContext:
+class Surroundings:
     """The rest of a gearbox around one of its stages: what puts lines in the stage's
     spectrum that are none of the pair's own (every speed relative to the pair's pinion,
-    so the context holds at any speed).
+    so they hold at any speed). Not a machine: a stage's view of the rest of it,
+    made by :meth:`pydiag.gear.machine.Machine.stage_kinematics`.
 
     ``fundamental_order``: set when the model simulates every stage (a machine model,
     :mod:`pydiag.loop.machine_model`): the machine's fundamental frequency over the pair's
@@ -112,7 +113,7 @@ class GearKinematics:
             a second stage whose z3 teeth on the gear's shaft drive z4: Np/Ng * z3/z4
         bearing: a rolling bearing's geometry (its lines are kinematic, and a bearing
             effect's model takes it), or None: none known
-        machine: the other stages, shafts and bearings of the pair's gearbox (their lines
+        surroundings: the other stages, shafts and bearings of the pair's gearbox (their lines
             are kinematic; no effect of the pair models them), or None: a pair alone
     """
 
@@ -121,7 +122,7 @@ class GearKinematics:
     f_pinion_hz: float
     other_shaft_ratio: float | None = None
     bearing: Bearing | None = None
-    machine: MachineContext | None = None
+    surroundings: Surroundings | None = None
 
     def __post_init__(self) -> None:
         if self.n_pinion < 1 or self.n_gear < 1:
@@ -136,13 +137,13 @@ class GearKinematics:
     def shaft_hz(self, shaft: str) -> float:
         """The speed of the shaft called ``shaft``: the pinion's or the gear's ("pinion",
         "gear", or their names in the machine), or another shaft of the machine's."""
-        names = self.machine.pair_shafts if self.machine is not None else ()
+        names = self.surroundings.pair_shafts if self.surroundings is not None else ()
         if shaft in ("pinion", *names[:1]):
             return self.f_pinion_hz
         if shaft in ("gear", *names[1:]):
             return self.f_pinion_hz * self.n_pinion / self.n_gear
-        other = next((s for s in self.machine.shafts if s.name == shaft), None) \
-            if self.machine is not None else None
+        other = next((s for s in self.surroundings.shafts if s.name == shaft), None) \
+            if self.surroundings is not None else None
         if other is None:
             raise UsageError(f"no shaft called {shaft!r} beside the pair")
         return other.ratio * self.f_pinion_hz
@@ -184,21 +185,21 @@ class GearKinematics:
 
     @property
     def modelled_machine(self) -> bool:
-        """Whether the model simulates every stage of the pair's machine (``machine``'s
+        """Whether the model simulates every stage of the pair's machine (``surroundings``'
         ``fundamental_order`` is set)."""
-        return self.machine is not None and self.machine.fundamental_order is not None
+        return self.surroundings is not None and self.surroundings.fundamental_order is not None
 
     @property
     def period_s(self) -> float:
         """Fundamental period: every shaft, tooth and assembly-phase line is a harmonic of
         1/period (of every stage's, for a modelled machine)."""
         if self.modelled_machine:
-            return 1.0 / (self.machine.fundamental_order * self.f_pinion_hz)
+            return 1.0 / (self.surroundings.fundamental_order * self.f_pinion_hz)
         return 1.0 / self.f_hunting_hz
 
     def stages(self) -> tuple["GearKinematics", ...]:
         """The pair, then every other stage of its machine as a pair at its own speed."""
-        others = self.machine.stages if self.machine is not None else ()
+        others = self.surroundings.stages if self.surroundings is not None else ()
         return (self.pair,) + tuple(GearKinematics(o.pinion_teeth, o.gear_teeth,
                                                    o.pinion_ratio * self.f_pinion_hz)
                                     for o in others)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from pydiag.core.errors import MachineError
-from pydiag.gear.kinematics import (Bearing, GearKinematics, MachineContext,
+from pydiag.gear.kinematics import (Bearing, GearKinematics, Surroundings,
                                     OtherShaft, OtherStage)
 
 #: Stage types whose kinematics are those of a parallel-axis pair.
@@ -158,7 +158,7 @@ class Machine:
         machine: the pair's bearing is the first on its pinion shaft; its other shaft (the
         one the other-shaft effect models) the next shaft downstream of its gear, else the
         one upstream of its pinion; every other stage, shaft and bearing is its
-        :class:`~pydiag.gear.kinematics.MachineContext`."""
+        :class:`~pydiag.gear.kinematics.Surroundings`."""
         s = self.stages[stage]
         own = self.pair_bearing(stage)
         base = self.shaft_ratio(stage)
@@ -168,7 +168,7 @@ class Machine:
 
         others = [k for k in range(len(self.shafts)) if k not in (stage, stage + 1)]
         neighbour = stage + 2 if stage + 2 < len(self.shafts) else stage - 1
-        context = MachineContext(
+        context = Surroundings(
             tuple(OtherStage(o.name, o.pinion_teeth, o.gear_teeth, ratio(j), self.shafts[j],
                              self.shafts[j + 1])
                   for j, o in enumerate(self.stages) if j != stage),
@@ -178,7 +178,7 @@ class Machine:
         return GearKinematics(s.pinion_teeth, s.gear_teeth, float(input_hz * base),
                               other_shaft_ratio=ratio(neighbour) if others else None,
                               bearing=own,
-                              machine=context if len(self.stages) > 1 or context.bearings
+                              surroundings=context if len(self.stages) > 1 or context.bearings
                               else None)
 
     def pair_bearing(self, stage: int) -> Bearing | None:
@@ -204,8 +204,8 @@ class Machine:
         (:attr:`~pydiag.gear.kinematics.GearKinematics.modelled_machine`); each stage's
         names the same lines from its own shafts."""
         kin = self.stage_kinematics(stage, input_hz)
-        context = kin.machine or MachineContext()
-        return dataclasses.replace(kin, machine=dataclasses.replace(
+        context = kin.surroundings or Surroundings()
+        return dataclasses.replace(kin, surroundings=dataclasses.replace(
             context, fundamental_order=float(self.fundamental_order()
                                              / self.shaft_ratio(stage))))
 

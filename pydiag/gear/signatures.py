@@ -129,8 +129,8 @@ def _other_speeds(kin: GearKinematics) -> list[float]:
     once (a gearbox's list holds the pair's two shafts too)."""
     fp = kin.f_pinion_hz
     speeds = [kin.f_gear_hz] + ([kin.f_other_shaft_hz] if kin.f_other_shaft_hz else [])
-    if kin.machine is not None:
-        speeds += [shaft.ratio * fp for shaft in kin.machine.shafts]
+    if kin.surroundings is not None:
+        speeds += [shaft.ratio * fp for shaft in kin.surroundings.shafts]
     out: list[float] = []
     for f in speeds:
         if not any(math.isclose(f, seen, rel_tol=1e-9) for seen in [fp, *out]):

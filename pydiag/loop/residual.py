@@ -85,8 +85,8 @@ def describe_non_kinematic(freq_hz: float, kin, bin_hz: float) -> str:
     """What a line no kinematic frequency explains could be."""
     text = (f"not kinematic: {freq_hz / kin.f_pinion_hz:.3g}x pinion, "
             f"{freq_hz / kin.f_gear_hz:.3g}x gear")
-    if kin.machine is not None:
-        for shaft in kin.machine.shafts:
+    if kin.surroundings is not None:
+        for shaft in kin.surroundings.shafts:
             text += f", {freq_hz / (shaft.ratio * kin.f_pinion_hz):.3g}x {shaft.name}"
     elif kin.f_other_shaft_hz is not None:
         text += f", {freq_hz / kin.f_other_shaft_hz:.3g}x other shaft"
@@ -95,7 +95,7 @@ def describe_non_kinematic(freq_hz: float, kin, bin_hz: float) -> str:
         if n >= 1 and abs(freq_hz - n * mains) <= bin_hz:
             text += f", {n}x {mains:g} Hz mains"
     return text + (" (a shaft or stage the machine file lacks, the mains, or a resonance)"
-                   if kin.machine is not None else
+                   if kin.surroundings is not None else
                    " (another shaft or stage, the mains, or a resonance)")
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from pydiag.fit.gain import (apply_curve, curve_basis, curve_nodes, fitted_curve,
                              fitted_gain)
-from pydiag.gear.kinematics import GearKinematics, MachineContext, OtherStage
+from pydiag.gear.kinematics import GearKinematics, Surroundings, OtherStage
 
 
 def test_the_nodes_are_every_stages_mesh_harmonics_and_close_ones_are_one():
@@ -14,7 +14,7 @@ def test_the_nodes_are_every_stages_mesh_harmonics_and_close_ones_are_one():
     # a second stage of 48/80 on the gear shaft (12 Hz): mesh 576 Hz; its 5th harmonic
     # (2880 Hz) falls on the first stage's 3rd, and is one node with it; each stage's
     # harmonics reach the first at or above the top
-    box = GearKinematics(32, 80, 30.0, machine=MachineContext(
+    box = GearKinematics(32, 80, 30.0, surroundings=Surroundings(
         stages=(OtherStage("output stage", 48, 80, 32 / 80, "idler", "output"),)))
     nodes = curve_nodes(box, 2900.0)
     assert nodes == pytest.approx([576.0, 960.0, 1152.0, 1728.0, 1920.0, 2304.0, 2880.0,

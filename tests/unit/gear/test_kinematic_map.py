@@ -94,4 +94,4 @@ def test_a_stage_of_a_gearbox_names_every_other_stage_shaft_and_bearing():
     assert machine.stage_kinematics(1, 30.0).other_shaft_ratio == pytest.approx(0.6 * 19 / 47)
     last = machine.stage_kinematics(2, 30.0)
     assert last.other_shaft_ratio == pytest.approx(10 / 6)
-    assert last.bearing.n_balls == 9 and last.machine.bearings == ()  # on its pinion shaft
+    assert last.bearing.n_balls == 9 and last.surroundings.bearings == ()  # on its pinion shaft
