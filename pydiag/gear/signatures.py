@@ -288,7 +288,8 @@ def bearing_values(kin) -> dict[str, float]:
 
 
 def bearing_missing(kin) -> str:
-    return "the bearing's geometry (--bearing)" if kin is None or kin.bearing is None else ""
+    return ("the bearing's geometry (--bearing, or a machine file's [[bearings]] on the pinion's "
+            "shaft)" if kin is None or kin.bearing is None else "")
 
 
 #: The largest bearing strike the bearing effects fit, m/s2 at the model's sensor (500 g):

@@ -27,11 +27,12 @@ are fitted as ``<stage>.<name>``, after the stages
 machine: a torque ripple is read from periods of the model's response without it, and so
 is a speed ripple on a machine of one stage; on a stage among others a speed ripple's model
 is simulated whole, not one period repeated (:func:`~pydiag.loop.stage_catalogue.stage_effect`,
-:mod:`pydiag.signal.ripple`). An effect that
-needs a component the stage does not describe (a bearing's geometry, another shaft's
-ratio) or that is a sensor's path (the housing) is not a stage's in this model yet. The
-catalogue as a stage has it (its parameters named for the stage) is
-:mod:`pydiag.loop.stage_catalogue`'s.
+:mod:`pydiag.signal.ripple`). A bearing's effect on a stage is the first bearing the
+machine file places on the stage's pinion shaft (its geometry the file's), another shaft's
+orders the next shaft's downstream of the stage's gear (else upstream of its pinion); a
+stage with neither has nothing of theirs to fit. The housing (a sensor's path) is not a
+stage's in this model yet. The catalogue as a stage has it (its parameters named for the
+stage) is :mod:`pydiag.loop.stage_catalogue`'s.
 
 The stages' shafts are not connected: each stage's pinion turns at its steady speed. A
 shaft's torsion between two stages (``GearDiag.Components.Shaft``,

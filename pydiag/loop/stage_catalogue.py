@@ -18,16 +18,16 @@ from pydiag.gear.machine import Machine
 
 def on_a_stage(effect: Effect) -> bool:
     """Whether a machine's model can give ``effect`` to a stage
-    (:mod:`pydiag.loop.machine_model`'s docstring): an
-    effect of the mesh or its shafts, not one that needs a component the stage does not
-    describe (a bearing's geometry, another shaft's ratio) nor a sensor's path."""
-    return effect.machine_values is None and effect.transfer is None
+    (:mod:`pydiag.loop.machine_model`'s docstring): an effect of the mesh, of its shafts or
+    of a component the machine file describes on them (a bearing on the stage's pinion
+    shaft, another shaft of the machine), not a sensor's path (the housing)."""
+    return effect.transfer is None
 
 
 def not_on_a_stage(key: str) -> str:
     """Why the effect ``key`` cannot be a stage's (one that :func:`on_a_stage` refuses)."""
-    return (f"{key} is not a stage's in a machine's model yet (a bearing's lines need its "
-            "geometry, another shaft's its ratio; the housing is a sensor's path)")
+    return (f"{key} is not a stage's in a machine's model yet (the housing is a sensor's "
+            "path)")
 
 
 def possible_parameters(machine: Machine, k: int, key: str) -> tuple[Parameter, ...]:
@@ -37,12 +37,17 @@ def possible_parameters(machine: Machine, k: int, key: str) -> tuple[Parameter, 
 
 
 def nothing_to_fit(machine: Machine, k: int, key: str) -> str:
-    """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine`` (every line
-    it would fit is another's of the stage: each of the first ten orders of a 6-tooth
-    pinion is a mesh harmonic or one of its sidebands), or "" when it has."""
-    if EFFECTS[key].parameters and not possible_parameters(machine, k, key):
-        return (f"{key} has nothing to fit on {machine.stages[k].name} (its lines are all "
-                "another's of the stage's)")
+    """Why the effect ``key`` has nothing to fit on stage ``k`` of ``machine``, or "" when
+    it has: the machine file does not say where its lines are (no bearing on the stage's
+    pinion shaft, no other shaft), or every line it would fit is another's of the stage
+    (each of the first ten orders of a 6-tooth pinion is a mesh harmonic or one of its
+    sidebands)."""
+    effect = EFFECTS[key]
+    name = machine.stages[k].name
+    if why := effect.unknown_lines(machine.stage_kinematics(k, machine.input_hz or 1.0)):
+        return f"{key} has nothing to fit on {name}: {why}"
+    if effect.parameters and not possible_parameters(machine, k, key):
+        return f"{key} has nothing to fit on {name} (its lines are all another's of the stage's)"
     return ""
 
 

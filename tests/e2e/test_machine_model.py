@@ -323,7 +323,13 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     assert [match(480.0, ln, bin_hz).family for ln in lines] == ["stage_mesh", "mesh"]
     assert [match(960.0, ln, bin_hz).family for ln in lines] == ["mesh", "mesh"]  # shared
     effects = model.stage_effects(1)
-    assert "housing_sensor" not in effects and "bearing_outer_race" not in effects
+    assert "housing_sensor" not in effects  # a sensor's path, not a stage's
+    # a bearing's effect on a stage is the first bearing on its pinion's shaft (the idler's
+    # ID:IS, an ER-10K): its geometry from the machine file, named for the stage
+    outer = effects["bearing_outer_race"]
+    assert outer.values_from(views[1]) == {
+        "output_stage.n_balls": 8.0, "output_stage.d_ball": pytest.approx(7.9375e-3),
+        "output_stage.d_pitch": pytest.approx(33.5026e-3), "output_stage.alpha_contact": 0.0}
     tooth = effects["gear_tooth_fault"]
     assert [p.name for p in tooth.parameters] == ["output_stage.d_g", "output_stage.tooth_g"]
     assert tooth.hint([], 0.0, views[1]) == {"output_stage.tooth_g": (0.0, 80.0)}

@@ -565,6 +565,46 @@ def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(truth_r
     assert "stopped at the step limit, confident: speed_fluctuation on stage 1" in res.stdout
 
 
+#: The simulator's pair as a machine file that places the pinion's bearing (a 6205, the
+#: simulator's geometry): a bearing's lines are the machine's, so a stage's model has them.
+PAIR_WITH_BEARING = ('name = "pair (its bearing placed)"\ninput_rpm = 1500\n'
+                     'shafts = ["pinion", "gear"]\n[[stages]]\npinion_teeth = 14\n'
+                     'gear_teeth = 21\n[[bearings]]\nname = "pinion bearing"\n'
+                     'shaft = "pinion"\nn_balls = 9\nball_diameter_mm = 7.94\n'
+                     'pitch_diameter_mm = 39.04\n')
+
+
+@pytest.fixture(scope="module")
+def machines_dir(tmp_path_factory):
+    """Where the machines' models these tests write are built: once for every test of a
+    worker that writes the same one."""
+    return tmp_path_factory.mktemp("machines")
+
+
+@pytest.mark.parametrize("hidden", ["bearing_outer_race", "bearing_inner_race", "none"])
+def test_a_bearing_the_machine_file_places_is_judged_by_the_machines_model(
+        truth_records, tmp_path, machines_dir, hidden):
+    """`pydiag discover --machine` without --fmu, the pair as a machine of one stage with its
+    pinion's bearing: the simulator's race defect (pulses with random slip through a mode
+    of its own) is confident on the stage, on the envelope, and the other race is not; on
+    the healthy record neither is."""
+    meas, machine, out = tmp_path / "m.csv", tmp_path / "pair.toml", tmp_path / "d.json"
+    write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
+                                   clean=truth_records[hidden]))
+    machine.write_text(PAIR_WITH_BEARING)
+    res = run_cli("-m", "pydiag", "discover", "--machine", str(machine), "--measurement",
+                  str(meas), "--effects", ",".join(STRIKES), "--json", str(out), "--quiet",
+                  "--particles", "10", "--iterations", "8", "--polish", "100",
+                  "--build-dir", str(machines_dir))
+    assert res.returncode == 0, res.stderr
+    rows = {r["effect"]: r for r in json.loads(out.read_text())["ranking"]}
+    assert set(rows) == set(STRIKES) and {r["stage"] for r in rows.values()} == {"stage 1"}
+    confident = [key for key, r in rows.items() if r["confident"]]
+    assert confident == ([] if hidden == "none" else [hidden]), rows
+    if hidden != "none":
+        assert "envelope" in rows[hidden]["message"], rows[hidden]
+
+
 def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, truth_records,
                                                                       tmp_path):
     """pydiag loop, one comparison allowed: the runout is confident on the two-effect
