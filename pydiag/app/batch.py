@@ -6,7 +6,8 @@ a fleet's records can be trended in one table.
 
 With a machine file of several stages (``batch --machine``), every stage of every record
 is diagnosed (:mod:`pydiag.diagnose.stages`), against the ``--baseline`` records when given:
-a column group a stage.
+a column group a stage. Without an FMU of one's own, by the machine's own model, built
+once before the tasks (a task carries it and the FMU's path).
 
 Every measurement is one task; inside a task the estimator runs in a single process
 (the parallelism is across measurements). A measurement that fails becomes a row with
@@ -38,8 +39,9 @@ from pydiag.gear.machine_file import load_machine
 from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
+from pydiag.loop.machine_model import MachineModel
 from pydiag.diagnose.diagnosis import diagnose
-from pydiag.diagnose.stages import diagnose_machine
+from pydiag.diagnose.stages import diagnose_machine, diagnose_machine_model
 from pydiag.model.adapter import load_adapter
 
 ROW_COLUMNS = ("measurement", "status", "message", "fault_mode", "severity", "error",
@@ -63,6 +65,7 @@ class BatchTask:
     machine: str | None = None  # a machine file of several stages: every stage diagnosed
     baselines: tuple[MachineRecord, ...] = ()  # its healthy records, seen through it
     input_hz: float | None = None  # its nominal input speed
+    model: MachineModel | None = None  # the machine's own model, built at ``fmu``
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -123,9 +126,14 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     """Every stage of a machine's record (:func:`pydiag.diagnose.stages.diagnose_machine`): a
     column group a stage (``<stage>:fault_mode``, ...); the row's own fault mode is the
     first stage's that is not healthy, its severity and error the highest."""
-    result = diagnose_machine(task.fmu, m, load_machine(task.machine), task.input_hz,
-                              task.problem, FaultEstimator(n_workers=1, **task.estimator),
-                              task.baselines, adapter)
+    estimator = FaultEstimator(n_workers=1, **task.estimator)
+    machine = load_machine(task.machine)
+    if task.model is not None:  # every stage at once, by the machine's own model
+        result = diagnose_machine_model(task.fmu, task.model, m, machine, task.input_hz,
+                                        task.problem, estimator, task.baselines)
+    else:
+        result = diagnose_machine(task.fmu, m, machine, task.input_hz, task.problem,
+                                  estimator, task.baselines, adapter)
     row: dict = {"status": "ok", "message": "; ".join(result.warnings),
                  **{k: v for k, v in result.speed.to_dict().items()
                     if k != "nominal_speed_hz"}}

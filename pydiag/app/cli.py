@@ -207,7 +207,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_indicators)
 
     p = sub.add_parser("batch", help="diagnose many measurements (locally or on Dask)")
-    p.add_argument("--fmu", required=True)
+    p.add_argument("--fmu", help="a model of your own (or a vendor's, with --adapter); "
+                   "without it, --machine's own model is written and built, once")
     p.add_argument("--measurements", required=True,
                    help="folder of record files (any format pydiag reads), or a glob")
     p.add_argument("--out", required=True, help="results table (.parquet, or .csv)")
@@ -219,6 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
                    + KEPT_HELP)
     _history_arg(p)
     _record_args(p)
+    _library_args(p)
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_batch)

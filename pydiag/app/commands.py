@@ -33,6 +33,8 @@ from pydiag.gear.machine_report import machine_report
 from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
+from pydiag.loop.compose import BuiltModel
+from pydiag.loop.machine_model import MachineModel
 from pydiag.model import regress
 from pydiag.diagnose.diagnosis import Diagnosis, diagnose
 from pydiag.diagnose.stages import (diagnose_machine, diagnose_machine_model, machine_speed,
@@ -277,14 +279,18 @@ def cmd_batch(args) -> int:
     settings = {k: v for k, v in estimator_settings(args).items() if k != "n_workers"}
     channels = channels_to_read(args)
     machine = args.machine_description
+    if not args.fmu and machine is None:
+        raise UsageError("give --fmu, or --machine FILE to diagnose by the machine's own model")
     staged = _staged(args)
     problem = problem_settings(args)
     baselines = tuple(baseline_records(args, machine, problem.tracking))
-    tasks = [batch.BatchTask(p, args.fmu, settings, tuple(channels) if channels else None,
+    # the machine's own model, built once here for every record (a worker only runs it)
+    model, fmu = (None, args.fmu) if args.fmu else _built(machine_models(args)(machine))
+    tasks = [batch.BatchTask(p, fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,
                              tuple(args.sensitivity or ()), args.machine if staged else None,
-                             baselines, args.input_hz if staged else None)
+                             baselines, args.input_hz if staged else None, model)
              for p in paths]
     bar = None
     if not args.quiet:
@@ -305,6 +311,10 @@ def cmd_batch(args) -> int:
             print(f"  {r['measurement']}: {'' if r['status'] != 'ok' else 'warning: '}"
                   f"{r['message']}")
     return 0
+
+
+def _built(model: tuple[MachineModel, BuiltModel]) -> tuple[MachineModel, str]:
+    return model[0], str(model[1].fmu)
 
 
 def cmd_regress(args) -> int:

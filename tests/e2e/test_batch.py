@@ -92,3 +92,23 @@ def test_batch_rows_can_carry_the_condition_indicators(measurement_dir, gear_fmu
                   "--polish", "0", "--quiet")
     assert res.returncode == 0, res.stderr
     assert {"acc:fm4", "disp:na4", "acc:ser", "tooth_contrast"} <= set(pd.read_parquet(out))
+
+
+def test_cli_batch_by_the_machines_own_model(measurement_dir, tmp_path):
+    """batch --machine without --fmu: the machine's own model is written and built once,
+    every record diagnosed by it (a column group a stage) as diagnose --machine does, a
+    broken record a row; without a machine file either, a usage error."""
+    out = tmp_path / "results.csv"
+    res = run_cli("-m", "pydiag", "batch", "--machine", "examples/paper_pair.toml",
+                  "--measurements", str(measurement_dir / "*.csv"), "--out", str(out),
+                  "--quiet", "--build-dir", str(tmp_path / "build"), "--workers", "2")
+    assert res.returncode == 0, res.stderr
+    table = pd.read_csv(out)
+    assert list(table["status"]) == ["ok", "ok", "error"], table["message"]
+    # a: a_f 0.3; b: f_ate = f_dte = 0.2 (Table 1 case 6)
+    assert list(table["pair:fault_mode"][:2]) == ["tooth_fault", "transmission_error"]
+    assert list(table["pair:severity"][:2]) == ["medium", "medium"]
+    assert len(list((tmp_path / "build" / "machines").glob("*/*.fmu"))) == 1
+    res = run_cli("-m", "pydiag", "batch", "--measurements", str(measurement_dir / "*.csv"),
+                  "--out", str(tmp_path / "x.csv"), "--quiet")
+    assert res.returncode == 2 and "give --fmu, or --machine FILE" in res.stderr, res.stderr
