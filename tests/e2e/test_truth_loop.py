@@ -581,7 +581,8 @@ def machines_dir(tmp_path_factory):
     return tmp_path_factory.mktemp("machines")
 
 
-@pytest.mark.parametrize("hidden", ["bearing_outer_race", "bearing_inner_race", "none"])
+@pytest.mark.parametrize("hidden", ["bearing_outer_race", "none", pytest.param(
+    "bearing_inner_race", marks=pytest.mark.slow)])  # the pair path checks it on three seeds
 def test_a_bearing_the_machine_file_places_is_judged_by_the_machines_model(
         truth_records, tmp_path, machines_dir, hidden):
     """`pydiag discover --machine` without --fmu, the pair as a machine of one stage with its
