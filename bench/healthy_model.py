@@ -1,0 +1,112 @@
+"""Does a record need, held out, what the machine's healthy model lacks? An experiment for
+the component verdict (issue 60): the machine's own model (no ``--fmu``) is fitted once to
+a healthy baseline record; each other record is then seen through that healthy model (its
+stages' parameters held at the baseline's fit, the channels' gains the record's own), and
+every effect each stage can have is tried held out against it (``discover --machine``'s
+test, on a base not fitted to the record). The baseline itself is tried the same way
+against its own fit: what the healthy model lacks on a healthy record. Prints, per
+record, every (stage, effect) with its held-out z and whether it is confident. Usage:
+
+    .venv/bin/python bench/healthy_model.py BASELINE RECORD [RECORD ...]
+        [--machine examples/phm09_spur.toml] [--channel ch1] [--rpm 1800] [--effects K,K]
+
+Records are the PHM 2009 challenge's (cite the PHM Society 2009 Data Challenge where you
+report results); the machine file gives their sensor's sensitivity and the tacho.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _setup(machine: str, record: str, channel: str, rpm: float, build_dir: str):
+    from pydiag.app import loop_commands as lc
+    from pydiag.app.cli import build_parser
+    from pydiag.app.machine_options import apply_machine
+    from pydiag.app.models import machine_models
+    from pydiag.app.reading import read_input
+    args = build_parser().parse_args(
+        ["discover", "--machine", machine, "--measurement", record, "--channel", channel,
+         "--rpm", str(rpm), "--sample-rate", str(200_000 / 3), "--quiet",
+         "--build-dir", build_dir])
+    args.machine_description = apply_machine(args)
+    m = read_input(args)
+    machines = machine_models(args)
+    problem, (model, _built) = lc._machine_problem(args, m, machines)
+    return args, machines, problem, model
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("baseline")
+    ap.add_argument("records", nargs="+")
+    ap.add_argument("--machine", default=str(ROOT / "examples" / "phm09_spur.toml"))
+    ap.add_argument("--channel", default="ch1")
+    ap.add_argument("--rpm", type=float, default=1800.0)
+    ap.add_argument("--effects", help="comma-separated effect keys (default: the catalogue)")
+    a = ap.parse_args()
+    from pydiag.app import loop_commands as lc
+    from pydiag.app.commands import estimator_settings
+    from pydiag.fit.estimator import FaultEstimator
+    from pydiag.loop.compare import compare
+    from pydiag.loop.machine_discover import discover_machine
+    from pydiag.loop.machine_fit import compare_machine
+    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}; {Path(a.machine).name}, {a.channel}, "
+          f"{a.rpm:g} rpm nominal; baseline {Path(a.baseline).name}")
+    with tempfile.TemporaryDirectory() as tmp:
+        build_dir = str(Path(tmp) / "build")
+        started = time.perf_counter()
+        args, machines, problem, model = _setup(a.machine, a.baseline, a.channel, a.rpm,
+                                                build_dir)
+        healthy = compare_machine(problem, model, FaultEstimator(**estimator_settings(args)),
+                                  lc._effect_estimator(args))
+        print(f"healthy fit: error {healthy.fit_error:.3f}, "
+              f"{time.perf_counter() - started:.0f} s", flush=True)
+        own: dict[tuple[str, str], float] = {}  # the baseline's z against its own fit
+        for record in [a.baseline] + a.records:
+            started = time.perf_counter()
+            args, machines, problem, model = _setup(a.machine, record, a.channel, a.rpm,
+                                                    build_dir)
+            base = compare(problem, None, healthy.false_alarm_rate,
+                           parameters=healthy.parameters)
+            base = dataclasses.replace(base, fit_error=base.error)
+            found = discover_machine(problem, args.machine_description, model, base,
+                                     lambda machine, ms=machines: str(ms(machine)[1].fmu),
+                                     lc._effect_estimator(args),
+                                     a.effects.split(",") if a.effects else None)
+            took = time.perf_counter() - started
+            print(f"\n## {Path(record).name}: healthy model's error {base.error:.3f}, "
+                  f"{took:.0f} s", flush=True)
+            print("| stage | effect | z | baseline's z | rise | confident | explained | "
+                  "error base -> with | fitted |")
+            print("|---|---|---|---|---|---|---|---|---|")
+            rows = [d for d in found if d.held_out is not None and d.held_out.tried]
+            if not own:
+                own = {(d.stage, d.effect): d.held_out.z for d in rows}
+            rows.sort(key=lambda d: -(d.held_out.z - own.get((d.stage, d.effect), 0.0)))
+            for d in rows:
+                h = d.held_out
+                zb = own.get((d.stage, d.effect), float("nan"))
+                names = {p.name for p in model.stage_effects(
+                    [s.name for s in args.machine_description.stages].index(d.stage))[
+                        d.effect].parameters}
+                fitted = ", ".join(f"{k.split('.', 1)[1]} {v:.3g}"
+                                   for k, v in h.parameters.items() if k in names)
+                print(f"| {d.stage} | {d.effect} | {h.z:.1f} | {zb:.1f} | {h.z - zb:+.1f} | "
+                      f"{'yes' if d.confident else ''} | {h.explained:.2f} | "
+                      f"{h.error_base:.3f} -> {h.error_effect:.3f} | {fitted} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
