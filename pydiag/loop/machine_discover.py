@@ -5,10 +5,10 @@ each stage's residual points to).
 For each stage, the model's problem is seen from that stage's shafts, its own parameters
 free and the other stages' held at the machine's fit
 (:func:`~pydiag.loop.machine_fit.stage_view`), with the catalogue named for it
-(:func:`~pydiag.loop.machine_model.MachineModel.stage_effects`); each effect the stage lacks is fitted
-on half of the periods on the model with it on that stage and scored on the other half
-(:func:`pydiag.loop.held_out.held_out`), whatever its score on the residual (compare
-tries only those its residual points to). The models are built here, one after the
+(:meth:`~pydiag.loop.machine_model.MachineModel.stage_effects`); each effect the stage
+lacks is fitted on half of the periods on the model with it on that stage and scored on
+the other half (:func:`pydiag.loop.held_out.held_out`), whatever its score on the
+residual (compare tries only those its residual points to). The models are built here, one after the
 other; the fits run side by side, one per core, as :func:`pydiag.loop.discover.discover`
 runs a pair's, the longest first. Competitors are settled stage by stage: two effects on
 one stage claim the same lines, the same effect on two stages does not.
@@ -67,8 +67,8 @@ def _try_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key
 
 def lacking(machine: Machine, model: MachineModel, stage: int) -> dict[str, Effect]:
     """The catalogue as stage ``stage`` of ``model`` has it
-    (:func:`~pydiag.loop.machine_model.MachineModel.stage_effects`) but the effects the machine file
-    already gives it, whatever parameters of theirs it holds off."""
+    (:meth:`~pydiag.loop.machine_model.MachineModel.stage_effects`) but the effects the
+    machine file already gives it, whatever parameters of theirs it holds off."""
     has = machine.effect_keys(stage)
     return {key: e for key, e in model.stage_effects(stage).items() if key not in has}
 
