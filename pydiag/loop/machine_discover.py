@@ -10,8 +10,9 @@ lacks is fitted on half of the periods on the model with it on that stage and sc
 the other half (:func:`pydiag.loop.held_out.held_out`), whatever its score on the
 residual (compare tries only those its residual points to). The models are built here,
 one after the other; the fits run side by side, one per core, as
-:func:`pydiag.loop.discover.discover` runs a pair's, the longest first. Competitors are settled stage by stage: two effects on
-one stage claim the same lines, the same effect on two stages does not.
+:func:`pydiag.loop.discover.discover` runs a pair's, the longest first. Competitors are
+settled stage by stage: two effects on one stage claim the same lines, the same effect on
+two stages does not.
 
 Validation (:func:`validate_machine`) tries on each stage what
 :func:`pydiag.loop.validate.validate` would try there, the fits of every stage side by
