@@ -17,7 +17,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_file import load_machine, machine_from_dict
 from pydiag.io.outputs import edit_in_place
-from pydiag.loop.stage_catalogue import not_on_a_stage, on_a_stage
+from pydiag.loop.stage_catalogue import not_on_a_stage, nothing_to_fit, on_a_stage
 
 
 def accept(path: str | Path, key: str, stage: str | None = None,
@@ -42,6 +42,8 @@ def accept(path: str | Path, key: str, stage: str | None = None,
     name = machine.stages[index].name
     if key in machine.effect_keys(index):
         raise UsageError(f"{path}: {key} is on {name} already")
+    if why := nothing_to_fit(machine, index, key):  # the model would refuse it
+        raise UsageError(f"{path}: {why}")
     edited: list[Machine] = []
 
     def added(text: str) -> str:  # the table, in the file's own line ends

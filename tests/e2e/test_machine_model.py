@@ -102,6 +102,8 @@ def test_compare_fits_the_machines_model_and_accept_gives_a_stage_an_effect(tmp_
     for args, message in (
             (("housing_sensor", "--stage", "2"), "housing_sensor is not a stage's in a "
              "machine's model yet"),
+            (("bearing_outer_race", "--stage", "2"), "bearing_outer_race has nothing to fit "
+             "on stage 2: its lines are not known without the bearing's geometry"),
             (("gear_tooth_fault",), "2 stages: give the stage the effect is on (1 or "
              "'stage 1', 2 or 'stage 2')")):
         assert message in refused(capsys, "accept", *args, "--machine", str(machine))
