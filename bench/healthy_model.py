@@ -5,7 +5,8 @@ stages' parameters held at the baseline's fit, the channels' gains the record's 
 every effect each stage can have is tried held out against it (``discover --machine``'s
 test, on a base not fitted to the record). The baseline itself is tried the same way
 against its own fit: what the healthy model lacks on a healthy record. Prints, per
-record, every (stage, effect) with its held-out z and whether it is confident. Usage:
+record, every (stage, effect) tried with its held-out z, the baseline's own, the rise,
+whether it is confident and what it fitted, the largest rise first. Usage:
 
     .venv/bin/python bench/healthy_model.py BASELINE RECORD [RECORD ...]
         [--machine examples/phm09_spur.toml] [--channel ch1] [--rpm 1800] [--effects K,K]
@@ -29,6 +30,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _setup(machine: str, record: str, channel: str, rpm: float, build_dir: str):
+    """The record and the machine's model as `pydiag discover --machine` sees them (the
+    command line's defaults: the file's sensors and sensitivity, the tacho's speed)."""
     from pydiag.app import loop_commands as lc
     from pydiag.app.cli import build_parser
     from pydiag.app.machine_options import apply_machine
