@@ -57,36 +57,37 @@ def main() -> int:
     ap.add_argument("--rpm", type=float, default=1800.0)
     ap.add_argument("--effects", help="comma-separated effect keys (default: the catalogue)")
     a = ap.parse_args()
-    from pydiag.app import loop_commands as lc
     from pydiag.app.commands import estimator_settings
     from pydiag.fit.estimator import FaultEstimator
     from pydiag.loop.compare import compare
+    from pydiag.loop.effect_fit import EFFECT_REFIT
     from pydiag.loop.machine_discover import discover_machine
     from pydiag.loop.machine_fit import compare_machine
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
           f"{platform.python_version()}; {Path(a.machine).name}, {a.channel}, "
           f"{a.rpm:g} rpm nominal; baseline {Path(a.baseline).name}")
+    refit = FaultEstimator(**EFFECT_REFIT)  # an effect's refit, as discover's defaults
     with tempfile.TemporaryDirectory() as tmp:
         build_dir = str(Path(tmp) / "build")
         started = time.perf_counter()
-        args, machines, problem, model = _setup(a.machine, a.baseline, a.channel, a.rpm,
-                                                build_dir)
+        seen = _setup(a.machine, a.baseline, a.channel, a.rpm, build_dir)
+        args, _, problem, model = seen
         healthy = compare_machine(problem, model, FaultEstimator(**estimator_settings(args)),
-                                  lc._effect_estimator(args))
+                                  refit)
         print(f"healthy fit: error {healthy.fit_error:.3f}, "
               f"{time.perf_counter() - started:.0f} s", flush=True)
         own: dict[tuple[str, str], float] = {}  # the baseline's z against its own fit
-        for record in [a.baseline] + a.records:
+        for index, record in enumerate([a.baseline] + a.records):
             started = time.perf_counter()
-            args, machines, problem, model = _setup(a.machine, record, a.channel, a.rpm,
-                                                    build_dir)
+            if index:  # the baseline's is read and built once, above
+                seen = _setup(a.machine, record, a.channel, a.rpm, build_dir)
+            args, machines, problem, model = seen
             base = compare(problem, None, healthy.false_alarm_rate,
                            parameters=healthy.parameters)
             base = dataclasses.replace(base, fit_error=base.error)
             found = discover_machine(problem, args.machine_description, model, base,
                                      lambda machine, ms=machines: str(ms(machine)[1].fmu),
-                                     lc._effect_estimator(args),
-                                     a.effects.split(",") if a.effects else None)
+                                     refit, a.effects.split(",") if a.effects else None)
             took = time.perf_counter() - started
             print(f"\n## {Path(record).name}: healthy model's error {base.error:.3f}, "
                   f"{took:.0f} s", flush=True)
@@ -94,15 +95,15 @@ def main() -> int:
                   "error base -> with | fitted |")
             print("|---|---|---|---|---|---|---|---|---|")
             rows = [d for d in found if d.held_out is not None and d.held_out.tried]
-            if not own:
+            if index == 0:
                 own = {(d.stage, d.effect): d.held_out.z for d in rows}
             rows.sort(key=lambda d: -(d.held_out.z - own.get((d.stage, d.effect), 0.0)))
+            stages = [s.name for s in args.machine_description.stages]
             for d in rows:
                 h = d.held_out
                 zb = own.get((d.stage, d.effect), float("nan"))
-                names = {p.name for p in model.stage_effects(
-                    [s.name for s in args.machine_description.stages].index(d.stage))[
-                        d.effect].parameters}
+                names = {p.name for p in
+                         model.stage_effects(stages.index(d.stage))[d.effect].parameters}
                 fitted = ", ".join(f"{k.split('.', 1)[1]} {v:.3g}"
                                    for k, v in h.parameters.items() if k in names)
                 print(f"| {d.stage} | {d.effect} | {h.z:.1f} | {zb:.1f} | {h.z - zb:+.1f} | "
