@@ -238,14 +238,20 @@ def build_parser() -> argparse.ArgumentParser:
     _history_arg(p)
     p.set_defaults(func=cmd_baseline)
 
-    p = sub.add_parser("regress", help="check an FMU against golden spectra")
-    p.add_argument("--fmu", required=True)
+    p = sub.add_parser("regress", help="check an FMU, or a machine's own model, against "
+                       "golden spectra")
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--fmu", help="the FMU to check")
+    which.add_argument("--machine", help="machine TOML file: its own model, written and built "
+                       "(checked on the machine's period at the file's input speed)")
+    _library_args(p)
     p.add_argument("--golden", required=True, help="golden JSON file")
     p.add_argument("--bless", action="store_true", help="write the golden file from this FMU "
                    "(replace an existing one with --force)")
     p.add_argument("--rtol", type=number(float, 0), default=DEFAULT_RTOL,
                    help=f"tolerance, fraction of the largest line (default {DEFAULT_RTOL:g})")
-    p.add_argument("--sensor", action="append", help="output to check when blessing (repeat)")
+    p.add_argument("--sensor", action="append", help="output to check when blessing (repeat; "
+                   "default the GearDiag sensors, or every output of a machine's model)")
     p.add_argument("--sample-rate", type=positive, default=10_000.0, help="Hz when blessing")
     p.add_argument("--adapter", help="adapter TOML (sensors, start values, kinematics) for --bless")
     _force(p)

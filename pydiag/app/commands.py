@@ -27,6 +27,7 @@ from pydiag.gear.conventions import DEFAULT_SENSORS, kinematics_from
 from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine import Machine
+from pydiag.gear.machine_file import load_machine
 from pydiag.gear.paper_cases import case
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings
 from pydiag.gear.machine_report import machine_report
@@ -34,7 +35,7 @@ from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop.compose import BuiltModel
-from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.machine_model import SPEED_PARAMETER, MachineModel
 from pydiag.model import regress
 from pydiag.diagnose.diagnosis import Diagnosis, diagnose
 from pydiag.diagnose.stages import (diagnose_machine, diagnose_machine_model, machine_speed,
@@ -318,13 +319,21 @@ def _built(model: tuple[MachineModel, BuiltModel]) -> tuple[MachineModel, str]:
 
 
 def cmd_regress(args) -> int:
+    fmu, machine, sensors = args.fmu, None, tuple(args.sensor) if args.sensor else None
+    if args.machine:
+        if args.adapter:
+            raise UsageError("--adapter describes an FMU of one's own: a machine's model "
+                             "(--machine) describes itself")
+        machine = load_machine(args.machine)
+        model, fmu = _built(machine_models(args)(machine))
+        sensors = sensors or tuple(o.name for o in model.outputs)
     if args.bless:
         check_outputs(args, "golden")  # an accepted behaviour is replaced only with --force
-        path = regress.bless_fmu(args.fmu, args.golden, adapter_of(args),
-                                 tuple(args.sensor) if args.sensor else None, args.sample_rate)
+        path = regress.bless_fmu(fmu, args.golden, adapter_of(args), sensors, args.sample_rate,
+                                 machine, SPEED_PARAMETER)
         print(f"blessed {path}")
         return 0
-    report = regress.check(args.fmu, args.golden, args.rtol)
+    report = regress.check(fmu, args.golden, args.rtol)
     print(format_regression(report))
     return 0 if report.passed else 1
 

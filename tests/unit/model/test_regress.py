@@ -2,6 +2,9 @@
 
 import json
 
+import numpy as np
+import pytest
+
 from conftest import inspected, run_cli
 
 from fmu_build import build_fmu
@@ -75,3 +78,37 @@ def test_missing_golden_is_a_clear_error(gear_fmu, tmp_path):
                   str(tmp_path / "none.json"))
     assert res.returncode == 2 and "create it with --bless" in res.stderr
     assert "Traceback" not in res.stderr
+
+
+def test_a_machines_own_model_is_blessed_checked_and_is_the_pairs(tmp_path):
+    """`regress --machine`: the machine's own model, written and built, blessed and checked
+    on Table 1's cases (on its stage's fault parameters). The paper's pair as a machine of
+    one stage gives the pair FMU's golden spectra within the check's tolerance (one model,
+    two routes to it); the same file at another speed fails the check."""
+    golden = tmp_path / "pair.json"
+    build = ["--build-dir", str(tmp_path / "build")]
+    res = run_cli("-m", "pydiag", "regress", "--machine", "examples/paper_pair.toml",
+                  "--golden", str(golden), "--bless", *build)
+    assert res.returncode == 0, res.stderr
+    mine, pair = json.loads(golden.read_text()), json.loads(open(GOLDEN).read())
+    assert mine["synchronous"]["period_s"] == pytest.approx(0.12)
+    assert list(mine["cases"]) == list(pair["cases"])
+    for name, case in pair["cases"].items():
+        assert mine["cases"][name]["parameters"] == {
+            f"pair.{k}": v for k, v in case["parameters"].items()}
+        for sensor, ref in case["spectra"].items():
+            g = np.asarray(ref["amplitude"])
+            a = np.asarray(mine["cases"][name]["spectra"][f"{sensor}_{sensor}"]["amplitude"])
+            assert a.shape == g.shape and np.max(np.abs(a - g)) < regress.DEFAULT_RTOL * g.max()
+    res = run_cli("-m", "pydiag", "regress", "--machine", "examples/paper_pair.toml",
+                  "--golden", str(golden), *build)
+    assert res.returncode == 0 and res.stdout.startswith("PASS: 8 cases x 2 sensors"), res.stdout
+    faster = tmp_path / "faster.toml"
+    faster.write_text(open("examples/paper_pair.toml").read().replace("input_rpm = 1500",
+                                                                     "input_rpm = 1530"))
+    res = run_cli("-m", "pydiag", "regress", "--machine", str(faster), "--golden", str(golden),
+                  *build)
+    assert res.returncode == 1 and "FAIL" in res.stdout, res.stdout + res.stderr
+    res = run_cli("-m", "pydiag", "regress", "--machine", "examples/paper_pair.toml",
+                  "--golden", str(golden), "--adapter", "x.toml", *build)
+    assert res.returncode == 2 and "--adapter" in res.stderr and "Traceback" not in res.stderr
