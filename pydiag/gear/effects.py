@@ -11,8 +11,8 @@ from pydiag.core.parameters import Parameter
 from pydiag.gear.effect import Effect
 from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPPLE_HZ,
                                     MAX_SHAFT_ORDER_M_S2, MAX_STRIKE_M_S2, MAX_SWING,
-                                    backlash, bearing_missing, bearing_values, family,
-                                    gear_eccentricity, gear_tooth_fault, housing_hint,
+                                    backlash, ball_defect, bearing_missing, bearing_values,
+                                    family, gear_eccentricity, gear_tooth_fault, housing_hint,
                                     housing_start, load_fluctuation, mesh_modulation,
                                     other_shaft, other_shaft_hint, other_shaft_missing,
                                     other_shaft_values, pinion_shaft, pinion_shaft_hint,
@@ -74,6 +74,15 @@ EFFECTS = {e.key: e for e in (
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
             Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
            family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
+           machine_values=bearing_values, missing=bearing_missing),
+    # a spalled ball strikes both races once each a turn about its axis (2 x BSF, the
+    # kinematic map's even BSF lines), the cage carrying it through the load zone
+    Effect("bearing_ball", "GearDiag.Effects.BearingBall",
+           "rolling-element defect, pinion bearing (strikes twice a ball turn ringing a "
+           "structural mode)",
+           (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
+            Parameter("phi_cage", -math.pi, math.pi, periodic=True)),
+           ball_defect, synchronous=False, outputs=("acc",), envelope=True,
            machine_values=bearing_values, missing=bearing_missing),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,

@@ -224,6 +224,16 @@ def family(name):
     return weight
 
 
+def ball_defect(line, freq, kin):
+    # a spalled ball strikes both races once each a turn about its axis: 2 x BSF and its
+    # harmonics (the BSF lines of even order); the two strikes differ (the races' curvature
+    # and load), which makes the odd ones, and the cage's turn through the load zone
+    # modulates them (FTF)
+    if line is None or line.family not in ("bsf", "ftf"):
+        return 0.0
+    return 1.0 if line.family == "bsf" and line.order % 2 == 0 else 0.5
+
+
 def stiffness_shape(line, freq, kin):
     # an even harmonic of the healthy mesh's stiffness: the mesh harmonics, 2x above all
     if line is None or line.family != "mesh":

@@ -50,6 +50,9 @@ HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           # without slip); seen in the envelope above the gear's bands
           "bearing_outer_race": dict(outer_race_acc=60.0),
           "bearing_inner_race": dict(inner_race_acc=60.0),
+          # a spalled ball: an outer and a weaker inner strike each spin of the ball, the
+          # cage's turn through the load zone (GearDiag: equal strikes at 2 x BSF)
+          "bearing_ball": dict(ball_acc=60.0),
           # the accelerometer sees the mesh force through a 2.5 kHz mode, above the band
           "housing_sensor": dict(housing_hz=2500.0),
           # a misaligned coupling: 1x-3x of the pinion angle at the sensor (GearDiag: ten
@@ -73,7 +76,8 @@ TWO_HIDDEN = dict(gear_runout_m=10e-6, other_shaft_acc=3.0)
 #: A gear runout and a torque ripple on the input shaft in one record.
 RUNOUT_AND_RIPPLE = dict(gear_runout_m=10e-6, torque_ripple=0.005)
 #: The strike frequency of each bearing effect on the simulator, Hz.
-STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz}
+STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz,
+           "bearing_ball": 2 * TruthGear().ball_spin_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
 ENVELOPE_BAND = (1575.0, ENVELOPE_TOP * RATE_HZ)
 
@@ -166,7 +170,7 @@ def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effec
 #: The effects discover tries on the simulator's records (the base has the others).
 DISCOVERED = ["gear_eccentricity", "gear_tooth_fault", "second_pinion_tooth_fault",
               "load_fluctuation", "speed_fluctuation", "mesh_stiffness_shape",
-              "bearing_outer_race", "bearing_inner_race", "housing_sensor",
+              "bearing_outer_race", "bearing_inner_race", "bearing_ball", "housing_sensor",
               "pinion_shaft_orders", "other_shaft_orders", "shaft_swing"]
 
 

@@ -49,6 +49,10 @@ class Effects:
     backlash_m: float = 0.0  # a gap opened when the deflection falls below zero
     outer_race_acc: float = 0.0  # peak acceleration of each outer-race pulse response, m/s2
     inner_race_acc: float = 0.0  # the same, inner race (modulated by the load zone)
+    # a spalled ball: it strikes the outer race and then the inner (weaker, through the
+    # ball's other contact) once each a turn about its axis, the cage carrying it through
+    # the load zone once a cage turn; peak of the outer strike's response, m/s2
+    ball_acc: float = 0.0
     torque_ripple: float = 0.0  # relative input torque ripple
     ripple_hz: float = 7.3
     housing_hz: float = 0.0  # > 0: the accelerometer sits on a housing mode at this frequency
@@ -120,6 +124,20 @@ class TruthGear:
     @property
     def bpfi_hz(self) -> float:
         return self.n_balls / 2 * self.f_pinion_hz * (1 + self.ball_to_pitch)
+
+    @property
+    def cage_turns_per_turn(self) -> float:
+        """The cage's turns a pinion turn: the balls roll between a fixed outer race and
+        the turning inner, so their centres go at half the inner contact's speed."""
+        return (1 - self.ball_to_pitch) / 2
+
+    @property
+    def ball_spin_hz(self) -> float:
+        """A ball's turns about its own axis a second: its circumference rolls without
+        slip on the fixed outer race, whose surface (radius (D + d)/2) passes the cage at
+        the cage's angular speed."""
+        r = self.ball_to_pitch
+        return self.f_pinion_hz * self.cage_turns_per_turn * (1 + r) / r
 
     def with_effects(self, **magnitudes) -> "TruthGear":
         return replace(self, effects=replace(self.effects, **magnitudes))
@@ -210,19 +228,20 @@ def _rhs(y, t, *args):
 
 
 def _pulse_train(rate_hz: float, t: np.ndarray, spread: float, rng: np.random.Generator,
-                 width_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Gaussian pulses at intervals 1/rate_hz (each interval spread by ``spread``), on t;
-    returns (pulses, pulse times)."""
+                 width_s: float, sizes: tuple[float, ...] = (1.0,)
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Gaussian pulses at intervals 1/rate_hz (each interval spread by ``spread``), on t,
+    their heights ``sizes`` in turn; returns (pulses, pulse times)."""
     n = int(np.ceil(t[-1] * rate_hz)) + 2
     times = np.cumsum(np.full(n, 1.0 / rate_hz) * (1 + spread * rng.standard_normal(n)))
     pulses = np.zeros_like(t)
     dt = t[1] - t[0]
     half = int(np.ceil(5 * width_s / dt))
-    for tk in times:
+    for i, tk in enumerate(times):
         k = int(round(tk / dt))
         lo, hi = max(k - half, 0), min(k + half + 1, t.size)
         if lo < hi:
-            pulses[lo:hi] += np.exp(-0.5 * ((t[lo:hi] - tk) / width_s) ** 2)
+            pulses[lo:hi] += sizes[i % len(sizes)] * np.exp(-0.5 * ((t[lo:hi] - tk) / width_s) ** 2)
     return pulses, times
 
 
@@ -236,7 +255,7 @@ def _resonance(x: np.ndarray, fs: float, f_hz: float, zeta: float, acceleration:
 
 
 #: The effects only the sensor sees: the mesh's dynamics are the same without them.
-SENSOR_ONLY = ("outer_race_acc", "inner_race_acc", "housing_hz", "housing_zeta", "coupling_acc",
+SENSOR_ONLY = ("outer_race_acc", "inner_race_acc", "ball_acc", "housing_hz", "housing_zeta", "coupling_acc",
                "other_shaft_acc", "other_shaft_ratio")
 
 
@@ -330,6 +349,11 @@ def _observe(g: TruthGear, t: np.ndarray, y: np.ndarray, out: list, duration_s: 
         pulses, _ = _pulse_train(g.bpfi_hz, t, g.slip, rng, 0.1e-3)
         zone = 0.5 * (1 + np.cos(y[:, 0]))  # the defect passes the load zone once a turn
         acc = acc + e.inner_race_acc * _unit_peak(
+            _resonance(pulses * zone, sample_rate_hz, g.bearing_resonance_hz, 0.05, True))
+    if e.ball_acc > 0:  # an outer strike, then an inner one, each spin of the ball
+        pulses, _ = _pulse_train(2 * g.ball_spin_hz, t, g.slip, rng, 0.1e-3, (1.0, 0.6))
+        zone = 0.5 * (1 + np.cos(g.cage_turns_per_turn * y[:, 0] + 0.4))
+        acc = acc + e.ball_acc * _unit_peak(
             _resonance(pulses * zone, sample_rate_hz, g.bearing_resonance_hz, 0.05, True))
     keep = _kept(t, duration_s, sample_rate_hz, warmup_s)
     return {"acc": acc[keep], "disp": y[keep, 2]}
