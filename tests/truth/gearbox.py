@@ -112,12 +112,21 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
 BEARING = dict(n_balls=9, ball_mm=7.9, pitch_mm=39.0, mode_hz=7000.0, zeta=0.05, slip=0.01)
 
 
+def cage_turns_per_turn() -> float:
+    """The cage's turns a turn of the shaft: the balls' centres move at half the speed of
+    the inner race's contact, (1 - d/D)/2 of the shaft's."""
+    return (1 - BEARING["ball_mm"] / BEARING["pitch_mm"]) / 2
+
+
 def bearing_passes_per_turn(defect: str) -> float:
-    """How many times a ball meets a defect of the outer or inner race in a turn of the
-    shaft: the balls roll at the cage's speed, (1 - d/D)/2 of the shaft's, so the outer
-    race (fixed) meets n of them n (1 - d/D)/2 times a turn, the inner race (turning with
-    the shaft) n (1 + d/D)/2 times."""
+    """How many times a defect strikes in a turn of the shaft. A race's: the outer race
+    (fixed) meets the n balls n (1 - d/D)/2 times a turn, the inner race (turning with the
+    shaft) n (1 + d/D)/2 times. A ball's: it meets a race twice a turn about its own
+    axis (the outer, then the inner), and it turns (D + d)/d times a turn of the cage
+    against the fixed outer race, whose surface passes it."""
     ratio = BEARING["ball_mm"] / BEARING["pitch_mm"]
+    if defect == "ball":
+        return 2 * cage_turns_per_turn() * (1 + ratio) / ratio
     sign = {"outer": -1.0, "inner": 1.0}[defect]
     return BEARING["n_balls"] / 2 * (1 + sign * ratio)
 
@@ -126,7 +135,8 @@ def _bearing_impacts(turns: np.ndarray, defect: str, size: float,
                      rng: np.random.Generator) -> np.ndarray:
     """The impacts of a defect on a bearing whose shaft has turned ``turns`` at each
     sample: one each time the passes (a ball every 1/passes of a turn, jittered by the
-    slip) are due, ringing the mode; an inner race's strongest at the bottom of its turn."""
+    slip) are due, ringing the mode; an inner race's strongest at the bottom of its turn, a
+    ball's at the bottom of the cage's."""
     passes = bearing_passes_per_turn(defect)
     n = turns.size
     due = np.arange(1, int(turns[-1] * passes))
@@ -136,6 +146,10 @@ def _bearing_impacts(turns: np.ndarray, defect: str, size: float,
     strength = np.ones(at.size)
     if defect == "inner":
         strength = 0.6 + 0.4 * np.cos(2 * np.pi * turns[at])
+    if defect == "ball":  # the inner strike through the ball's other contact is weaker,
+        # and the cage carries the ball through the load zone once a turn of its own
+        strength = (np.where(np.arange(at.size) % 2 == 0, 1.0, 0.6)
+                    * (0.6 + 0.4 * np.cos(2 * np.pi * cage_turns_per_turn() * turns[at])))
     w = 2 * np.pi * BEARING["mode_hz"]
     ring_t = np.arange(int(8 / (BEARING["zeta"] * w) * FS)) / FS
     ring = np.exp(-BEARING["zeta"] * w * ring_t) * np.sin(w * ring_t)
