@@ -185,46 +185,76 @@ class _Mesh:
         return self.k_pair / (1 / total + 1 / self.series) if total > 0 else 0.0
 
 
-def _dynamics(y, t, g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
-              omega_g0: float, load_damping: float) -> tuple[list[float], float]:
-    """(the state's derivatives, the mesh force); the state: the pinion's angle and speed,
-    the mesh deflection and its rate, and with a rotor the coupling's twist and the
-    rotor's speed"""
-    theta_p, omega_p, d, dv = y[:4]
+def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
+                 omega_g0: float, load_damping: float):
+    """The mesh's dynamics, a function (y, t) -> (the state's derivatives, the mesh force);
+    the state: the pinion's angle and speed, the mesh deflection and its rate, and with a
+    rotor the coupling's twist and the rotor's speed. Every constant is looked up once
+    here: the integrator calls it some 25 times a sample."""
     e = g.effects
     r_p, r_g = g.r_pinion_m, g.r_gear_m
-    theta_g = (r_p * theta_p - d) / r_g
-    omega_g = (r_p * omega_p - dv) / r_g
+    n_p = g.n_pinion
     assembly = g.n_pinion / (math.lcm(g.n_pinion, g.n_gear) / g.n_pinion)
-    te = (g.pinion_runout_m * math.sin(theta_p) + g.pitch_error_m * math.sin(assembly * theta_p)
-          + e.gear_runout_m * math.sin(theta_g + 0.7))
-    te_rate = (g.pinion_runout_m * math.cos(theta_p) * omega_p
-               + g.pitch_error_m * assembly * math.cos(assembly * theta_p) * omega_p
-               + e.gear_runout_m * math.cos(theta_g + 0.7) * omega_g)
-    stretch = d - te
-    k = mesh.stiffness(theta_p) * (1.0 + e.gear_tilt * math.cos(theta_g + 1.9))
-    if e.backlash_m > 0.0 and stretch < 0.0:  # the teeth separate: no force across the gap
-        stretch = min(stretch + e.backlash_m, 0.0)
-        force = k * stretch + (g.damping_n_s_m * (dv - te_rate) if stretch < 0.0 else 0.0)
-    else:
-        force = k * stretch + g.damping_n_s_m * (dv - te_rate)
-    t_in = g.torque_n_m * (1.0 + e.torque_ripple * math.sin(TWO_PI * e.ripple_hz * t))
-    t_load = (g.torque_n_m * g.n_gear / g.n_pinion * (1.0 + e.load_swing * math.cos(theta_g + 2.6))
-              + load_damping * (omega_g - omega_g0))
-    rotor = []
-    if g.rotor_inertia_kg_m2 > 0.0:  # the ripple drives the rotor, the coupling the pinion
-        twist, omega_r = y[4], y[5]
-        t_coupling = (g.coupling_stiffness_n_m_rad * twist
-                      + g.coupling_damping_n_m_s_rad * (omega_r - omega_p))
-        rotor = [omega_r - omega_p, (t_in - t_coupling) / g.rotor_inertia_kg_m2]
-        t_in = t_coupling
-    acc_p = (t_in - r_p * force) / inertia_p
-    acc_g = (r_g * force - t_load) / inertia_g
-    return [omega_p, acc_p, dv, r_p * acc_p - r_g * acc_g] + rotor, force
+    runout_p, pitch, runout_g = g.pinion_runout_m, g.pitch_error_m, e.gear_runout_m
+    tilt, backlash, damping = e.gear_tilt, e.backlash_m, g.damping_n_s_m
+    torque, ripple, ripple_w = g.torque_n_m, e.torque_ripple, TWO_PI * e.ripple_hz
+    load_torque, swing = g.torque_n_m * g.n_gear / g.n_pinion, e.load_swing
+    rotor_inertia = g.rotor_inertia_kg_m2
+    k_coupling, c_coupling = g.coupling_stiffness_n_m_rad, g.coupling_damping_n_m_s_rad
+    eps, drop, relief = g.contact_ratio, g.profile_drop, g.tip_relief
+    weights, n_weights = mesh.weights, mesh.weights.size
+    k_pair, series = mesh.k_pair, mesh.series
+    sin, cos, floor = math.sin, math.cos, math.floor
 
+    def shape(s: float) -> float:  # _pair_shape, inline
+        if s <= 0.0 or s >= eps:
+            return 0.0
+        middle = 2.0 * s / eps - 1.0
+        value = 1.0 - drop * middle * middle
+        for edge in (s, eps - s):
+            if edge < relief:
+                x = edge / relief
+                value *= x * x * (3.0 - 2.0 * x)
+        return value
 
-def _rhs(y, t, *args):
-    return _dynamics(y, t, *args)[0]
+    def dynamics(y, t):
+        y = y.tolist()  # Python floats: the same IEEE arithmetic as numpy's scalars, faster
+        theta_p, omega_p, d, dv = y[:4]
+        theta_g = (r_p * theta_p - d) / r_g
+        omega_g = (r_p * omega_p - dv) / r_g
+        te = (runout_p * sin(theta_p) + pitch * sin(assembly * theta_p)
+              + runout_g * sin(theta_g + 0.7))
+        te_rate = (runout_p * cos(theta_p) * omega_p
+                   + pitch * assembly * cos(assembly * theta_p) * omega_p
+                   + runout_g * cos(theta_g + 0.7) * omega_g)
+        stretch = d - te
+        u = theta_p * n_p / TWO_PI  # _Mesh.stiffness, inline
+        n0 = floor(u)
+        total = 0.0
+        for n in (n0, n0 - 1):
+            pair = shape(u - n)
+            if pair:
+                total += pair * weights[n % n_weights]
+        k_mesh = k_pair / (1 / total + 1 / series) if total > 0 else 0.0
+        k = k_mesh * (1.0 + tilt * cos(theta_g + 1.9))
+        if backlash > 0.0 and stretch < 0.0:  # the teeth separate: no force across the gap
+            stretch = min(stretch + backlash, 0.0)
+            force = k * stretch + (damping * (dv - te_rate) if stretch < 0.0 else 0.0)
+        else:
+            force = k * stretch + damping * (dv - te_rate)
+        t_in = torque * (1.0 + ripple * sin(ripple_w * t))
+        t_load = load_torque * (1.0 + swing * cos(theta_g + 2.6)) + load_damping * (omega_g - omega_g0)
+        rotor = []
+        if rotor_inertia > 0.0:  # the ripple drives the rotor, the coupling the pinion
+            twist, omega_r = y[4], y[5]
+            t_coupling = k_coupling * twist + c_coupling * (omega_r - omega_p)
+            rotor = [omega_r - omega_p, (t_in - t_coupling) / rotor_inertia]
+            t_in = t_coupling
+        acc_p = (t_in - r_p * force) / inertia_p
+        acc_g = (r_g * force - t_load) / inertia_g
+        return [omega_p, acc_p, dv, r_p * acc_p - r_g * acc_g] + rotor, force
+
+    return dynamics
 
 
 def _pulse_train(rate_hz: float, t: np.ndarray, spread: float, rng: np.random.Generator,
@@ -298,14 +328,14 @@ def _integrate(g: TruthGear, duration_s: float, sample_rate_hz: float, warmup_s:
     d0 = g.torque_n_m / r_p / mesh.stiffness(0.0)
     n = int(round((warmup_s + duration_s) * sample_rate_hz))
     t = np.arange(n + 1) / sample_rate_hz
-    args = (g, mesh, inertia_p, inertia_g, omega_g0, load_damping)
+    dynamics = _dynamics_of(g, mesh, inertia_p, inertia_g, omega_g0, load_damping)
     y0, atol = [0.0, omega_p0, d0, 0.0], [1e-9, 1e-6, 1e-13, 1e-9]
     if g.rotor_inertia_kg_m2 > 0.0:  # the coupling twisted by the mean torque
         y0 = y0 + [g.torque_n_m / g.coupling_stiffness_n_m_rad, omega_p0]
         atol = atol + [1e-9, 1e-6]
-    y = integrate.odeint(_rhs, y0, t, args=args, rtol=1e-9, atol=atol,
+    y = integrate.odeint(lambda yk, tk: dynamics(yk, tk)[0], y0, t, rtol=1e-9, atol=atol,
                          hmax=0.25 / sample_rate_hz, mxstep=100_000)
-    return t, y, [_dynamics(yk, tk, *args) for yk, tk in zip(y, t)]
+    return t, y, [dynamics(yk, tk) for yk, tk in zip(y, t)]
 
 
 def pinion_speed_hz(g: TruthGear, duration_s: float, sample_rate_hz: float,
