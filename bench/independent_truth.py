@@ -32,6 +32,9 @@ CASES = {"none": {}, "gear_eccentricity": dict(gear_runout_m=10e-6),
          "second_pinion_tooth_fault": dict(second_pinion_tooth_loss=0.4),
          "bearing_outer_race": dict(outer_race_acc=60.0),
          "bearing_inner_race": dict(inner_race_acc=60.0),
+         # a spalled ball: an outer and a weaker inner strike each spin of the ball, the
+         # cage's turn through the load zone
+         "bearing_ball": dict(ball_acc=60.0),
          # a torque ripple on the input shaft: through the shafts' inertia and the
          # dynamometer it reaches the mesh mostly as a fluctuation of the speed
          "speed_fluctuation": dict(torque_ripple=0.005),
