@@ -12,7 +12,16 @@ Where it differs from GearDiag.GearPair (same kinematics and physical defaults):
   along its path of contact with tip relief at both ends, in series with the constant
   stiffness of shafts, bearings and bodies, evaluated at the pinion's *angle*, not at
   time; a faulty tooth is a weaker tooth over its whole contact;
-- transmission errors are runouts projected on the line of action, in shaft angles;
+- transmission errors are runouts projected on the line of action, in shaft angles, and
+  the pitch error one sine at the assembly phase, as the model writes them; with
+  :meth:`TruthGear.own_way` they are the simulator's own: a runout is a gear's centre off
+  its axis, turning with it, whose offsets set the centre distance, so the operating
+  pressure angle, the line of action and the contact ratio; each gear tooth has its pitch
+  error (the cutter's passes leave a pattern over every third tooth), shared by the pairs
+  in contact by their stiffness (the mesh's error their stiffness-weighted mean, moving as
+  one pair loads and the other unloads), sizes and phases not the model's (make test runs
+  the first: the second's records take twice as long and its misses are measured in
+  bench/CHANGELOG.md);
 - each effect of the catalogue is made its own way (see :class:`Effects`): bearing defects
   are pulse trains with random slip through a structural resonance into the accelerometer
   (not a force on the mesh), a torque ripple drives the shafts (and so the speed), the
@@ -37,6 +46,8 @@ from scipy import integrate, signal
 from pydiag.core.measurement import Measurement
 
 TWO_PI = 2.0 * math.pi
+#: The teeth's pressure angle, rad.
+PRESSURE_ANGLE_RAD = math.radians(20.0)
 
 
 @dataclass(frozen=True)
@@ -94,6 +105,14 @@ class TruthGear:
     pinion_tooth_loss: float = 0.3  # pinion tooth 0 is weaker by this much
     pinion_runout_m: float = 5e-6
     pitch_error_m: float = 0.7e-6  # at the assembly-phase order
+    # the simulator's own geometry (own_way): where the pinion's centre points at pinion
+    # angle 0 (from the gear's centre), the pressure angle, and the gear teeth's pitch
+    # errors, a pattern over `cut_passes` teeth of amplitude pitch_error_m at this phase
+    own_geometry: bool = False
+    pinion_runout_rad: float = 0.0
+    pressure_angle_rad: float = PRESSURE_ANGLE_RAD
+    cut_passes: int = 3
+    pitch_error_rad: float = 0.0
     load_time_constant_s: float = 0.05  # of the dynamometer holding the speed
     # a motor's rotor driving the pinion through a flexible coupling (0: the input torque
     # acts on the pinion itself): a drive train's inertia, many times the gears', turns a
@@ -142,6 +161,12 @@ class TruthGear:
     def with_effects(self, **magnitudes) -> "TruthGear":
         return replace(self, effects=replace(self.effects, **magnitudes))
 
+    def own_way(self) -> "TruthGear":
+        """This gear with the simulator's own runouts and pitch errors (module docstring):
+        the pinion's runout 4 um at 0.9 rad, the pitch pattern 0.6 um at 2.0 rad."""
+        return replace(self, own_geometry=True, pinion_runout_m=4e-6, pinion_runout_rad=0.9,
+                       pitch_error_m=0.6e-6, pitch_error_rad=2.0)
+
 
 def _pair_shape(s: float, g: TruthGear) -> float:
     """A tooth pair's stiffness at roll position s (pitches since it came into contact)."""
@@ -172,6 +197,9 @@ class _Mesh:
         teeth = np.array([_pair_shape(x, g) + _pair_shape(x + 1, g) for x in s])
         self.series = g.series_stiffness_ratio * np.mean(teeth)
         self.k_pair = g.stiffness_n_m / np.mean(1 / (1 / teeth + 1 / self.series))
+        j = np.arange(g.n_gear)  # each gear tooth's pitch error (own_geometry)
+        self.gear_errors = g.pitch_error_m * np.cos(TWO_PI * j / g.cut_passes
+                                                    + g.pitch_error_rad)
 
     def stiffness(self, theta_p: float) -> float:
         g = self.g
@@ -183,6 +211,37 @@ class _Mesh:
             if shape:
                 total += shape * self.weights[n % self.weights.size]
         return self.k_pair / (1 / total + 1 / self.series) if total > 0 else 0.0
+
+
+def _centres(g: TruthGear, theta_p: float, theta_g: float, omega_p: float, omega_g: float
+             ) -> tuple[float, float, float]:
+    """(the transmission error of the two runouts, its rate, the contact ratio) at these
+    angles and speeds: each gear's centre off its axis turns with it (the gear's the other
+    way); the centres' distance sets the operating pressure angle (the base circles'
+    tangent) and so the line of action, on which the offsets' difference is the error,
+    and the length of the path of contact. The rate is the offsets' turn projected on
+    that line (the line's own turn moves it by the offset over the centre distance
+    more, a ten-thousandth: left out)."""
+    r_p, r_g = g.r_pinion_m, g.r_gear_m
+    a0 = r_p + r_g
+    pinion = (g.pinion_runout_m * math.cos(theta_p + g.pinion_runout_rad),
+              g.pinion_runout_m * math.sin(theta_p + g.pinion_runout_rad))
+    gear = (g.effects.gear_runout_m * math.cos(0.7 - theta_g),
+            g.effects.gear_runout_m * math.sin(0.7 - theta_g))
+    dx, dy = a0 + gear[0] - pinion[0], gear[1] - pinion[1]
+    a = math.hypot(dx, dy)
+    base = a0 * math.cos(g.pressure_angle_rad)  # the base circles' radii, summed
+    alpha = math.acos(base / a)
+    tilt = math.atan2(dy, dx)  # the line of centres' turn
+    # the line of action: tangent to both base circles, at alpha from the normal to the
+    # line of centres; the pinion's offset along it leads, the gear's lags
+    nx, ny = math.sin(alpha - tilt), math.cos(alpha - tilt)
+    te = (pinion[0] - gear[0]) * nx + (pinion[1] - gear[1]) * ny
+    rate = ((-pinion[1] * omega_p - gear[1] * omega_g) * nx
+            + (pinion[0] * omega_p + gear[0] * omega_g) * ny)
+    pitch = TWO_PI * r_p * math.cos(g.pressure_angle_rad) / g.n_pinion  # base pitch
+    eps = g.contact_ratio - (a * math.sin(alpha) - a0 * math.sin(g.pressure_angle_rad)) / pitch
+    return te, rate, eps
 
 
 def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
@@ -202,7 +261,8 @@ def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
     rotor_inertia = g.rotor_inertia_kg_m2
     k_coupling, c_coupling = g.coupling_stiffness_n_m_rad, g.coupling_damping_n_m_s_rad
     eps, drop, relief = g.contact_ratio, g.profile_drop, g.tip_relief
-    weights, n_weights = mesh.weights, mesh.weights.size
+    weights, n_weights, errors = mesh.weights, mesh.weights.size, mesh.gear_errors.tolist()
+    n_g = g.n_gear
     k_pair, series = mesh.k_pair, mesh.series
     sin, cos, floor = math.sin, math.cos, math.floor
 
@@ -217,17 +277,29 @@ def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
                 value *= x * x * (3.0 - 2.0 * x)
         return value
 
-    def dynamics(y, t):
-        y = y.tolist()  # Python floats: the same IEEE arithmetic as numpy's scalars, faster
-        theta_p, omega_p, d, dv = y[:4]
-        theta_g = (r_p * theta_p - d) / r_g
-        omega_g = (r_p * omega_p - dv) / r_g
+    def shaped(s: float, eps: float) -> tuple[float, float]:
+        """shape over a path of ``eps`` pitches, and its slope in ``s`` (own_geometry)."""
+        if s <= 0.0 or s >= eps:
+            return 0.0, 0.0
+        middle = 2.0 * s / eps - 1.0
+        value = 1.0 - drop * middle * middle
+        slope = -drop * 2.0 * middle * 2.0 / eps
+        for edge, sign in ((s, 1.0), (eps - s, -1.0)):
+            if edge < relief:
+                x = edge / relief
+                ease = x * x * (3.0 - 2.0 * x)
+                slope = slope * ease + value * sign * 6.0 * x * (1.0 - x) / relief
+                value *= ease
+        return value, slope
+
+    def sine_errors(theta_p, theta_g, omega_p, omega_g):
+        """(the mesh stiffness, the transmission error, its rate): runouts and the pitch
+        error as sines of the shaft angles."""
         te = (runout_p * sin(theta_p) + pitch * sin(assembly * theta_p)
               + runout_g * sin(theta_g + 0.7))
         te_rate = (runout_p * cos(theta_p) * omega_p
                    + pitch * assembly * cos(assembly * theta_p) * omega_p
                    + runout_g * cos(theta_g + 0.7) * omega_g)
-        stretch = d - te
         u = theta_p * n_p / TWO_PI  # _Mesh.stiffness, inline
         n0 = floor(u)
         total = 0.0
@@ -235,7 +307,41 @@ def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
             pair = shape(u - n)
             if pair:
                 total += pair * weights[n % n_weights]
-        k_mesh = k_pair / (1 / total + 1 / series) if total > 0 else 0.0
+        return (k_pair / (1 / total + 1 / series) if total > 0 else 0.0), te, te_rate
+
+    def own_errors(theta_p, theta_g, omega_p, omega_g):
+        """The same, the simulator's own way: the centres' geometry, each tooth's pitch
+        error shared by the pairs in contact by their stiffness."""
+        runout, runout_rate, eps = _centres(g, theta_p, theta_g, omega_p, omega_g)
+        u = theta_p * n_p / TWO_PI  # mesh cycles since the start
+        n0 = floor(u)
+        total = moment = slope_total = slope_moment = 0.0
+        for n in (n0, n0 - 1):  # pairs that came into contact in this cycle and the last
+            pair, slope = shaped(u - n, eps)
+            if pair:
+                w = weights[n % n_weights]
+                error = errors[n % n_g]  # the gear tooth of the n-th engagement
+                total += pair * w
+                moment += pair * w * error
+                slope_total += slope * w
+                slope_moment += slope * w * error
+        if total <= 0:
+            return 0.0, runout, runout_rate
+        # the pairs' errors weighted by their stiffness, and the rate of that mean as they
+        # load and unload (the mesh cycles' rate times the shares' slope)
+        shared = moment / total
+        rate = (slope_moment - shared * slope_total) / total * omega_p * n_p / TWO_PI
+        return k_pair / (1 / total + 1 / series), runout + shared, runout_rate + rate
+
+    errors_of = own_errors if g.own_geometry else sine_errors
+
+    def dynamics(y, t):
+        y = y.tolist()  # Python floats: the same IEEE arithmetic as numpy's scalars, faster
+        theta_p, omega_p, d, dv = y[:4]
+        theta_g = (r_p * theta_p - d) / r_g
+        omega_g = (r_p * omega_p - dv) / r_g
+        k_mesh, te, te_rate = errors_of(theta_p, theta_g, omega_p, omega_g)
+        stretch = d - te
         k = k_mesh * (1.0 + tilt * cos(theta_g + 1.9))
         if backlash > 0.0 and stretch < 0.0:  # the teeth separate: no force across the gap
             stretch = min(stretch + backlash, 0.0)
