@@ -7,9 +7,10 @@ to ``max_freq_hz``. A check passes when, for every case and sensor, every amplit
 lies within ``rtol`` times the largest amplitude of that spectrum of its golden value.
 
 The default cases are Table 1's eight when the FMU has the paper's fault parameters (a
-machine's model: on its first stage), else one case at the FMU's own defaults: so any FMU can be blessed and checked. A
-machine's own model is checked on the machine's fundamental period (every stage's lines
-synchronous), which the golden file records as ``synchronous``.
+machine's model: on its first stage), else one case at the FMU's own defaults: so any
+FMU can be blessed and checked. A machine's own model is checked on the machine's
+fundamental period (every stage's lines synchronous), which the golden file records as
+``synchronous``.
 """
 
 from __future__ import annotations
@@ -120,8 +121,8 @@ def bless_fmu(fmu_path: str | Path, golden_path: str | Path, adapter: Adapter | 
         kin = None
         if machine is not None:
             values = {**plant.parameters(), **plant.fixed_values}
-            if speed_parameter not in values:
-                raise UsageError(f"{fmu_path} has no parameter {speed_parameter}: it is not "
+            if speed_parameter not in values:  # a caller's mix-up, not the user's
+                raise ValueError(f"{fmu_path} has no parameter {speed_parameter}: it is not "
                                  f"the model of {machine.name}")
             kin = machine.model_kinematics(values[speed_parameter])
         return bless(plant, golden_path, adapter=adapter, kinematics=kin)
