@@ -73,10 +73,10 @@ def test_a_shafts_fault_and_a_broken_tooth_are_named_on_their_component(seed, fa
 @pytest.mark.parametrize("seed", [2, 3, 4])
 @pytest.mark.parametrize("shaft, defect", [(1, "inner"), (0, "outer"), pytest.param(
     2, "ball", marks=pytest.mark.xfail(strict=True, reason=(
-        "a known miss: the slow output shaft's ball strikes 0.66 input orders apart, the "
-        "cage's turn a comb of sidebands 0.06 apart round them; one of those falls on the "
-        "input bearing's ball line, which rises more than the output's own (12.2 against "
-        "8.3 dB on seed 2); a defect's comb is not yet told from a line of another's")))])
+        "a known miss: the output shaft turns once in five input turns, so the fifth "
+        "harmonic of its ball line (0.95 input orders) is the input bearing's ball line "
+        "(4.73), which rises more than the output's own (12.2 against 8.3 dB on seed 2): a "
+        "line two bearings share is not yet told apart by their other harmonics")))])
 def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):
     """Strong impacts (peaks 20 times the noise): the bearing's own line rises beyond four
     times the healthy halves' spread, no other bearing's does. (Their energy reaches the
