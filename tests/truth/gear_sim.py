@@ -349,7 +349,8 @@ def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
         else:
             force = k * stretch + damping * (dv - te_rate)
         t_in = torque * (1.0 + ripple * sin(ripple_w * t))
-        t_load = load_torque * (1.0 + swing * cos(theta_g + 2.6)) + load_damping * (omega_g - omega_g0)
+        t_load = (load_torque * (1.0 + swing * cos(theta_g + 2.6))
+                  + load_damping * (omega_g - omega_g0))
         rotor = []
         if rotor_inertia > 0.0:  # the ripple drives the rotor, the coupling the pinion
             twist, omega_r = y[4], y[5]
@@ -377,7 +378,8 @@ def _pulse_train(rate_hz: float, t: np.ndarray, spread: float, rng: np.random.Ge
         k = int(round(tk / dt))
         lo, hi = max(k - half, 0), min(k + half + 1, t.size)
         if lo < hi:
-            pulses[lo:hi] += sizes[i % len(sizes)] * np.exp(-0.5 * ((t[lo:hi] - tk) / width_s) ** 2)
+            pulses[lo:hi] += (sizes[i % len(sizes)]
+                              * np.exp(-0.5 * ((t[lo:hi] - tk) / width_s) ** 2))
     return pulses, times
 
 
@@ -391,8 +393,8 @@ def _resonance(x: np.ndarray, fs: float, f_hz: float, zeta: float, acceleration:
 
 
 #: The effects only the sensor sees: the mesh's dynamics are the same without them.
-SENSOR_ONLY = ("outer_race_acc", "inner_race_acc", "ball_acc", "housing_hz", "housing_zeta", "coupling_acc",
-               "other_shaft_acc", "other_shaft_ratio")
+SENSOR_ONLY = ("outer_race_acc", "inner_race_acc", "ball_acc", "housing_hz", "housing_zeta",
+               "coupling_acc", "other_shaft_acc", "other_shaft_ratio")
 
 
 def dynamics_of(g: TruthGear) -> TruthGear:
