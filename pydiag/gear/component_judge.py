@@ -20,7 +20,10 @@ records) differ by the same measure, pooled over the machine's components of tha
   of a shaft's orders falls on that order's bins, which the envelope's line of the shaft
   holds (a shaft's turn modulates the noise the envelope is taken of): it is not judged,
   and a bearing all of whose lines are such is "not judged". Two bearings of one geometry on one shaft have the same lines
-  and get the same verdict: the record does not tell them apart.
+  and get the same verdict: the record does not tell them apart. A line of one bearing
+  that is a harmonic of another's (a shaft turning once in n turns of a faster one) is
+  read as both: the faster one's rises as much and may be named instead (a known miss,
+  tests/unit/gear/test_component_judge.py).
 """
 
 from __future__ import annotations
