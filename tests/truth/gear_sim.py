@@ -266,19 +266,9 @@ def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
     k_pair, series = mesh.k_pair, mesh.series
     sin, cos, floor = math.sin, math.cos, math.floor
 
-    def shape(s: float) -> float:  # _pair_shape, inline
-        if s <= 0.0 or s >= eps:
-            return 0.0
-        middle = 2.0 * s / eps - 1.0
-        value = 1.0 - drop * middle * middle
-        for edge in (s, eps - s):
-            if edge < relief:
-                x = edge / relief
-                value *= x * x * (3.0 - 2.0 * x)
-        return value
-
     def shaped(s: float, eps: float) -> tuple[float, float]:
-        """shape over a path of ``eps`` pitches, and its slope in ``s`` (own_geometry)."""
+        """_pair_shape, inline, over a path of ``eps`` pitches, and its slope in ``s``
+        (own_geometry's pitch errors move with it)."""
         if s <= 0.0 or s >= eps:
             return 0.0, 0.0
         middle = 2.0 * s / eps - 1.0
@@ -304,7 +294,7 @@ def _dynamics_of(g: TruthGear, mesh: _Mesh, inertia_p: float, inertia_g: float,
         n0 = floor(u)
         total = 0.0
         for n in (n0, n0 - 1):
-            pair = shape(u - n)
+            pair = shaped(u - n, eps)[0]
             if pair:
                 total += pair * weights[n % n_weights]
         return (k_pair / (1 / total + 1 / series) if total > 0 else 0.0), te, te_rate
