@@ -19,15 +19,18 @@ a shaft's turn modulates the noise the envelope is taken of, so the envelope has
 its orders, exactly on their bins in a record tracked by the shaft's angle, where a
 bearing's slipping line is not (the ER-10K's inner race strikes at 4.95 times its
 shaft's speed, beside its 5th order). A ball's defect strikes both races, twice a turn of
-the ball (2 x BSF). The same is read on each half of the record (whole periods each):
-how much two healthy halves differ is what a change is judged by
-(:mod:`pydiag.gear.component_judge`).
+the ball (2 x BSF). Each level comes with its standard deviation where the envelope is noise: a bin's power
+of noise is exponentially distributed, so the mean of ``n`` bins has a relative spread of
+1/sqrt(n), and the level's, in dB, is 10/ln 10 x sqrt(1/n_line + 1/n_floor) (a line of
+few bins, a slow shaft's, reads far less surely than a fast one's). The same is read on
+each half of the record (whole periods each): how much two healthy halves differ, against
+those deviations, is what a change is judged by (:mod:`pydiag.gear.component_judge`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -58,23 +61,31 @@ DEFECT_LINES = {"outer": ("bpfo", 1.0), "inner": ("bpfi", 1.0), "ball": ("bsf", 
 class BearingRecord:
     """One bearing's defect lines in one record: channel -> defect ("outer", "inner",
     "ball", "cage") -> the line over its floor, dB, for the whole record (``levels_db``)
-    and for each half (``halves_db``)."""
+    and for each half (``halves_db``), and the standard deviation of each where the
+    envelope is noise (``sd_db``, ``halves_sd_db``; empty: a record kept before pydiag
+    read them)."""
 
     bearing: str
     shaft: str
     levels_db: dict[str, dict[str, float]]
     halves_db: dict[str, dict[str, tuple[float, float]]]
+    sd_db: dict[str, dict[str, float]] = field(default_factory=dict)
+    halves_sd_db: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
+        def pairs(table):
+            return {c: {d: list(h) for d, h in t.items()} for c, t in table.items()}
         return {"bearing": self.bearing, "shaft": self.shaft, "levels_db": self.levels_db,
-                "halves_db": {c: {d: list(h) for d, h in t.items()}
-                              for c, t in self.halves_db.items()}}
+                "halves_db": pairs(self.halves_db), "sd_db": self.sd_db,
+                "halves_sd_db": pairs(self.halves_sd_db)}
 
     @classmethod
     def from_dict(cls, data: dict) -> "BearingRecord":
+        def pairs(table):
+            return {c: {d: (h[0], h[1]) for d, h in t.items()} for c, t in table.items()}
         return cls(data["bearing"], data["shaft"], dict(data["levels_db"]),
-                   {c: {d: (h[0], h[1]) for d, h in t.items()}
-                    for c, t in data["halves_db"].items()})
+                   pairs(data["halves_db"]), dict(data.get("sd_db", {})),
+                   pairs(data.get("halves_sd_db", {})))
 
 
 def defect_orders(machine: Machine) -> dict[str, dict[str, float]]:
@@ -98,28 +109,32 @@ def shaft_orders(machine: Machine, top: float) -> np.ndarray:
 
 def _levels_db(envelope: np.ndarray, samples_per_rev: int,
                orders: dict[str, dict[str, float]], shafts: np.ndarray
-               ) -> dict[str, dict[str, float]]:
-    """Bearing -> defect -> its line over its floor in ``envelope``'s spectrum, dB, the
-    bins of the shafts' orders (``shafts``, in input orders) left out."""
+               ) -> dict[str, dict[str, tuple[float, float]]]:
+    """Bearing -> defect -> (its line over its floor in ``envelope``'s spectrum, dB, that
+    level's standard deviation in noise, dB), the bins of the shafts' orders (``shafts``,
+    in input orders) left out."""
     freqs, amp = amplitude_spectrum(envelope, samples_per_rev)  # in orders of the input
     step = freqs[1] - freqs[0]
     padded = np.concatenate(([-np.inf], np.sort(shafts), [np.inf]))
     index = np.searchsorted(padded, freqs)
-    on_order = (np.minimum(freqs - padded[index - 1], padded[index] - freqs)
-                <= ORDER_BINS * step + 1e-12)
-    out: dict[str, dict[str, float]] = {}
+    kept = (np.minimum(freqs - padded[index - 1], padded[index] - freqs)
+            > ORDER_BINS * step + 1e-12)
+    out: dict[str, dict[str, tuple[float, float]]] = {}
     for name, lines in orders.items():
         out[name] = {}
         for defect, order in lines.items():
             half = max(SLIP_SHARE * order, LINE_BINS * step)
-            near = (np.abs(freqs - order) <= half) & ~on_order
+            near = (np.abs(freqs - order) <= half) & kept
             around = ((np.abs(freqs - order) <= max(FLOOR_SHARE * order,
                                                     half + 4 * LINE_BINS * step))
-                      & ~near & ~on_order)
-            floor = float(np.mean(amp[around] ** 2)) if np.any(around) else 0.0
-            line = float(np.mean(amp[near] ** 2)) if np.any(near) else 0.0
-            out[name][defect] = (10 * math.log10(line / floor) if line > 0 and floor > 0
-                                 else math.nan)
+                      & ~near & kept)
+            n_line, n_floor = int(np.sum(near)), int(np.sum(around))
+            if not (n_line and n_floor):
+                out[name][defect] = (math.nan, math.nan)
+                continue
+            level = 10 * math.log10(np.mean(amp[near] ** 2) / np.mean(amp[around] ** 2))
+            out[name][defect] = (level, 10 / math.log(10) * math.sqrt(1 / n_line
+                                                                      + 1 / n_floor))
     return out
 
 
@@ -153,8 +168,12 @@ def bearing_records(measurement: Measurement, machine: Machine, estimate: SpeedE
             envelope = band_envelope(without_synchronous(y, count), rate_hz, band)
             parts.append(_levels_db(envelope, samples_per_rev, orders, shafts))
         whole[channel], halves[channel] = parts[0], (parts[1], parts[2])
-    return [BearingRecord(b.name, b.shaft,
-                          {c: whole[c][b.name] for c in names},
-                          {c: {d: (halves[c][0][b.name][d], halves[c][1][b.name][d])
-                               for d in DEFECT_LINES} for c in names})
-            for b in machine.bearings]
+
+    def of(name: str, i: int) -> dict:  # i 0: the levels, 1: their deviations
+        return {c: {d: whole[c][name][d][i] for d in DEFECT_LINES} for c in names}
+
+    def halved(name: str, i: int) -> dict:
+        return {c: {d: (halves[c][0][name][d][i], halves[c][1][name][d][i])
+                    for d in DEFECT_LINES} for c in names}
+    return [BearingRecord(b.name, b.shaft, of(b.name, 0), halved(b.name, 0), of(b.name, 1),
+                          halved(b.name, 1)) for b in machine.bearings]

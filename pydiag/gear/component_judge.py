@@ -14,9 +14,12 @@ records) differ by the same measure, pooled over the machine's components of tha
   (a bend or a misalignment: twice a turn); three or more of its first five, "looseness"
   (a loose fit, a sheared key: a turn that repeats with harmonics); any other rise,
   "changed".
-- **A bearing** by its defect lines in the envelope (:mod:`pydiag.gear.bearing_lines`):
-  the defect whose line rose most, beyond its threshold, names the fault ("outer",
-  "inner", "ball", "cage"). A line whose frequency is within :data:`ON_ORDER_SHARE` of one
+- **A bearing** by its defect lines in the envelope (:mod:`pydiag.gear.bearing_lines`),
+  each line held to its own threshold: ``K_SPREAD`` times its change's deviation in noise
+  (a slow shaft's line of few bins reads less surely than a fast one's) times how many
+  times that the healthy halves differ (:func:`bearing_scale`, at least once). The defect
+  whose line rose most over its threshold, beyond it, names the fault ("outer", "inner",
+  "ball", "cage"); the threshold reported is that line's. A line whose frequency is within :data:`ON_ORDER_SHARE` of one
   of a shaft's orders falls on that order's bins, which the envelope's line of the shaft
   holds (a shaft's turn modulates the noise the envelope is taken of): it is not judged,
   and a bearing all of whose lines are such is "not judged". Two bearings of one geometry on one shaft have the same lines
@@ -211,42 +214,66 @@ def _told(machine: Machine) -> dict[str, dict[str, str]]:
     return out
 
 
+def _normalised(a: tuple[float, float], b: tuple[float, float]) -> float:
+    """The difference of two (level, deviation) readings over the deviation it has in
+    noise."""
+    return (a[0] - b[0]) / math.hypot(a[1], b[1])
+
+
+def bearing_scale(baselines: Sequence[MachineRecord], told: dict[str, dict[str, str]]
+                  ) -> float:
+    """How many times what noise alone makes two healthy records' bearing lines differ
+    they do differ: the RMS of the baselines' halves' differences (and, with several
+    baselines, of each pair's), each over its deviation in noise; never below 1."""
+    def halves(br) -> dict:
+        return {(c, d): ((h[0], br.halves_sd_db[c][d][0]), (h[1], br.halves_sd_db[c][d][1]))
+                for c, t in br.halves_db.items() for d, h in t.items() if not told[br.bearing][d]}
+
+    def whole(br) -> dict:
+        return {(c, d): (t[d], br.sd_db[c][d]) for c, t in br.levels_db.items()
+                for d in DEFECT_LINES if not told[br.bearing][d]}
+    diffs = [d for d in healthy_differences(baselines, lambda rec: rec.bearings, halves, whole,
+                                            _normalised) if math.isfinite(d)]
+    return max(float(np.sqrt(np.mean(np.square(diffs)))) if diffs else 1.0, 1.0)
+
+
 def _bearings(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord]
               ) -> list[ComponentVerdict]:
     bearings = [c for c in components(machine) if c.kind == "bearing"]
-    if not record.bearings or any(not b.bearings for b in baselines):
+    if not record.bearings or any(not b.bearings or not b.bearings[0].sd_db
+                                  for b in baselines):
         why = ("the record holds too few periods, or its rate no band above the gears'"
                if not record.bearings else
                "a baseline was kept before pydiag read the bearings' lines: keep it again")
         return [ComponentVerdict(c, NOT_JUDGED, reason=why) for c in bearings]
     told = _told(machine)
-    diffs = healthy_differences(
-        baselines, lambda rec: rec.bearings,
-        lambda br: {(c, d): h for c, t in br.halves_db.items() for d, h in t.items()
-                    if not told[br.bearing][d]},
-        lambda br: {(c, d): t[d] for c, t in br.levels_db.items() for d in DEFECT_LINES
-                    if not told[br.bearing][d]},
-        lambda a, b: a - b)
-    threshold = K_SPREAD * _rms(diffs)
+    scale = bearing_scale(baselines, told)
     out = []
     for i, (c, br) in enumerate(zip(bearings, record.bearings)):
-        changes = {}
+        changes, thresholds = {}, {}
         for d in DEFECT_LINES:
             if told[br.bearing][d]:
                 continue
-            per_channel = [t[d] - _mean([b.bearings[i].levels_db[ch][d] for b in baselines])
-                           for ch, t in br.levels_db.items()]
+            per_channel, deviations = [], []
+            for ch, t in br.levels_db.items():
+                seen = [b.bearings[i] for b in baselines]
+                per_channel.append(t[d] - _mean([b.levels_db[ch][d] for b in seen]))
+                deviations.append(math.hypot(br.sd_db[ch][d], _mean(
+                    [b.sd_db[ch][d] for b in seen]) / math.sqrt(len(seen))))
             changes[d] = _mean(per_channel)
+            thresholds[d] = K_SPREAD * scale * _mean(deviations)
         not_told = [f"{d}: {why}" for d, why in told[br.bearing].items() if why]
         if not changes:
             out.append(ComponentVerdict(c, NOT_JUDGED, reason="; ".join(not_told)))
             continue
-        worst = max(changes, key=lambda d: changes[d] if math.isfinite(changes[d]) else -1e9)
-        rose = math.isfinite(changes[worst]) and changes[worst] > threshold
-        biggest = max((abs(v) for v in changes.values() if math.isfinite(v)), default=math.nan)
-        out.append(ComponentVerdict(c, worst if rose else GOOD,
-                                    {f"{d}_db": v for d, v in changes.items()}, threshold,
-                                    biggest / threshold, "; ".join(not_told)))
+        ratio = {d: changes[d] / thresholds[d] if math.isfinite(changes[d] / thresholds[d])
+                 else -math.inf for d in changes}
+        worst = max(ratio, key=ratio.get)
+        margin = max((abs(changes[d]) / thresholds[d] for d in changes
+                      if math.isfinite(changes[d] / thresholds[d])), default=math.nan)
+        out.append(ComponentVerdict(c, worst if ratio[worst] > 1 else GOOD,
+                                    {f"{d}_db": v for d, v in changes.items()},
+                                    thresholds[worst], margin, "; ".join(not_told)))
     return out
 
 

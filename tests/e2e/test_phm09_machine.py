@@ -67,6 +67,23 @@ def test_the_eccentric_idler_pinion_swings_the_tachos_angle_once_an_idler_turn(t
     assert swing["idler"]["swing_change_db"] > swing["output"]["swing_change_db"] + 6, swing
 
 
+def test_an_inner_race_defect_is_named_on_its_shafts_bearings_and_a_healthy_run_has_none(
+        tmp_path):
+    """spur 6 at 40 Hz (its input shaft's IS-side bearing's inner race, among other faults)
+    against the healthy box's run 2: the input shaft's bearings (one geometry, so one
+    verdict) read "inner"; no other bearing's line rose past its threshold. The healthy
+    repeat at 30 Hz has every bearing good."""
+    def bearings(name: str, baseline: str, *extra: str) -> dict:
+        data, _ = indicators(tmp_path, name, "--baseline", str(DATA / f"{baseline}.zip"),
+                             *extra)
+        return {c["name"]: c["state"] for c in data["components"] if c["kind"] == "bearing"}
+    faulty = bearings("spur 6_40hz_High_1", "spur 1_40hz_High_2", "--rpm", "2400")
+    assert faulty == {"IS:IS": "inner", "IS:OS": "inner", "ID:IS": "good", "ID:OS": "good",
+                      "OS:IS": "good", "OS:OS": "good"}, faulty
+    healthy = bearings("spur 1_30hz_High_1", "spur 1_30hz_High_2")
+    assert set(healthy.values()) == {"good"}, healthy
+
+
 def test_the_machine_files_tacho_is_used_and_a_wrong_pulse_count_is_named(tmp_path):
     data, stderr = indicators(tmp_path, "spur 1_30hz_High_1")
     assert data["speed_method"] == "tacho" and abs(data["speed_hz"] - 29.905) < 0.01

@@ -107,6 +107,26 @@ def test_a_bearings_line_on_a_shafts_order_is_not_judged_on_that_line():
     assert set(bearing.evidence) == {"ball_db", "cage_db"}
 
 
+def test_a_lines_deviation_is_how_much_it_varies_in_noise():
+    """An envelope of white noise, read at a slow shaft's line (few bins) and a fast one's
+    (many): over many records each level varies by the deviation it is reported with, so
+    one threshold of deviations holds every line to the same false-alarm rate."""
+    import numpy as np
+
+    from pydiag.gear.bearing_lines import _levels_db
+    lines = {"b": {"slow": 0.37, "fast": 4.73}}
+    shafts = np.arange(1.0, 7.0)
+    rng = np.random.default_rng(0)
+    read = [_levels_db(rng.standard_normal(64 * 160), 64, lines, shafts)["b"]
+            for _ in range(400)]
+    for line in ("slow", "fast"):
+        levels, deviations = zip(*(r[line] for r in read))
+        assert np.ptp(deviations) == 0  # the bins it is read on do not depend on the record
+        assert 0.85 < np.std(levels) / deviations[0] < 1.15, (line, np.std(levels),
+                                                                deviations[0])
+    assert read[0]["slow"][1] > 1.5 * read[0]["fast"][1]
+
+
 def test_a_baseline_kept_before_the_components_were_read_judges_only_the_gears():
     """A kept baseline written before pydiag read the shafts' orders and the bearings'
     lines reads back without them: gears are judged, bearings and shafts say why not."""
@@ -125,3 +145,11 @@ def test_a_baseline_kept_before_the_components_were_read_judges_only_the_gears()
     assert states["gear"][0] == "good"
     for kind in ("bearing", "shaft"):
         assert states[kind][0] == "not judged" and "keep it again" in states[kind][1]
+    # kept after the bearings' lines were read, before their deviations were
+    old = baseline.to_dict()
+    for bearing in old["bearings"]:
+        del bearing["sd_db"], bearing["halves_sd_db"]
+    old = MachineRecord.from_dict(old)
+    bearings = [v for v in judge_components(machine, record, [old], verdicts)
+                if v.component.kind == "bearing"]
+    assert all(v.state == "not judged" and "keep it again" in v.reason for v in bearings)
