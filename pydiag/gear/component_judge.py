@@ -19,13 +19,15 @@ records) differ by the same measure, pooled over the machine's components of tha
   (a slow shaft's line of few bins reads less surely than a fast one's) times how many
   times that the healthy halves differ (:func:`bearing_scale`, at least once). The defect
   whose line rose most over its threshold, beyond it, names the fault ("outer", "inner",
-  "ball", "cage"); the threshold reported is that line's. A line whose frequency is within :data:`ON_ORDER_SHARE` of one
-  of a shaft's orders falls on that order's bins, which the envelope's line of the shaft
-  holds (a shaft's turn modulates the noise the envelope is taken of): it is not judged,
-  and a bearing all of whose lines are such is "not judged". Two bearings of one geometry on one shaft have the same lines
-  and get the same verdict: the record does not tell them apart. A line of one bearing
-  that is a harmonic of another's (a shaft turning once in n turns of a faster one) is
-  read as both: the faster one's rises as much and may be named instead (a known miss,
+  "ball", "cage"); the threshold reported is that line's. A line whose frequency is
+  within :data:`ON_ORDER_SHARE` of one of a shaft's orders falls on that order's bins,
+  which the envelope's line of the shaft holds (a shaft's turn modulates the noise the
+  envelope is taken of): it is not judged, and a bearing all of whose lines are such is
+  "not judged". Two bearings of one geometry on one shaft have the same lines and get the
+  same verdict, which says so: the record does not tell them apart. A line of one
+  bearing that is another's line's harmonic (a shaft turning once in n turns of a faster
+  one; a ball's spin, whose line a spalled ball makes beside twice it) is read as both:
+  the other may rise as much and be named instead or as well (known misses,
   tests/unit/gear/test_component_judge.py).
 """
 
@@ -248,6 +250,7 @@ def _bearings(machine: Machine, record: MachineRecord, baselines: Sequence[Machi
         return [ComponentVerdict(c, NOT_JUDGED, reason=why) for c in bearings]
     told = _told(machine)
     scale = bearing_scale(baselines, told)
+    lines = defect_orders(machine)
     out = []
     for i, (c, br) in enumerate(zip(bearings, record.bearings)):
         changes, thresholds = {}, {}
@@ -271,6 +274,11 @@ def _bearings(machine: Machine, record: MachineRecord, baselines: Sequence[Machi
         worst = max(ratio, key=ratio.get)
         margin = max((abs(changes[d]) / thresholds[d] for d in changes
                       if math.isfinite(changes[d] / thresholds[d])), default=math.nan)
+        twins = [b.name for b in machine.bearings if b.name != br.bearing
+                 and b.shaft == br.shaft and lines[b.name] == lines[br.bearing]]
+        if twins and ratio[worst] > 1:
+            not_told.insert(0, f"its lines are {', '.join(twins)}'s too (one geometry on "
+                               "one shaft): the record does not tell which")
         out.append(ComponentVerdict(c, worst if ratio[worst] > 1 else GOOD,
                                     {f"{d}_db": v for d, v in changes.items()},
                                     thresholds[worst], margin, "; ".join(not_told)))

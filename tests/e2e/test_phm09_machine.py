@@ -76,12 +76,15 @@ def test_an_inner_race_defect_is_named_on_its_shafts_bearings_and_a_healthy_run_
     def bearings(name: str, baseline: str, *extra: str) -> dict:
         data, _ = indicators(tmp_path, name, "--baseline", str(DATA / f"{baseline}.zip"),
                              *extra)
-        return {c["name"]: c["state"] for c in data["components"] if c["kind"] == "bearing"}
+        return {c["name"]: (c["state"], c["reason"]) for c in data["components"]
+                if c["kind"] == "bearing"}
     faulty = bearings("spur 6_40hz_High_1", "spur 1_40hz_High_2", "--rpm", "2400")
-    assert faulty == {"IS:IS": "inner", "IS:OS": "inner", "ID:IS": "good", "ID:OS": "good",
-                      "OS:IS": "good", "OS:OS": "good"}, faulty
+    assert {k: v[0] for k, v in faulty.items()} == {
+        "IS:IS": "inner", "IS:OS": "inner", "ID:IS": "good", "ID:OS": "good",
+        "OS:IS": "good", "OS:OS": "good"}, faulty
+    assert faulty["IS:IS"][1].startswith("its lines are IS:OS's too"), faulty
     healthy = bearings("spur 1_30hz_High_1", "spur 1_30hz_High_2")
-    assert set(healthy.values()) == {"good"}, healthy
+    assert {v[0] for v in healthy.values()} == {"good"}, healthy
 
 
 def test_the_machine_files_tacho_is_used_and_a_wrong_pulse_count_is_named(tmp_path):

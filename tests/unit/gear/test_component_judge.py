@@ -76,7 +76,13 @@ def test_a_shafts_fault_and_a_broken_tooth_are_named_on_their_component(seed, fa
         "a known miss: the output shaft turns once in five input turns, so the fifth "
         "harmonic of its ball line (0.95 input orders) is the input bearing's ball line "
         "(4.73), which rises more than the output's own (12.2 against 8.3 dB on seed 2): a "
-        "line two bearings share is not yet told apart by their other harmonics")))])
+        "line two bearings share is not yet told apart by their other harmonics"))),
+    pytest.param(0, "ball", marks=pytest.mark.xfail(strict=True, reason=(
+        "a known miss: the input's spalled ball strikes its two races unequally, so its "
+        "envelope has a line at the ball's spin (2.37 input orders) as well as at twice "
+        "it; the intermediate shaft turns at half the input's speed, so its ball line "
+        "(twice its balls' spin) is that line, and rises more (+20.6 against +15.2 dB "
+        "on seed 2): the intermediate's bearing is named too")))])
 def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):
     """Strong impacts (peaks 20 times the noise): the bearing's own line rises beyond four
     times the healthy halves' spread, no other bearing's does. (Their energy reaches the
