@@ -5,6 +5,12 @@ component (what the label says and what was said) and a row a record (how many o
 components were called faulty, and the seconds it took), then the counts. Usage:
 
     .venv/bin/python bench/components.py [DIR]     # default ../shared/data/phm09
+    .venv/bin/python bench/components.py --simulator
+
+``--simulator``: the same on the independent gearbox simulator's records
+(tests/truth/gearbox.py: faults written from the shafts' angles and the bearing's own
+geometry), each fault alone and two at once, seeds 2-4, each judged against seed 1's
+healthy record.
 
 The records and their labels are the folder README's (a record is judged against the
 case-1 run of its box, speed and load that is not itself); a case whose every component is
@@ -58,10 +64,94 @@ def _right(said: str, truth: str) -> bool:
                                                                           "eccentric"))
 
 
+#: The simulator's cases: (name, box, the record's faults, what they are: component ->
+#: state). Sizes as tests/unit/gear/test_component_judge.py's; a broken tooth is said
+#: "changed" (the judge tells a gear's change, not its kind).
+SIMULATED = [
+    ("healthy", "BOX", {}, {}),
+    ("healthy (short box)", "SHORT_BOX", {}, {}),
+    ("output unbalance", "BOX", dict(unbalance=((2, 0.3),)), {"output": "imbalance"}),
+    ("input bend", "BOX", dict(bend=((0, 0.3),)), {"input": "bent"}),
+    ("broken tooth, stage 2's gear", "BOX", dict(faulty_shaft=2, stage=1),
+     {"54T gear of stage 2": "changed"}),
+    ("intermediate inner race", "SHORT_BOX", dict(bearing=((1, "inner", 6.0),)),
+     {"intermediate bearing": "inner"}),
+    ("input outer race", "SHORT_BOX", dict(bearing=((0, "outer", 6.0),)),
+     {"input bearing": "outer"}),
+    ("output ball", "SHORT_BOX", dict(bearing=((2, "ball", 6.0),)),
+     {"output bearing": "ball"}),
+    ("input ball", "SHORT_BOX", dict(bearing=((0, "ball", 6.0),)), {"input bearing": "ball"}),
+    ("input bend + intermediate inner race", "SHORT_BOX",
+     dict(bend=((0, 0.3),), bearing=((1, "inner", 6.0),)),
+     {"input": "bent", "intermediate bearing": "inner"}),
+    ("output unbalance + broken tooth", "BOX",
+     dict(unbalance=((2, 0.3),), faulty_shaft=2, stage=1),
+     {"output": "imbalance", "54T gear of stage 2": "changed"}),
+    ("input outer race + broken tooth", "SHORT_BOX",
+     dict(bearing=((0, "outer", 6.0),), faulty_shaft=2, stage=1),
+     {"input bearing": "outer", "50T gear of stage 2": "changed"}),
+]
+
+
+def simulator_rows() -> tuple[list, list]:
+    """Each of :data:`SIMULATED` on seeds 2-4 against seed 1's healthy record: a row a
+    record (case, seed, faulty said, seconds) and a row a labelled or said component."""
+    sys.path.append(str(ROOT / "tests"))
+    from truth import gearbox as sim
+
+    from pydiag.gear.machine_file import machine_from_dict
+    records, rows = [], []
+    for case, box_name, faults, labels in SIMULATED:
+        box = getattr(sim, box_name)
+        machine = machine_from_dict(sim.described(box))
+        baseline = machine_record(sim.gearbox_record(1, box=box), machine,
+                                  SpeedSettings("mesh"), sim.INPUT_HZ)
+        for seed in (2, 3, 4):
+            started = time.perf_counter()
+            seen = machine_record(sim.gearbox_record(seed, box=box, **faults), machine,
+                                  SpeedSettings("mesh"), sim.INPUT_HZ)
+            verdicts, _ = judge_stages(machine, seen, [baseline])
+            judged = {v.component.name: v for v in judge_components(machine, seen, [baseline],
+                                                                    verdicts)}
+            faulty = [v for v in judged.values() if v.faulty]
+            records.append((case, seed, len(faulty), time.perf_counter() - started))
+            for name, truth in labels.items():
+                rows.append((case, seed, name, truth, judged[name].state, judged[name].margin))
+            rows += [(case, seed, v.component.name, "good", v.state, v.margin)
+                     for v in faulty if v.component.name not in labels]
+    return records, rows
+
+
+def simulator_main() -> int:
+    records, rows = simulator_rows()
+    print(f"{'case':<40}{'seed':>5}{'faulty said':>12}{'s':>6}")
+    for case, seed, said, seconds in records:
+        print(f"{case:<40}{seed:>5}{said:>12}{seconds:>6.1f}")
+    print()
+    print(f"{'case':<40}{'seed':>5}  {'component':<22}{'truth':<11}{'said':<11}{'x thr':>6}")
+    for case, seed, name, truth, said, margin in rows:
+        shown = "-" if margin is None else f"{margin:.2f}"
+        print(f"{case:<40}{seed:>5}  {name:<22}{truth:<11}{said:<11}{shown:>6}")
+    labelled = [r for r in rows if r[3] != "good"]
+    right = sum(r[4] == r[3] for r in labelled)
+    wrong = sum(r[3] == "good" for r in rows)
+    clean = sum(said == 0 for case, _, said, _ in records if case.startswith("healthy"))
+    print(f"\nfaults named on their component: {right} of {len(labelled)}; components called "
+          f"faulty that are not: {wrong}; healthy records with every component good: "
+          f"{clean} of {sum(case.startswith('healthy') for case, *_ in records)}")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default=str(ROOT.parent / "shared" / "data" / "phm09"))
+    ap.add_argument("--simulator", action="store_true",
+                    help="the independent gearbox simulator's cases instead")
     args = ap.parse_args()
+    if args.simulator:
+        print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
+              f"{platform.python_version()}, the gearbox simulator")
+        return simulator_main()
     files = sorted(p for p in Path(args.folder).iterdir() if NAME.search(p.name))
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"{len(files)} records")

@@ -112,6 +112,22 @@ def gearbox_record(seed: int, faulty_shaft: int | None = None, stage: int = 0,
 BEARING = dict(n_balls=9, ball_mm=7.9, pitch_mm=39.0, mode_hz=7000.0, zeta=0.05, slip=0.01)
 
 
+#: The box's shafts as its description names them, input first.
+SHAFT_NAMES = ("input", "intermediate", "output")
+
+
+def described(box: Box) -> dict:
+    """The box as its user would write it in a machine file (plain data, read by whatever
+    reads machine files): its teeth, and a bearing on each shaft of the geometry its
+    maker's sheet gives, named "<shaft> bearing"."""
+    return {"name": box.name, "shafts": list(SHAFT_NAMES[:len(box.teeth) + 1]),
+            "stages": [{"pinion_teeth": p, "gear_teeth": g} for p, g in box.teeth],
+            "bearings": [{"name": f"{shaft} bearing", "shaft": shaft,
+                          "n_balls": BEARING["n_balls"], "ball_diameter_mm": BEARING["ball_mm"],
+                          "pitch_diameter_mm": BEARING["pitch_mm"]}
+                         for shaft in SHAFT_NAMES[:len(box.teeth) + 1]]}
+
+
 def cage_turns_per_turn() -> float:
     """The cage's turns a turn of the shaft: the balls' centres move at half the speed of
     the inner race's contact, (1 - d/D)/2 of the shaft's."""

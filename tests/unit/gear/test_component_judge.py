@@ -5,7 +5,7 @@ every component good; a shaft's unbalance, a bend, a broken tooth and a race's d
 each named on their component (a ball's defect on the slowest shaft is not yet: below)."""
 
 import pytest
-from truth.gearbox import BEARING, BOX, INPUT_HZ, SHORT_BOX, gearbox_record
+from truth.gearbox import BOX, INPUT_HZ, SHAFT_NAMES, SHORT_BOX, described, gearbox_record
 
 from pydiag.gear.component_judge import components, judge_components
 from pydiag.gear.machine_file import machine_from_dict
@@ -13,18 +13,13 @@ from pydiag.gear.machine_indicators import machine_record
 from pydiag.gear.speed import SpeedSettings
 from pydiag.gear.stage_judge import judge_stages
 
-SHAFTS = ["input", "intermediate", "output"]
+SHAFTS = list(SHAFT_NAMES)
 
 
 def machine_of(box):
     """The box as its user would describe it: its teeth and a bearing on each shaft, of
     the geometry its maker's sheet gives."""
-    return machine_from_dict({
-        "name": box.name,
-        "stages": [{"pinion_teeth": p, "gear_teeth": g} for p, g in box.teeth],
-        "bearings": [{"name": f"{shaft} bearing", "shaft": shaft,
-                      "n_balls": BEARING["n_balls"], "ball_diameter_mm": BEARING["ball_mm"],
-                      "pitch_diameter_mm": BEARING["pitch_mm"]} for shaft in SHAFTS]})
+    return machine_from_dict(described(box))
 
 
 def judged(box, seed, **fault):
