@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.gear.component_judge import ComponentVerdict
 from pydiag.gear.machine_report import MachineReport
+from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.diagnose.diagnosis import Diagnosis
 from pydiag.loop.history import KeptBaseline
 from pydiag.loop.accumulate import LoopStep
@@ -226,17 +229,22 @@ def _verdict_rows(report: MachineReport) -> list[str]:
     first = report.stages[0].verdict
     fm4 = ("" if first.fm4_threshold is None else
            f"; FM4 {first.fm4_threshold:.2f} names a suspect")
+    own = math.isfinite(first.pinion.threshold_db)
+    held = (f"each shaft's own: {K_SPREAD:g} x its deviation, scaled by the healthy halves'"
+            if own else
+            f"{first.threshold_db:.2f} dB = {first.threshold_db / report.spread_db:g} x the "
+            f"healthy spread {report.spread_db:.2f} dB")
     lines = ["", f"{'stage':<16}{'teeth':>7}{'mesh Hz':>10}{'pinion dB':>11}{'gear dB':>9}"
-             f"{'FM4 p/g':>14}  verdict (threshold {first.threshold_db:.2f} dB = "
-             f"{first.threshold_db / report.spread_db:g} x the healthy spread "
-             f"{report.spread_db:.2f} dB{fm4})"]
+             f"{'thr p/g':>12}{'FM4 p/g':>14}  verdict (threshold {held}{fm4})"]
     for st in report.stages:
         v = st.verdict
         verdict = "changed" if v.changed else "healthy"
         if v.suspect:
             verdict += f", {v.suspect} suspect ({v.suspect_by})"
+        thresholds = (f"{v.pinion.threshold_db:.2f}/{v.gear.threshold_db:.2f}" if own
+                      else f"{v.threshold_db:.2f}")
         lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"
-                     f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}"
+                     f"{v.pinion.change_db:>+11.2f}{v.gear.change_db:>+9.2f}{thresholds:>12}"
                      f"{f'{v.pinion.fm4_change:+.2f}/{v.gear.fm4_change:+.2f}':>14}  {verdict}")
     return lines
 
@@ -271,7 +279,8 @@ def format_components(judged: tuple[ComponentVerdict, ...]) -> list[str]:
         margin = "-" if v.margin is None or v.margin != v.margin else f"{v.margin:.2f}"
         lines.append(f"{c.name:<30}{c.kind:<9}{c.shaft:<10}{v.state:<12}{margin:>7}  {v.reason}")
     lines.append("x thr      : the largest change of a component's measures over its "
-                 "threshold (K x the healthy records' spread): above 1, beyond it")
+                 f"threshold ({K_SPREAD:g} x how much it varies between healthy records): "
+                 "above 1, beyond it")
     return lines
 
 

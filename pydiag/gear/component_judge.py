@@ -131,7 +131,7 @@ def _gears(machine: Machine, verdicts: Sequence[StageVerdict]) -> list[Component
         v = verdicts[[s.name for s in machine.stages].index(c.stage)]
         change = v.pinion if c.role == "pinion" else v.gear
         evidence = {"residual_energy_db": change.change_db, "fm4_change": change.fm4_change}
-        margin = abs(change.change_db) / v.threshold_db
+        margin = change.margin(v.threshold_db)
         if not v.changed:
             out.append(ComponentVerdict(c, GOOD, evidence, v.threshold_db, margin,
                                         "its stage did not change"))

@@ -13,6 +13,15 @@ shafts' lines are removed: a local tooth fault, an eccentric gear's sidebands): 
 in dB against the baseline's, averaged over the channels
 (:mod:`pydiag.gear.stage_judge` judges each stage by it).
 
+Part of that energy is not the shaft's: whatever in the record does not repeat with the
+shaft (noise, a bearing's strikes, another shaft's lines) is averaged down in the TSA, not
+away, and lands in its residual. How much is read from the record itself (the **noise**):
+the TSAs of the record's two halves hold the same synchronous part and independent
+non-synchronous parts, so their difference's residual energy is four times what the
+whole record's TSA keeps of them (and a deterministic line at another shaft's frequency,
+which a TSA averages down faster than noise, is counted as the TSA counts it). The same
+from the quarters gives each half's.
+
 With a tacho on the input shaft, each slower shaft also gets the **swing** of the input's
 angle once its turn (:func:`~pydiag.signal.angle.once_a_turn_swing`, in degrees of the
 input's turn): a runout or an eccentric gear on that shaft swings the whole drive once a
@@ -27,7 +36,9 @@ record and of each half, for :mod:`pydiag.gear.component_judge`.
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +50,7 @@ from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
 from pydiag.signal.angle import once_a_turn_swing
-from pydiag.signal.condition import (TrendReference, synchronous_average,
+from pydiag.signal.condition import (TrendReference, TsaSignals, synchronous_average,
                                      tsa_indicators, tsa_signals)
 
 #: Indicators of a shaft's TSA in the report, after the residual energy.
@@ -67,6 +78,10 @@ class ShaftRecord:
         orders: channel -> the amplitudes of the TSA's first :data:`SHAFT_ORDERS` orders
             (a shaft's unbalance, bend or looseness); order_halves: the same of each half
             (empty: a baseline kept before they were)
+        noise: channel -> how much of ``residual_energy`` the record's non-synchronous
+            vibration leaves in a TSA of that many turns (module docstring);
+            noise_halves: the same of each half (empty: a baseline kept before they were)
+        residual_orders: how many orders the TSA's residual keeps (0: not known)
     """
 
     shaft: str
@@ -83,6 +98,9 @@ class ShaftRecord:
     orders: dict[str, tuple[float, ...]] = field(default_factory=dict)
     order_halves: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = \
         field(default_factory=dict)
+    noise: dict[str, float] = field(default_factory=dict)
+    noise_halves: dict[str, tuple[float, float]] = field(default_factory=dict)
+    residual_orders: int = 0
 
 
 def _teeth_on(machine: Machine, shaft: int) -> tuple[int, ...]:
@@ -143,14 +161,24 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             raise MeasurementError(f"the record holds {n_revs} whole turns of the {name} shaft: "
                                    "too few to average (at least 4)")
         energy, halves, table, fm4_halves, orders, order_halves = {}, {}, {}, {}, {}, {}
+        noise, noise_halves = {}, {}
         half = (n_revs // 2) * samples_per_rev
+        quarter = (n_revs // 4) * samples_per_rev
+        signals = functools.partial(tsa_signals, mesh_order=teeth[-1],
+                                    other_meshes=teeth[:-1] + others, faster_shafts=faster)
+        left = functools.partial(_noise_left, samples_per_rev=samples_per_rev,
+                                 signals=signals)
         for channel, x in zip(names, tracked):
-            parts = [tsa_signals(synchronous_average(y, samples_per_rev), teeth[-1],
-                                 other_meshes=teeth[:-1] + others, faster_shafts=faster)
+            parts = [signals(synchronous_average(y, samples_per_rev))
                      for y in (x, x[:half], x[half:2 * half])]
             energy[channel] = float(np.var(parts[0].residual))
+            residual_orders = parts[0].residual_orders
             halves[channel] = (float(np.var(parts[1].residual)),
                                float(np.var(parts[2].residual)))
+            noise[channel] = left(x[:half], x[half:2 * half])
+            noise_halves[channel] = (left(x[:quarter], x[quarter:2 * quarter]),
+                                     left(x[half:half + quarter],
+                                          x[half + quarter:half + 2 * quarter]))
             values = tsa_indicators(parts[0], TrendReference())
             table[channel] = {k: float(values[k]) for k in SHAFT_INDICATORS}
             fm4_halves[channel] = tuple(float(tsa_indicators(p)["fm4"]) for p in parts[1:])
@@ -158,8 +186,17 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             orders[channel], order_halves[channel] = first[0], (first[1], first[2])
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
                                halves, table, fm4_halves, _swing_deg(estimate, ratio),
-                               orders, order_halves))
+                               orders, order_halves, noise, noise_halves, residual_orders))
     return out
+
+
+def _noise_left(first: np.ndarray, second: np.ndarray, samples_per_rev: int,
+                signals: Callable[[np.ndarray], TsaSignals]) -> float:
+    """The residual energy the non-synchronous part of two equal runs of turns leaves in
+    the TSA of both: a quarter of their TSAs' difference's (module docstring)."""
+    difference = (synchronous_average(first, samples_per_rev)
+                  - synchronous_average(second, samples_per_rev))
+    return float(np.var(signals(difference).residual)) / 4
 
 
 def _swing_deg(estimate: SpeedEstimate, ratio: float) -> float | None:
@@ -207,7 +244,10 @@ class MachineRecord:
                             "swing_deg": s.swing_deg,
                             "orders": {c: list(o) for c, o in s.orders.items()},
                             "order_halves": {c: [list(h) for h in o]
-                                             for c, o in s.order_halves.items()}}
+                                             for c, o in s.order_halves.items()},
+                            "noise": s.noise,
+                            "noise_halves": {c: list(h) for c, h in s.noise_halves.items()},
+                            "residual_orders": s.residual_orders}
                            for s in self.shafts],
                 "bearings": [b.to_dict() for b in self.bearings]}
 
@@ -225,7 +265,10 @@ class MachineRecord:
             {c: (_number(h[0]), _number(h[1])) for c, h in s.get("fm4_halves", {}).items()},
             s.get("swing_deg"),
             {c: tuple(o) for c, o in s.get("orders", {}).items()},
-            {c: (tuple(o[0]), tuple(o[1])) for c, o in s.get("order_halves", {}).items()})
+            {c: (tuple(o[0]), tuple(o[1])) for c, o in s.get("order_halves", {}).items()},
+            dict(s.get("noise", {})),
+            {c: (h[0], h[1]) for c, h in s.get("noise_halves", {}).items()},
+            s.get("residual_orders", 0))
             for s in data["shafts"])
         return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
                    data["file"], data.get("units"),

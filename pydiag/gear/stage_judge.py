@@ -1,23 +1,35 @@
 """Each stage of a machine judged against the machine's own healthy state: the shafts' TSA
 facts of a record (:mod:`pydiag.gear.machine_indicators`) against those of its baselines.
 
+A shaft's change is that of its residual's **synchronous** energy: the residual energy
+less the noise in it, what the record's non-synchronous vibration (noise, a bearing's
+strikes, another shaft's lines) leaves in a TSA of that many turns
+(:mod:`pydiag.gear.machine_indicators`). A bearing's strikes or a louder noise raise the
+residual energy of every shaft, and not the synchronous part of any; a baseline kept
+before pydiag read the noise is judged by the whole energy, as the record then is.
+
 How much two healthy records of the machine differ is estimated from the baselines
-themselves: the residual energy of each half of a baseline against the other half, and,
-with two or more baselines, of each baseline against the others, pooled over every shaft
-and channel as a root mean square (``spread_db``). A stage is **changed** when one of its
-two shafts' change (up or down) exceeds ``K_SPREAD`` times that spread.
+themselves: the synchronous energy of each half of a baseline against the other half,
+and, with two or more baselines, of each baseline against the others, each difference over
+its deviation (:func:`synchronous_db`: a shaft whose residual is mostly noise reads less
+surely than one whose residual is its gears'), pooled over every shaft and channel as a
+root mean square, never below 1 (:func:`synchronous_scale`). A stage is **changed** when
+one of its two shafts' change (up or down) exceeds its own threshold, ``K_SPREAD`` times
+its deviation times that scale. The same differences in dB, pooled, are the reported
+healthy spread (``spread_db``); by the whole energy, the one threshold is ``K_SPREAD``
+times it.
 
 Its ``suspect`` is named first by **impulsiveness**: a local tooth fault (a chip, a crack)
 strikes once a turn of its shaft, so that shaft's TSA grows impulsive, and its kurtosis
 (FM4 of the difference signal, the classical detector of a local fault) rises; a runout,
 wear or another stage's change spreads over the turn and does not raise it. A shaft whose
-FM4 rose by more than ``K_SPREAD`` times FM4's healthy spread (estimated as the energy's
-is), and by as much more than the other shaft's, is the suspect, if its gear on this stage
+FM4 rose by more than ``K_SPREAD`` times FM4's healthy spread (the RMS of its halves'
+and baselines' differences), and by as much more than the other shaft's, is the suspect, if its gear on this stage
 is its only one (a shaft carrying two gears says which shaft, not which of its gears). A
 slower shaft's local fault reaches a faster shaft's TSA once in every n of its turns, at
 1/n of its weight, so it raises the faster shaft's FM4 less than its own. Otherwise the
-suspect is the shaft whose residual energy changed more than the other's by more than the
-stage's threshold (null: neither clearly did). Where a faster shaft turns a whole number
+suspect is the shaft whose change over its threshold exceeds the other's by more than one
+(null: neither clearly did). Where a faster shaft turns a whole number
 of times per turn of the slower one, the slower shaft's fault reaches the faster shaft's
 TSA on their common lines (a local fault's lines cover every order), so a change of both
 is no evidence against the slower one: the suspect stays null unless one stands clearly
@@ -51,6 +63,10 @@ K_SPREAD = 4.0
 MIN_SPREAD_DB = 0.1
 #: Nor FM4's below this (a kurtosis, 3 for Gaussian noise), for the same reason.
 MIN_FM4_SPREAD = 0.1
+#: A synchronous residual energy is never taken below this share of the noise in the
+#: residual (:func:`synchronous_db`): it is the difference of two estimates, each good to
+#: a few percent of the noise (a residual of a few hundred orders or more).
+NOISE_FLOOR = 0.1
 #: A baseline is at a record's operating point when its input speed lies within this share
 #: of the record's nominal input speed (:func:`at_speed`): a motor slips a few percent
 #: under load, and a machine's operating speeds lie further apart. The load is not told
@@ -68,6 +84,14 @@ class ShaftChange:
     change_db: float
     channels_db: dict[str, float]
     fm4_change: float = math.nan
+    #: the change beyond which the shaft changed (dB; nan: the stage's, a baseline kept
+    #: before its noise was read)
+    threshold_db: float = math.nan
+
+    def margin(self, stage_threshold_db: float) -> float:
+        """The change over the shaft's threshold (the stage's where it has none)."""
+        own = self.threshold_db if math.isfinite(self.threshold_db) else stage_threshold_db
+        return abs(self.change_db) / own
 
 
 @dataclass(frozen=True)
@@ -77,7 +101,9 @@ class StageVerdict:
     Attributes:
         stage: its name; pinion_teeth, gear_teeth; mesh_hz: its mesh frequency
         pinion, gear: the change of its two shafts
-        changed: a shaft changed beyond ``threshold_db``; suspect: "pinion", "gear" or None
+        changed: a shaft changed beyond its threshold (``ShaftChange.threshold_db``, else
+            ``threshold_db``: the larger of the two shafts'); suspect: "pinion", "gear" or
+            None
         fm4_threshold: the FM4 rise that names a suspect (None: FM4's spread not known)
         suspect_by: "impulsiveness" or "residual energy" (module docstring), None with no
             suspect
@@ -98,6 +124,7 @@ class StageVerdict:
     def to_dict(self) -> dict:
         def shaft(change: ShaftChange) -> dict:
             return {"name": change.shaft, "change_db": change.change_db,
+                    "threshold_db": finite_or_none(change.threshold_db),
                     "channels_db": change.channels_db,
                     "fm4_change": finite_or_none(change.fm4_change)}
         return {"pinion_shaft": shaft(self.pinion), "gear_shaft": shaft(self.gear),
@@ -140,12 +167,60 @@ def _rms(diffs: list[float], floor: float) -> float:
     return max(float(np.sqrt(np.mean(np.square(diffs)))), floor)
 
 
-def healthy_spread_db(baselines: list[MachineRecord]) -> float:
-    """The RMS difference in residual energy (dB) between two healthy records of the
-    machine, estimated from the baselines' halves and, with several, from each pair of
-    baselines (module docstring)."""
-    return _rms(healthy_differences(baselines, lambda rec: rec.shafts, lambda s: s.halves,
-                                    lambda s: s.residual_energy, _db), MIN_SPREAD_DB)
+def synchronous_db(a: tuple[float, float, int], b: tuple[float, float, int]
+                   ) -> tuple[float, float]:
+    """How far the synchronous residual energy of ``a`` lies above ``b``'s, and that
+    difference's standard deviation, dB: each an (energy, noise, orders) triple of a
+    shaft's TSA residual (:class:`ShaftRecord`), its synchronous part S the energy less
+    the noise N, never taken below :data:`NOISE_FLOOR` of the larger noise of the two
+    (below it neither is told from none). Over m orders of noise, the energy and the noise
+    are each read to within N sqrt(1/m) (the noise's orders are exponentially
+    distributed), the synchronous part to sqrt(2 N (N + S) / m)."""
+    floor = NOISE_FLOOR * max(a[1], b[1])
+
+    def part(e: float, n: float, m: int) -> tuple[float, float]:
+        s = max(e - n, floor)
+        return s, 10 / math.log(10) * math.sqrt(2 * n * (n + max(e - n, 0.0)) / max(m, 1)) / s
+    (sa, da), (sb, db) = part(*a), part(*b)
+    return _db(sa, sb), math.hypot(da, db)
+
+
+def knows_noise(records: Sequence[MachineRecord]) -> bool:
+    """Whether every shaft of every one of ``records`` knows, in each channel, the noise
+    its residual holds (a baseline kept before pydiag read it does not)."""
+    return all(set(s.noise) == set(s.residual_energy) and set(s.noise_halves) == set(s.halves)
+               and s.residual_orders > 0 for r in records for s in r.shafts)
+
+
+def _synchronous_differences(baselines: list[MachineRecord]) -> list[tuple[float, float]]:
+    """:func:`healthy_differences` of the shafts' synchronous residual energies: (dB, its
+    deviation) of each pair."""
+    return healthy_differences(
+        baselines, lambda rec: rec.shafts,
+        lambda s: {c: ((h[0], s.noise_halves[c][0], s.residual_orders),
+                       (h[1], s.noise_halves[c][1], s.residual_orders))
+                   for c, h in s.halves.items()},
+        lambda s: {c: (e, s.noise[c], s.residual_orders) for c, e in s.residual_energy.items()},
+        synchronous_db)
+
+
+def healthy_spread_db(baselines: list[MachineRecord], synchronous: bool = True) -> float:
+    """The RMS difference in a shaft's residual energy (dB) between two healthy records of
+    the machine, estimated from the baselines' halves and, with several, from each pair of
+    baselines (module docstring); ``synchronous``: of its synchronous part
+    (:func:`synchronous_db`), else of the whole energy."""
+    if not synchronous:
+        return _rms(healthy_differences(baselines, lambda rec: rec.shafts, lambda s: s.halves,
+                                        lambda s: s.residual_energy, _db), MIN_SPREAD_DB)
+    return _rms([d for d, _ in _synchronous_differences(baselines)], MIN_SPREAD_DB)
+
+
+def synchronous_scale(baselines: list[MachineRecord]) -> float:
+    """How many times their deviations (:func:`synchronous_db`) two healthy halves' (and
+    baselines') synchronous residual energies differ: the RMS of the differences each over
+    its deviation, never below 1."""
+    ratios = [d / sd for d, sd in _synchronous_differences(baselines) if sd > 0]
+    return _rms(ratios, 1.0) if ratios else 1.0
 
 
 def healthy_fm4_spread(baselines: list[MachineRecord]) -> float | None:
@@ -181,8 +256,8 @@ def _suspect(pinion: ShaftChange, gear: ShaftChange, threshold_db: float,
             rise, rest = this.fm4_change, other.fm4_change
             if only and math.isfinite(rest) and rise - max(rest, 0.0) > fm4_threshold:
                 return name, "impulsiveness"
-    p, g = abs(pinion.change_db), abs(gear.change_db)
-    if abs(p - g) > threshold_db:
+    p, g = pinion.margin(threshold_db), gear.margin(threshold_db)
+    if abs(p - g) > 1:
         return ("pinion" if p > g else "gear"), "residual energy"
     return None, None
 
@@ -220,30 +295,44 @@ def judge_stages(machine: Machine, record: MachineRecord,
     if not baselines:
         raise MeasurementError("judging a stage needs a baseline record of the machine")
     check_comparable(record, baselines)
-    spread = healthy_spread_db(baselines)
+    synchronous = knows_noise([record, *baselines])
+    spread = healthy_spread_db(baselines, synchronous)
+    scale = synchronous_scale(baselines) if synchronous else math.nan
     threshold = K_SPREAD * spread
     fm4_spread = healthy_fm4_spread(baselines)
     fm4_threshold = None if fm4_spread is None else K_SPREAD * fm4_spread
     changes = []
     for shaft in record.shafts:
-        per_channel = {}
+        per_channel, deviations = {}, []
         for channel, energy in shaft.residual_energy.items():
-            reference = [b.shafts[shaft.index].residual_energy.get(channel) for b in baselines]
+            seen = [b.shafts[shaft.index] for b in baselines]
+            reference = [b.residual_energy.get(channel) for b in seen]
             if any(r is None for r in reference):
                 raise MeasurementError(f"the baseline has no channel {channel}")
-            per_channel[channel] = _db(energy, float(np.mean(reference)))
+            if synchronous:  # the baselines' mean, read to 1/sqrt(n) of one's deviation
+                change, deviation = synchronous_db(
+                    (energy, shaft.noise[channel], shaft.residual_orders),
+                    (float(np.mean(reference)), float(np.mean([b.noise[channel] for b in seen])),
+                     len(seen) * shaft.residual_orders))
+                deviations.append(deviation)
+            else:
+                change = _db(energy, float(np.mean(reference)))
+            per_channel[channel] = change
         fm4 = _fm4_change(shaft, baselines) if fm4_threshold is not None else math.nan
+        own = K_SPREAD * scale * float(np.mean(deviations)) if synchronous else math.nan
         changes.append(ShaftChange(shaft.shaft, float(np.mean(list(per_channel.values()))),
-                                   per_channel, fm4))
+                                   per_channel, fm4, own))
     verdicts = []
     for k, stage in enumerate(machine.stages):
         pinion, gear = changes[k], changes[k + 1]
-        changed = max(abs(pinion.change_db), abs(gear.change_db)) > threshold
+        stage_threshold = (max(pinion.threshold_db, gear.threshold_db) if synchronous
+                           else threshold)
+        changed = max(pinion.margin(threshold), gear.margin(threshold)) > 1
         alone = (len(record.shafts[k].teeth) == 1, len(record.shafts[k + 1].teeth) == 1)
         suspect, by = (_suspect(pinion, gear, threshold, fm4_threshold, alone) if changed
                        else (None, None))
         verdicts.append(StageVerdict(stage.name, stage.pinion_teeth, stage.gear_teeth,
                                      float(record.speed.speed_hz * machine.mesh_order(k)),
-                                     pinion, gear, threshold, changed, suspect,
+                                     pinion, gear, stage_threshold, changed, suspect,
                                      fm4_threshold, by))
     return verdicts, spread

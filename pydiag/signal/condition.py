@@ -59,6 +59,7 @@ class TsaSignals:
     envelope: np.ndarray
     spectrum: np.ndarray  # one-sided amplitude per shaft order (index = order)
     mesh_order: int
+    residual_orders: int = 0  # how many orders the residual keeps
 
 
 def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDERS,
@@ -97,9 +98,9 @@ def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDE
                                            np.zeros(n - coeffs.size)]))
     return TsaSignals(tsa=tsa - tsa.mean(), regular=regular,
                       difference=part(~(mesh | sidebands | shaft | foreign) & (orders > 0)),
-                      residual=part(~(mesh | shaft | foreign) & (orders > 0)),
+                      residual=part(kept := ~(mesh | shaft | foreign) & (orders > 0)),
                       envelope=np.abs(analytic), spectrum=2 * np.abs(coeffs) / n,
-                      mesh_order=mesh_order)
+                      mesh_order=mesh_order, residual_orders=int(np.count_nonzero(kept)))
 
 
 def normalized_moment(x: np.ndarray, k: int, variance: float | None = None) -> float:

@@ -69,9 +69,10 @@ def test_a_faster_shafts_fault_is_not_the_slower_shafts_whose_turn_holds_whole_t
 
 def test_a_slower_shafts_fault_is_not_called_the_faster_ones(short_baseline):
     # its lines on every 2nd idler order are input orders too: the input changes as well,
-    # but not beyond the idler, so stage 1 names no suspect rather than the wrong one
+    # but not beyond the idler, so stage 1 names the idler (its gear's shaft) or no
+    # suspect, never the input
     first, second = judged_short(short_baseline, faulty_shaft=1, stage=1)
-    assert first.changed and first.suspect is None, first
+    assert first.changed and first.suspect in (None, "gear"), first
     assert second.changed and second.suspect == "pinion", second
 
 
@@ -181,3 +182,37 @@ def test_the_tacho_stands_in_when_no_mesh_line_stands_out():
                            machine=MACHINE)
     assert found.source is SpeedSource.TACHO and "no mesh line stood out" in found.method
     assert found.speed_hz == pytest.approx(0.99 * INPUT_HZ, 1e-3)
+
+
+@pytest.mark.parametrize("shaft, defect", [(0, "outer"), (1, "inner")])
+def test_a_bearings_strikes_change_no_stage(short_baseline, shaft, defect):
+    """Strong strikes of a race defect land in every shaft's TSA residual, averaged down
+    and not away, and raise its energy; the synchronous part, the energy less what the
+    record's non-synchronous vibration leaves in a TSA of that many turns, stays."""
+    faulty = machine_record(record(3, box=SHORT_BOX, bearing=((shaft, defect, 6.0),)),
+                            SHORT_MACHINE, SpeedSettings("mesh"), INPUT_HZ)
+    shafts = faulty.shafts
+    assert all(s.residual_energy["acc"] > b.residual_energy["acc"]
+               for s, b in zip(shafts, short_baseline.shafts))  # the strikes are in it
+    verdicts, _ = judge_stages(SHORT_MACHINE, faulty, [short_baseline])
+    assert not any(v.changed for v in verdicts), verdicts
+
+
+def test_a_baseline_kept_before_the_noise_was_read_is_judged_by_the_whole_energy(
+        short_baseline):
+    """Such a baseline reads back without its shafts' noise: the record is judged by the
+    residual's whole energy against one threshold, K x the healthy spread, as it was."""
+    from pydiag.gear.machine_indicators import MachineRecord
+    from pydiag.gear.stage_judge import K_SPREAD
+    old = short_baseline.to_dict()
+    for s in old["shafts"]:
+        del s["noise"], s["noise_halves"], s["residual_orders"]
+    old = MachineRecord.from_dict(old)
+    faulty = machine_record(record(3, box=SHORT_BOX, faulty_shaft=0, stage=0), SHORT_MACHINE,
+                            SpeedSettings("mesh"), INPUT_HZ)
+    verdicts, spread = judge_stages(SHORT_MACHINE, faulty, [old])
+    assert verdicts[0].threshold_db == pytest.approx(K_SPREAD * spread)
+    assert all(v.pinion.threshold_db != v.pinion.threshold_db for v in verdicts)  # nan
+    assert verdicts[0].changed and verdicts[0].suspect == "pinion", verdicts[0]
+    new, _ = judge_stages(SHORT_MACHINE, faulty, [short_baseline])
+    assert new[0].changed and new[0].pinion.threshold_db > 0
