@@ -19,12 +19,13 @@ a shaft's turn modulates the noise the envelope is taken of, so the envelope has
 its orders, exactly on their bins in a record tracked by the shaft's angle, where a
 bearing's slipping line is not (the ER-10K's inner race strikes at 4.95 times its
 shaft's speed, beside its 5th order). A ball's defect strikes both races, twice a turn of
-the ball (2 x BSF). Each level comes with its standard deviation where the envelope is noise: a bin's power
-of noise is exponentially distributed, so the mean of ``n`` bins has a relative spread of
-1/sqrt(n), and the level's, in dB, is 10/ln 10 x sqrt(1/n_line + 1/n_floor) (a line of
-few bins, a slow shaft's, reads far less surely than a fast one's). The same is read on
-each half of the record (whole periods each): how much two healthy halves differ, against
-those deviations, is what a change is judged by (:mod:`pydiag.gear.component_judge`).
+the ball (2 x BSF). Each level comes with its standard deviation where the envelope is
+noise: a bin's power of noise is exponentially distributed, so the mean of ``n`` bins has
+a relative spread of 1/sqrt(n), and the level's, in dB, is 10/ln 10 x sqrt(1/n_line +
+1/n_floor) (a line of few bins, a slow shaft's, reads far less surely than a fast one's).
+The same is read on each half of the record (whole periods each): how much two healthy
+halves differ, against those deviations, is what a change is judged by
+(:mod:`pydiag.gear.component_judge`).
 """
 
 from __future__ import annotations

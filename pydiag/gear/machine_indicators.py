@@ -161,7 +161,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             raise MeasurementError(f"the record holds {n_revs} whole turns of the {name} shaft: "
                                    "too few to average (at least 4)")
         energy, halves, table, fm4_halves, orders, order_halves = {}, {}, {}, {}, {}, {}
-        noise, noise_halves = {}, {}
+        noise, noise_halves, residual_orders = {}, {}, 0
         half = (n_revs // 2) * samples_per_rev
         quarter = (n_revs // 4) * samples_per_rev
         signals = functools.partial(tsa_signals, mesh_order=teeth[-1],

@@ -24,16 +24,16 @@ strikes once a turn of its shaft, so that shaft's TSA grows impulsive, and its k
 (FM4 of the difference signal, the classical detector of a local fault) rises; a runout,
 wear or another stage's change spreads over the turn and does not raise it. A shaft whose
 FM4 rose by more than ``K_SPREAD`` times FM4's healthy spread (the RMS of its halves'
-and baselines' differences), and by as much more than the other shaft's, is the suspect, if its gear on this stage
-is its only one (a shaft carrying two gears says which shaft, not which of its gears). A
-slower shaft's local fault reaches a faster shaft's TSA once in every n of its turns, at
-1/n of its weight, so it raises the faster shaft's FM4 less than its own. Otherwise the
-suspect is the shaft whose change over its threshold exceeds the other's by more than one
-(null: neither clearly did). Where a faster shaft turns a whole number
-of times per turn of the slower one, the slower shaft's fault reaches the faster shaft's
-TSA on their common lines (a local fault's lines cover every order), so a change of both
-is no evidence against the slower one: the suspect stays null unless one stands clearly
-higher. A shaft carrying two gears changes with either stage's change (a runout of its
+and baselines' differences), and by as much more than the other shaft's, is the suspect,
+if its gear on this stage is its only one (a shaft carrying two gears says which shaft,
+not which of its gears). A slower shaft's local fault reaches a faster shaft's TSA once in
+every n of its turns, at 1/n of its weight, so it raises the faster shaft's FM4 less than
+its own. Otherwise the suspect is the shaft whose change over its threshold exceeds the
+other's by more than one (null: neither clearly did). Where a faster shaft turns a whole
+number of times per turn of the slower one, the slower shaft's fault reaches the faster
+shaft's TSA on their common lines (a local fault's lines cover every order), so a change of
+both is no evidence against the slower one: the suspect stays null unless one stands
+clearly higher. A shaft carrying two gears changes with either stage's change (a runout of its
 second stage's pinion moves its residual energy), which is why impulsiveness, the
 specific evidence, is asked first. Without a baseline nothing is judged: there is no
 absolute scale of a real machine's residual energy.
@@ -173,9 +173,9 @@ def synchronous_db(a: tuple[float, float, int], b: tuple[float, float, int]
     difference's standard deviation, dB: each an (energy, noise, orders) triple of a
     shaft's TSA residual (:class:`ShaftRecord`), its synchronous part S the energy less
     the noise N, never taken below :data:`NOISE_FLOOR` of the larger noise of the two
-    (below it neither is told from none). Over m orders of noise, the energy and the noise
-    are each read to within N sqrt(1/m) (the noise's orders are exponentially
-    distributed), the synchronous part to sqrt(2 N (N + S) / m)."""
+    (below it neither is told from none). Over m orders of noise (each order's power
+    exponentially distributed) the energy is read to within sqrt(N (N + 2 S) / m), the
+    noise to N / sqrt(m), so the synchronous part to sqrt(2 N (N + S) / m)."""
     floor = NOISE_FLOOR * max(a[1], b[1])
 
     def part(e: float, n: float, m: int) -> tuple[float, float]:
