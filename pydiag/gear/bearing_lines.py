@@ -56,15 +56,22 @@ ORDER_BINS = 2
 #: Each defect, the line it strikes at (a multiple of one of Bearing.frequencies' keys).
 DEFECT_LINES = {"outer": ("bpfo", 1.0), "inner": ("bpfi", 1.0), "ball": ("bsf", 2.0),
                 "cage": ("ftf", 1.0)}
+#: A defect's strikes make a comb of lines at its rate's multiples; this is the line of
+#: each comb's first ("spin": the ball's spin, which a spalled ball striking its two races
+#: unequally makes beside twice it). Another bearing's line may be one of its harmonics
+#: (:mod:`pydiag.gear.component_judge`).
+COMB_FIRST = {"outer": "outer", "inner": "inner", "ball": "spin", "cage": "cage"}
+#: Every line read of a bearing: its defects' and the ball's spin.
+READ_LINES = {**DEFECT_LINES, "spin": ("bsf", 1.0)}
 
 
 @dataclass(frozen=True)
 class BearingRecord:
-    """One bearing's defect lines in one record: channel -> defect ("outer", "inner",
-    "ball", "cage") -> the line over its floor, dB, for the whole record (``levels_db``)
-    and for each half (``halves_db``), and the standard deviation of each where the
-    envelope is noise (``sd_db``, ``halves_sd_db``; empty: a record kept before pydiag
-    read them)."""
+    """One bearing's lines in one record: channel -> line (a defect's, "outer", "inner",
+    "ball", "cage", or the ball's "spin": :data:`READ_LINES`) -> the line over its floor,
+    dB, for the whole record (``levels_db``) and for each half (``halves_db``), and the
+    standard deviation of each where the envelope is noise (``sd_db``, ``halves_sd_db``;
+    empty: a record kept before pydiag read them; without "spin": before it read that)."""
 
     bearing: str
     shaft: str
@@ -90,12 +97,11 @@ class BearingRecord:
 
 
 def defect_orders(machine: Machine) -> dict[str, dict[str, float]]:
-    """Each bearing's (by name) defect lines in orders of the input shaft."""
+    """Each bearing's (by name) lines (:data:`READ_LINES`) in orders of the input shaft."""
     out = {}
     for b in machine.bearings:
         per_turn = b.frequencies(float(machine.shaft_ratio(b.shaft)))
-        out[b.name] = {defect: per_turn[key] * times
-                       for defect, (key, times) in DEFECT_LINES.items()}
+        out[b.name] = {line: per_turn[key] * times for line, (key, times) in READ_LINES.items()}
     return out
 
 
@@ -171,10 +177,10 @@ def bearing_records(measurement: Measurement, machine: Machine, estimate: SpeedE
         whole[channel], halves[channel] = parts[0], (parts[1], parts[2])
 
     def of(name: str, i: int) -> dict:  # i 0: the levels, 1: their deviations
-        return {c: {d: whole[c][name][d][i] for d in DEFECT_LINES} for c in names}
+        return {c: {d: whole[c][name][d][i] for d in READ_LINES} for c in names}
 
     def halved(name: str, i: int) -> dict:
         return {c: {d: (halves[c][0][name][d][i], halves[c][1][name][d][i])
-                    for d in DEFECT_LINES} for c in names}
+                    for d in READ_LINES} for c in names}
     return [BearingRecord(b.name, b.shaft, of(b.name, 0), halved(b.name, 0), of(b.name, 1),
                           halved(b.name, 1)) for b in machine.bearings]

@@ -1,8 +1,8 @@
 """Every gear, bearing and shaft of a two-stage box judged against its healthy record, on
 records of the independent gearbox simulator (:mod:`truth.gearbox`: faults written from
 the shafts' angles and the bearing's own geometry, not by pydiag): a healthy record has
-every component good; a shaft's unbalance, a bend, a broken tooth and a race's defect are
-each named on their component (a ball's defect on the slowest shaft is not yet: below)."""
+every component good; a shaft's unbalance, a bend, a broken tooth, a race's and a ball's
+defect are each named on their component."""
 
 import pytest
 from truth.gearbox import BOX, INPUT_HZ, SHAFT_NAMES, SHORT_BOX, described, gearbox_record
@@ -66,26 +66,25 @@ def test_a_shafts_fault_and_a_broken_tooth_are_named_on_their_component(seed, fa
 
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
-@pytest.mark.parametrize("shaft, defect", [(1, "inner"), (0, "outer"), pytest.param(
-    2, "ball", marks=pytest.mark.xfail(strict=True, reason=(
-        "a known miss: the output shaft turns once in five input turns, so the fifth "
-        "harmonic of its ball line (0.95 input orders) is the input bearing's ball line "
-        "(4.73), which rises more than the output's own (12.2 against 8.3 dB on seed 2): a "
-        "line two bearings share is not yet told apart by their other harmonics"))),
-    pytest.param(0, "ball", marks=pytest.mark.xfail(strict=True, reason=(
-        "a known miss: the input's spalled ball strikes its two races unequally, so its "
-        "envelope has a line at the ball's spin (2.37 input orders) as well as at twice "
-        "it; the intermediate shaft turns at half the input's speed, so its ball line "
-        "(twice its balls' spin) is that line, and rises more (+20.6 against +15.2 dB "
-        "on seed 2): the intermediate's bearing is named too")))])
+@pytest.mark.parametrize("shaft, defect", [(1, "inner"), (0, "outer"), (2, "ball"),
+                                           (0, "ball")])
 def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):
-    """Strong impacts (peaks 20 times the noise): the bearing's own line rises beyond four
-    times the healthy halves' spread, no other bearing's does. (Their energy reaches the
-    shafts' averages too, so the gears' stages may read changed: not asserted here.)"""
+    """Strong impacts (peaks 20 times the noise): the bearing's own line rises beyond its
+    threshold, and no other bearing is named. A spalled ball's lines are other bearings'
+    too: the output turns once in five input turns, so the tenth harmonic of its ball's
+    spin is the input bearing's ball line (4.73 input orders), which rises more than the
+    output's own (12.2 against 8.3 dB on seed 2); the input's ball strikes its races
+    unequally, so its envelope has a line at the spin (2.37), which is the intermediate's
+    ball line (twice its spin, at half the input's speed). Each is named on the bearing
+    whose comb's first line rose (:func:`pydiag.gear.component_judge._explainer`)."""
     found = judged(SHORT_BOX, seed, bearing=((shaft, defect, 6.0),))
     bearings = {name: v.state for name, v in found.items() if v.component.kind == "bearing"}
     assert bearings == {f"{s} bearing": defect if k == shaft else "good"
                         for k, s in enumerate(SHAFTS)}, bearings
+    if defect == "ball":  # the other bearing whose line rose says whose comb it is
+        other = "input bearing" if shaft == 2 else "intermediate bearing"
+        assert "harmonic of " f"{SHAFTS[shaft]} bearing's ball comb" in found[other].reason, \
+            found[other]
 
 
 def test_a_bearings_line_on_a_shafts_order_is_not_judged_on_that_line():
