@@ -83,7 +83,7 @@ def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):
                         for k, s in enumerate(SHAFTS)}, bearings
     if defect == "ball":  # the other bearing whose line rose says whose comb it is
         other = "input bearing" if shaft == 2 else "intermediate bearing"
-        assert "harmonic of " f"{SHAFTS[shaft]} bearing's ball comb" in found[other].reason, \
+        assert f"harmonic of {SHAFTS[shaft]} bearing's ball comb" in found[other].reason, \
             found[other]
 
 
