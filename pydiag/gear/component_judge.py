@@ -119,9 +119,10 @@ def components(machine: Machine) -> tuple[Component, ...]:
     return tuple(gears + bearings + [Component("shaft", name, name) for name in machine.shafts])
 
 
-def _rms(diffs: list[float]) -> float:
+def _rms(diffs: list[float], floor: float = MIN_SPREAD_DB) -> float:
+    """The RMS of the finite ``diffs``, never below ``floor`` (``floor`` when none is)."""
     finite = [d for d in diffs if math.isfinite(d)]
-    return max(float(np.sqrt(np.mean(np.square(finite)))) if finite else 0.0, MIN_SPREAD_DB)
+    return max(float(np.sqrt(np.mean(np.square(finite)))) if finite else 0.0, floor)
 
 
 def _mean(values: list[float]) -> float:
@@ -142,18 +143,19 @@ def _gears(machine: Machine, verdicts: Sequence[StageVerdict]) -> list[Component
         change = v.pinion if c.role == "pinion" else v.gear
         evidence = {"residual_energy_db": change.change_db, "fm4_change": change.fm4_change}
         margin = change.margin(v.threshold_db)
+        held = change.threshold_db if math.isfinite(change.threshold_db) else v.threshold_db
         if not v.changed:
-            out.append(ComponentVerdict(c, GOOD, evidence, v.threshold_db, margin,
+            out.append(ComponentVerdict(c, GOOD, evidence, held, margin,
                                         "its stage did not change"))
         elif v.suspect == c.role:
-            out.append(ComponentVerdict(c, CHANGED, evidence, v.threshold_db, margin,
+            out.append(ComponentVerdict(c, CHANGED, evidence, held, margin,
                                         f"its stage changed, its shaft the suspect "
                                         f"({v.suspect_by})"))
         elif v.suspect is None:
-            out.append(ComponentVerdict(c, CHANGED, evidence, v.threshold_db, margin,
+            out.append(ComponentVerdict(c, CHANGED, evidence, held, margin,
                                         "its stage changed; which of its gears is not told"))
         else:
-            out.append(ComponentVerdict(c, GOOD, evidence, v.threshold_db, margin,
+            out.append(ComponentVerdict(c, GOOD, evidence, held, margin,
                                         "its stage changed, the other shaft the suspect"))
     return out
 
@@ -244,9 +246,8 @@ def bearing_scale(baselines: Sequence[MachineRecord], told: dict[str, dict[str, 
     def whole(br) -> dict:
         return {(c, d): (v, br.sd_db[c][d]) for c, t in br.levels_db.items()
                 for d, v in t.items() if not told[br.bearing][d]}
-    diffs = [d for d in healthy_differences(baselines, lambda rec: rec.bearings, halves, whole,
-                                            _normalised) if math.isfinite(d)]
-    return max(float(np.sqrt(np.mean(np.square(diffs)))) if diffs else 1.0, 1.0)
+    return _rms(healthy_differences(baselines, lambda rec: rec.bearings, halves, whole,
+                                    _normalised), 1.0)
 
 
 def _explainer(machine: Machine, orders: dict[str, dict[str, float]],

@@ -13,7 +13,7 @@ themselves: the synchronous energy of each half of a baseline against the other 
 and, with two or more baselines, of each baseline against the others, each difference over
 its deviation (:func:`synchronous_db`: a shaft whose residual is mostly noise reads less
 surely than one whose residual is its gears'), pooled over every shaft and channel as a
-root mean square, never below 1 (:func:`synchronous_scale`). A stage is **changed** when
+root mean square, never below 1 (:func:`synchronous_spread`). A stage is **changed** when
 one of its two shafts' change (up or down) exceeds its own threshold, ``K_SPREAD`` times
 its deviation times that scale. The same differences in dB, pooled, are the reported
 healthy spread (``spread_db``); by the whole energy, the one threshold is ``K_SPREAD``
@@ -204,23 +204,24 @@ def _synchronous_differences(baselines: list[MachineRecord]) -> list[tuple[float
         synchronous_db)
 
 
-def healthy_spread_db(baselines: list[MachineRecord], synchronous: bool = True) -> float:
-    """The RMS difference in a shaft's residual energy (dB) between two healthy records of
-    the machine, estimated from the baselines' halves and, with several, from each pair of
-    baselines (module docstring); ``synchronous``: of its synchronous part
-    (:func:`synchronous_db`), else of the whole energy."""
-    if not synchronous:
-        return _rms(healthy_differences(baselines, lambda rec: rec.shafts, lambda s: s.halves,
-                                        lambda s: s.residual_energy, _db), MIN_SPREAD_DB)
-    return _rms([d for d, _ in _synchronous_differences(baselines)], MIN_SPREAD_DB)
+def healthy_spread_db(baselines: list[MachineRecord]) -> float:
+    """The RMS difference in a shaft's whole residual energy (dB) between two healthy
+    records of the machine, estimated from the baselines' halves and, with several, from
+    each pair of baselines (module docstring): the spread a baseline kept before pydiag
+    read the noise is judged by."""
+    return _rms(healthy_differences(baselines, lambda rec: rec.shafts, lambda s: s.halves,
+                                    lambda s: s.residual_energy, _db), MIN_SPREAD_DB)
 
 
-def synchronous_scale(baselines: list[MachineRecord]) -> float:
-    """How many times their deviations (:func:`synchronous_db`) two healthy halves' (and
-    baselines') synchronous residual energies differ: the RMS of the differences each over
-    its deviation, never below 1."""
-    ratios = [d / sd for d, sd in _synchronous_differences(baselines) if sd > 0]
-    return _rms(ratios, 1.0) if ratios else 1.0
+def synchronous_spread(baselines: list[MachineRecord]) -> tuple[float, float]:
+    """(spread, scale): the RMS difference in a shaft's synchronous residual energy (dB)
+    between two healthy records, estimated as :func:`healthy_spread_db` estimates the
+    whole energy's, and how many times their deviations (:func:`synchronous_db`) they
+    differ, the RMS of the differences each over its deviation, never below 1."""
+    diffs = _synchronous_differences(baselines)
+    ratios = [d / sd for d, sd in diffs if sd > 0]
+    return (_rms([d for d, _ in diffs], MIN_SPREAD_DB),
+            _rms(ratios, 1.0) if ratios else 1.0)
 
 
 def healthy_fm4_spread(baselines: list[MachineRecord]) -> float | None:
@@ -296,8 +297,8 @@ def judge_stages(machine: Machine, record: MachineRecord,
         raise MeasurementError("judging a stage needs a baseline record of the machine")
     check_comparable(record, baselines)
     synchronous = knows_noise([record, *baselines])
-    spread = healthy_spread_db(baselines, synchronous)
-    scale = synchronous_scale(baselines) if synchronous else math.nan
+    spread, scale = (synchronous_spread(baselines) if synchronous
+                     else (healthy_spread_db(baselines), math.nan))
     threshold = K_SPREAD * spread
     fm4_spread = healthy_fm4_spread(baselines)
     fm4_threshold = None if fm4_spread is None else K_SPREAD * fm4_spread

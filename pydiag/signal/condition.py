@@ -96,11 +96,12 @@ def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDE
     band = (orders > mesh_order / 2) & (orders < 1.5 * mesh_order)
     analytic = np.fft.ifft(np.concatenate([np.where(band, 2 * coeffs, 0),
                                            np.zeros(n - coeffs.size)]))
+    residual = ~(mesh | shaft | foreign) & (orders > 0)
     return TsaSignals(tsa=tsa - tsa.mean(), regular=regular,
                       difference=part(~(mesh | sidebands | shaft | foreign) & (orders > 0)),
-                      residual=part(kept := ~(mesh | shaft | foreign) & (orders > 0)),
-                      envelope=np.abs(analytic), spectrum=2 * np.abs(coeffs) / n,
-                      mesh_order=mesh_order, residual_orders=int(np.count_nonzero(kept)))
+                      residual=part(residual), envelope=np.abs(analytic),
+                      spectrum=2 * np.abs(coeffs) / n, mesh_order=mesh_order,
+                      residual_orders=int(np.count_nonzero(residual)))
 
 
 def normalized_moment(x: np.ndarray, k: int, variance: float | None = None) -> float:

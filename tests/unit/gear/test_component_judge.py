@@ -73,7 +73,7 @@ def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):
     threshold, and no other bearing is named. A spalled ball's lines are other bearings'
     too: the output turns once in five input turns, so the tenth harmonic of its ball's
     spin is the input bearing's ball line (4.73 input orders), which rises more than the
-    output's own (12.2 against 8.3 dB on seed 2); the input's ball strikes its races
+    output's own; the input's ball strikes its races
     unequally, so its envelope has a line at the spin (2.37), which is the intermediate's
     ball line (twice its spin, at half the input's speed). Each is named on the bearing
     whose comb's first line rose (:func:`pydiag.gear.component_judge._explainer`)."""
