@@ -74,6 +74,8 @@ SIMULATED = [
     ("input bend", "BOX", dict(bend=((0, 0.3),)), {"input": "bent"}),
     ("broken tooth, stage 2's gear", "BOX", dict(faulty_shaft=2, stage=1),
      {"54T gear of stage 2": "changed"}),
+    ("broken tooth, short box's output gear", "SHORT_BOX", dict(faulty_shaft=2, stage=1),
+     {"50T gear of stage 2": "changed"}),
     ("intermediate inner race", "SHORT_BOX", dict(bearing=((1, "inner", 6.0),)),
      {"intermediate bearing": "inner"}),
     ("input outer race", "SHORT_BOX", dict(bearing=((0, "outer", 6.0),)),

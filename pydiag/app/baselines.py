@@ -14,7 +14,7 @@ from pydiag.core.errors import UsageError
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
 from pydiag.gear.speed import SpeedSettings
-from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE, at_speed
+from pydiag.gear.comparable import BASELINE_SPEED_SHARE, at_speed
 from pydiag.loop import history
 
 #: The --baseline value that stands for the baselines kept in the history.
@@ -24,7 +24,7 @@ KEPT = "kept"
 def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
     """The --baseline records as the machine sees them (their speed and every shaft's TSA),
     read and made once; ``kept``: those kept for the machine in the history at the
-    record's operating point (:func:`~pydiag.gear.stage_judge.at_speed`). Each baseline
+    record's operating point (:func:`~pydiag.gear.comparable.at_speed`). Each baseline
     counts once, however often it is given or whether it is given and kept too (a second
     copy would narrow the healthy spread); the record among its own baselines is said."""
     record = _same_file(getattr(args, "measurement", None))

@@ -31,7 +31,7 @@ from pydiag.gear.features import FEATURE_MODES
 from pydiag.gear.indicators import SHAFTS
 from pydiag.gear.paper_cases import TABLE1
 from pydiag.gear.speed import SPEED_METHODS
-from pydiag.gear.stage_judge import BASELINE_SPEED_SHARE
+from pydiag.gear.comparable import BASELINE_SPEED_SHARE
 from pydiag.model.regress import DEFAULT_RTOL
 
 

@@ -241,6 +241,10 @@ def _verdict_rows(report: MachineReport) -> list[str]:
         verdict = "changed" if v.changed else "healthy"
         if v.suspect:
             verdict += f", {v.suspect} suspect ({v.suspect_by})"
+        for role, change in (("pinion", v.pinion), ("gear", v.gear)):
+            if change.explained_by:
+                verdict += (f"; the {role} shaft's rise is what "
+                            f"{' and '.join(change.explained_by)} put on its lines")
         thresholds = (f"{v.pinion.threshold_db:.2f}/{v.gear.threshold_db:.2f}" if own
                       else f"{v.threshold_db:.2f}")
         lines.append(f"{st.name:<16}{f'{st.pinion_teeth}/{st.gear_teeth}':>7}{st.mesh_hz:>10.2f}"

@@ -9,6 +9,8 @@ records) differ by the same measure, pooled over the machine's components of tha
 
 - **A gear** is its stage's: a stage that did not change has good gears; a changed
   stage's suspect shaft names its gear there, and without a suspect both are "changed".
+  A gear whose shaft's rise another shaft's change accounts for (on the lines they
+  share, :mod:`pydiag.gear.shared_lines`) is good, and says so.
 - **A shaft** by its first orders in its own TSA (those that are none of a faster
   shaft's, whose lines survive it): its 1x alone rose, "imbalance"; its 1x and 2x, "bent"
   (a bend or a misalignment: twice a turn); three or more of its first five, "looseness"
@@ -144,7 +146,13 @@ def _gears(machine: Machine, verdicts: Sequence[StageVerdict]) -> list[Component
         evidence = {"residual_energy_db": change.change_db, "fm4_change": change.fm4_change}
         margin = change.margin(v.threshold_db)
         held = change.threshold_db if math.isfinite(change.threshold_db) else v.threshold_db
-        if not v.changed:
+        if change.explained_by:
+            whose = " and ".join(change.explained_by) + (
+                " shafts'" if len(change.explained_by) > 1 else " shaft's")
+            out.append(ComponentVerdict(c, GOOD if v.suspect != c.role else CHANGED, evidence,
+                                        held, margin, f"the {whose} change accounts for its "
+                                        "shaft's rise, on the lines they share"))
+        elif not v.changed:
             out.append(ComponentVerdict(c, GOOD, evidence, held, margin,
                                         "its stage did not change"))
         elif v.suspect == c.role:

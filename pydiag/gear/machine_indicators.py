@@ -31,7 +31,9 @@ between healthy runs is not known from a record's halves.
 
 Each shaft's first orders in its TSA (a shaft's unbalance, bend, looseness) and each
 bearing's defect lines (:mod:`pydiag.gear.bearing_lines`) are kept too, of the whole
-record and of each half, for :mod:`pydiag.gear.component_judge`.
+record and of each half, for :mod:`pydiag.gear.component_judge`; and each shaft's TSA's
+power at every order, which tells whose a line two shafts' TSAs share is
+(:mod:`pydiag.gear.shared_lines`).
 """
 
 from __future__ import annotations
@@ -50,8 +52,8 @@ from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
 from pydiag.signal.angle import once_a_turn_swing
-from pydiag.signal.condition import (TrendReference, TsaSignals, synchronous_average,
-                                     tsa_indicators, tsa_signals)
+from pydiag.signal.condition import (TrendReference, TsaSignals, order_masks,
+                                     synchronous_average, tsa_indicators, tsa_signals)
 
 #: Indicators of a shaft's TSA in the report, after the residual energy.
 SHAFT_INDICATORS = ("fm0", "fm4", "na4", "nb4", "er", "ser")
@@ -82,6 +84,9 @@ class ShaftRecord:
             vibration leaves in a TSA of that many turns (module docstring);
             noise_halves: the same of each half (empty: a baseline kept before they were)
         residual_orders: how many orders the TSA's residual keeps (0: not known)
+        power: channel -> the TSA's power at each order, 0 to half its samples (signal
+            units squared: the residual energy is its sum over the residual's orders);
+            empty: a baseline kept before it was read
     """
 
     shaft: str
@@ -101,6 +106,7 @@ class ShaftRecord:
     noise: dict[str, float] = field(default_factory=dict)
     noise_halves: dict[str, tuple[float, float]] = field(default_factory=dict)
     residual_orders: int = 0
+    power: dict[str, tuple[float, ...]] = field(default_factory=dict)
 
 
 def _teeth_on(machine: Machine, shaft: int) -> tuple[int, ...]:
@@ -135,6 +141,17 @@ def faster_shafts(machine: Machine, shaft: int) -> tuple[int, ...]:
     return tuple(sorted({r.numerator for r in ratios if r.denominator == 1 and r > 1}))
 
 
+def residual_mask(machine: Machine, shaft: int, samples_per_rev: int) -> np.ndarray:
+    """Which orders of shaft ``shaft``'s TSA of ``samples_per_rev`` samples its residual
+    keeps (:func:`shaft_records`, :func:`~pydiag.signal.condition.tsa_signals`)."""
+    teeth = _teeth_on(machine, shaft)
+    n = samples_per_rev // 2 + 1
+    mesh, _, first, foreign = order_masks(
+        n, teeth[-1], other_meshes=teeth[:-1] + _synchronous_meshes(machine, shaft),
+        faster_shafts=faster_shafts(machine, shaft))
+    return ~(mesh | first | foreign) & (np.arange(n) > 0)
+
+
 def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEstimate,
                   drop: tuple[str, ...] = (), upsampled: Upsampled | None = None
                   ) -> list[ShaftRecord]:
@@ -161,7 +178,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             raise MeasurementError(f"the record holds {n_revs} whole turns of the {name} shaft: "
                                    "too few to average (at least 4)")
         energy, halves, table, fm4_halves, orders, order_halves = {}, {}, {}, {}, {}, {}
-        noise, noise_halves, residual_orders = {}, {}, 0
+        noise, noise_halves, residual_orders, power = {}, {}, 0, {}
         half = (n_revs // 2) * samples_per_rev
         quarter = (n_revs // 4) * samples_per_rev
         signals = functools.partial(tsa_signals, mesh_order=teeth[-1],
@@ -184,9 +201,11 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             fm4_halves[channel] = tuple(float(tsa_indicators(p)["fm4"]) for p in parts[1:])
             first = [tuple(float(a) for a in p.spectrum[1:SHAFT_ORDERS + 1]) for p in parts]
             orders[channel], order_halves[channel] = first[0], (first[1], first[2])
+            power[channel] = tuple(float(a) for a in np.square(parts[0].spectrum) / 2)
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
                                halves, table, fm4_halves, _swing_deg(estimate, ratio),
-                               orders, order_halves, noise, noise_halves, residual_orders))
+                               orders, order_halves, noise, noise_halves, residual_orders,
+                               power))
     return out
 
 
@@ -247,7 +266,8 @@ class MachineRecord:
                                              for c, o in s.order_halves.items()},
                             "noise": s.noise,
                             "noise_halves": {c: list(h) for c, h in s.noise_halves.items()},
-                            "residual_orders": s.residual_orders}
+                            "residual_orders": s.residual_orders,
+                            "power": {c: list(p) for c, p in s.power.items()}}
                            for s in self.shafts],
                 "bearings": [b.to_dict() for b in self.bearings]}
 
@@ -268,7 +288,8 @@ class MachineRecord:
             {c: (tuple(o[0]), tuple(o[1])) for c, o in s.get("order_halves", {}).items()},
             dict(s.get("noise", {})),
             {c: (h[0], h[1]) for c, h in s.get("noise_halves", {}).items()},
-            s.get("residual_orders", 0))
+            s.get("residual_orders", 0),
+            {c: tuple(p) for c, p in s.get("power", {}).items()})
             for s in data["shafts"])
         return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
                    data["file"], data.get("units"),

@@ -19,6 +19,14 @@ its deviation times that scale. The same differences in dB, pooled, are the repo
 healthy spread (``spread_db``); by the whole energy, the one threshold is ``K_SPREAD``
 times it.
 
+A shaft's residual can rise with another shaft's change: where their harmonics meet, what
+repeats with one lands in the other's TSA too (the short box's output turns once in five
+input turns, so its broken tooth rises on every input order). A risen shaft whose rise the
+other risen shafts' own change accounts for, read in their TSAs beside the shared lines
+(:mod:`pydiag.gear.shared_lines`), did not change itself (``ShaftChange.explained_by``);
+two that account for each other's are both judged whole, as is a rise accounted for only
+in part.
+
 Its ``suspect`` is named first by **impulsiveness**: a local tooth fault (a chip, a crack)
 strikes once a turn of its shaft, so that shaft's TSA grows impulsive, and its kurtosis
 (FM4 of the difference signal, the classical detector of a local fault) rises; a runout,
@@ -46,13 +54,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from pydiag.core.errors import MeasurementError
+from pydiag.gear.comparable import check_comparable
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, ShaftRecord, finite_or_none
+from pydiag.gear.shared_lines import explained_rise
 
 #: A stage is changed when a shaft's residual energy moved by more than this many times
 #: the spread of healthy records (module docstring): ~4 standard deviations, so that the
@@ -67,11 +77,7 @@ MIN_FM4_SPREAD = 0.1
 #: residual (:func:`synchronous_db`): it is the difference of two estimates, each good to
 #: a few percent of the noise (a residual of a few hundred orders or more).
 NOISE_FLOOR = 0.1
-#: A baseline is at a record's operating point when its input speed lies within this share
-#: of the record's nominal input speed (:func:`at_speed`): a motor slips a few percent
-#: under load, and a machine's operating speeds lie further apart. The load is not told
-#: by a record: which baselines share it is the user's to say.
-BASELINE_SPEED_SHARE = 0.05
+
 
 
 @dataclass(frozen=True)
@@ -87,11 +93,19 @@ class ShaftChange:
     #: the change beyond which the shaft changed (dB; nan: the stage's, a baseline kept
     #: before its noise was read)
     threshold_db: float = math.nan
+    #: the change left when what the other changed shafts' change puts on this one's
+    #: lines is taken out (dB; nan: none was, :func:`judge_stages`)
+    own_change_db: float = math.nan
+    #: the shafts whose change accounts for this one's rise (its own change within its
+    #: threshold: the shaft did not change), empty where none does; a rise they account
+    #: for in part is judged whole
+    explained_by: tuple[str, ...] = ()
 
     def margin(self, stage_threshold_db: float) -> float:
-        """The change over the shaft's threshold (the stage's where it has none)."""
+        """The shaft's change over its threshold (the stage's where it has none); its own
+        change where the other shafts' change accounts for its rise."""
         own = self.threshold_db if math.isfinite(self.threshold_db) else stage_threshold_db
-        return abs(self.change_db) / own
+        return abs(self.own_change_db if self.explained_by else self.change_db) / own
 
 
 @dataclass(frozen=True)
@@ -125,6 +139,8 @@ class StageVerdict:
         def shaft(change: ShaftChange) -> dict:
             return {"name": change.shaft, "change_db": change.change_db,
                     "threshold_db": finite_or_none(change.threshold_db),
+                    "own_change_db": finite_or_none(change.own_change_db),
+                    "explained_by": list(change.explained_by),
                     "channels_db": change.channels_db,
                     "fm4_change": finite_or_none(change.fm4_change)}
         return {"pinion_shaft": shaft(self.pinion), "gear_shaft": shaft(self.gear),
@@ -135,13 +151,6 @@ class StageVerdict:
 
 def _db(a: float, b: float) -> float:
     return 10 * math.log10(max(a, 1e-300) / max(b, 1e-300))
-
-
-def at_speed(baselines: Sequence[MachineRecord], nominal_hz: float) -> list[MachineRecord]:
-    """The ``baselines`` whose input speed is within :data:`BASELINE_SPEED_SHARE` of the
-    nominal input speed ``nominal_hz``."""
-    return [b for b in baselines
-            if abs(b.speed.speed_hz / nominal_hz - 1) <= BASELINE_SPEED_SHARE]
 
 
 def healthy_differences(baselines: Sequence[MachineRecord],
@@ -263,30 +272,50 @@ def _suspect(pinion: ShaftChange, gear: ShaftChange, threshold_db: float,
     return None, None
 
 
-def check_comparable(record: MachineRecord, baselines: Sequence[MachineRecord]) -> None:
-    """MeasurementError unless each baseline can judge ``record``: its input speed within
-    :data:`BASELINE_SPEED_SHARE` of the record's (a residual's energy grows with the
-    speed: another operating point is a change by itself), its channels read at the same
-    levels (volts at a sensitivity against volts without one differ by the sensitivity)."""
-    for b in baselines:
-        share = abs(b.speed.speed_hz / record.speed.speed_hz - 1)
-        if share > BASELINE_SPEED_SHARE:
-            raise MeasurementError(
-                f"the baseline {b.file} runs at {b.speed.speed_hz:.4g} Hz, {100 * share:.0f} % "
-                f"from the record's {record.speed.speed_hz:.4g} Hz: a baseline judges records "
-                f"within {100 * BASELINE_SPEED_SHARE:g} % of its speed (give one of the "
-                "record's operating point)")
-        if record.units is None:
+def _synchronous_change(shaft: ShaftRecord, seen: list[ShaftRecord],
+                        less: dict[str, float] | None = None
+                        ) -> tuple[dict[str, float], list[float]]:
+    """Each channel's change of ``shaft``'s synchronous residual energy against the mean
+    of its baselines' (``seen``), dB, and each one's deviation (:func:`synchronous_db`);
+    ``less``: channel -> energy taken out of the record's first (:func:`_explained`)."""
+    per_channel, deviations = {}, []
+    for channel, energy in shaft.residual_energy.items():
+        # the baselines' mean, read to 1/sqrt(n) of one's deviation
+        change, deviation = synchronous_db(
+            (energy - (less or {}).get(channel, 0.0), shaft.noise[channel],
+             shaft.residual_orders),
+            (float(np.mean([b.residual_energy[channel] for b in seen])),
+             float(np.mean([b.noise[channel] for b in seen])),
+             len(seen) * shaft.residual_orders))
+        per_channel[channel] = change
+        deviations.append(deviation)
+    return per_channel, deviations
+
+
+def _explained(machine: Machine, record: MachineRecord, baselines: list[MachineRecord],
+               changes: list[ShaftChange]) -> list[ShaftChange]:
+    """``changes`` with each risen shaft's own change: its rise less what the other risen
+    shafts' change accounts for on the lines it shares with them
+    (:mod:`pydiag.gear.shared_lines`). A shaft whose own rise is within its threshold is
+    explained by them."""
+    risen = [k for k, c in enumerate(changes) if c.change_db > 0 and c.margin(math.nan) > 1]
+    out = list(changes)
+    for k in risen:
+        less, by = explained_rise(machine, record.shafts, [b.shafts for b in baselines], k,
+                                  [j for j in risen if j != k])
+        if not by:
             continue
-        if b.units is None:
-            raise MeasurementError(f"the baseline {b.file} was kept without its channels' "
-                                   "units: keep it again (pydiag baseline)")
-        for channel, level in record.units.items():
-            if channel in b.units and b.units[channel] != level:
-                raise MeasurementError(
-                    f"channel {channel} is read as {level} in the record and as "
-                    f"{b.units[channel]} in the baseline {b.file}: give both the same unit "
-                    "and sensitivity")
+        per_channel, _ = _synchronous_change(record.shafts[k],
+                                             [b.shafts[k] for b in baselines], less)
+        own = max(float(np.mean(list(per_channel.values()))), 0.0)  # a rise, in part theirs
+        by = tuple(changes[j].shaft for j in by)
+        out[k] = replace(changes[k], own_change_db=own,
+                         explained_by=by if own <= changes[k].threshold_db else ())
+    # two shafts that account for each other's rise: the record does not tell which
+    # changed, so neither is explained away
+    mutual = {c.shaft for c in out for o in out
+              if o.shaft in c.explained_by and c.shaft in o.explained_by}
+    return [replace(c, explained_by=()) if c.shaft in mutual else c for c in out]
 
 
 def judge_stages(machine: Machine, record: MachineRecord,
@@ -304,25 +333,23 @@ def judge_stages(machine: Machine, record: MachineRecord,
     fm4_threshold = None if fm4_spread is None else K_SPREAD * fm4_spread
     changes = []
     for shaft in record.shafts:
-        per_channel, deviations = {}, []
-        for channel, energy in shaft.residual_energy.items():
-            seen = [b.shafts[shaft.index] for b in baselines]
-            reference = [b.residual_energy.get(channel) for b in seen]
-            if any(r is None for r in reference):
+        seen = [b.shafts[shaft.index] for b in baselines]
+        for channel in shaft.residual_energy:
+            if any(channel not in b.residual_energy for b in seen):
                 raise MeasurementError(f"the baseline has no channel {channel}")
-            if synchronous:  # the baselines' mean, read to 1/sqrt(n) of one's deviation
-                change, deviation = synchronous_db(
-                    (energy, shaft.noise[channel], shaft.residual_orders),
-                    (float(np.mean(reference)), float(np.mean([b.noise[channel] for b in seen])),
-                     len(seen) * shaft.residual_orders))
-                deviations.append(deviation)
-            else:
-                change = _db(energy, float(np.mean(reference)))
-            per_channel[channel] = change
         fm4 = _fm4_change(shaft, baselines) if fm4_threshold is not None else math.nan
-        own = K_SPREAD * scale * float(np.mean(deviations)) if synchronous else math.nan
+        if not synchronous:
+            per_channel = {c: _db(e, float(np.mean([b.residual_energy[c] for b in seen])))
+                           for c, e in shaft.residual_energy.items()}
+            changes.append(ShaftChange(shaft.shaft, float(np.mean(list(per_channel.values()))),
+                                       per_channel, fm4))
+            continue
+        per_channel, deviations = _synchronous_change(shaft, seen)
         changes.append(ShaftChange(shaft.shaft, float(np.mean(list(per_channel.values()))),
-                                   per_channel, fm4, own))
+                                   per_channel, fm4,
+                                   K_SPREAD * scale * float(np.mean(deviations))))
+    if synchronous:
+        changes = _explained(machine, record, baselines, changes)
     verdicts = []
     for k, stage in enumerate(machine.stages):
         pinion, gear = changes[k], changes[k + 1]

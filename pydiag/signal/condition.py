@@ -62,6 +62,29 @@ class TsaSignals:
     residual_orders: int = 0  # how many orders the residual keeps
 
 
+def order_masks(n_orders: int, mesh_order: int, shaft_orders: int = SHAFT_ORDERS,
+                other_meshes: tuple[int, ...] = (), faster_shafts: tuple[int, ...] = ()
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Which of the orders 0..``n_orders`` - 1 of a shaft's TSA (:func:`tsa_signals`'
+    arguments) are its meshes' harmonics, their first sidebands, its first
+    ``shaft_orders`` orders and the faster shafts' lines (boolean masks, in that order);
+    the residual is every order > 0 that is none of the first, third and fourth."""
+    orders = np.arange(n_orders)
+    mesh = np.zeros(orders.size, dtype=bool)
+    sidebands = np.zeros(orders.size, dtype=bool)
+    for teeth in (mesh_order, *other_meshes):
+        mesh |= (orders % teeth == 0) & (orders > 0)
+        sidebands |= ((orders + 1) % teeth == 0) | ((orders - 1) % teeth == 0)
+    sidebands &= (orders > 1) & ~mesh
+    shaft = (orders >= 1) & (orders <= shaft_orders)
+    foreign = np.zeros(orders.size, dtype=bool)
+    for turns in faster_shafts:
+        if turns < 2:
+            raise ValueError(f"a faster shaft turns a whole number >= 2 of times, got {turns}")
+        foreign |= orders % turns == 0
+    return mesh, sidebands, shaft, foreign
+
+
 def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDERS,
                 other_meshes: tuple[int, ...] = (),
                 faster_shafts: tuple[int, ...] = ()) -> TsaSignals:
@@ -75,19 +98,9 @@ def tsa_signals(tsa: np.ndarray, mesh_order: int, shaft_orders: int = SHAFT_ORDE
     if mesh_order < 2 or mesh_order >= n // 2:
         raise ValueError(f"mesh order {mesh_order} needs 2 <= order < {n // 2} (samples/2)")
     coeffs = np.fft.rfft(tsa - tsa.mean())
+    mesh, sidebands, shaft, foreign = order_masks(coeffs.size, mesh_order, shaft_orders,
+                                                  other_meshes, faster_shafts)
     orders = np.arange(coeffs.size)
-    mesh = np.zeros(orders.size, dtype=bool)
-    sidebands = np.zeros(orders.size, dtype=bool)
-    for teeth in (mesh_order, *other_meshes):
-        mesh |= (orders % teeth == 0) & (orders > 0)
-        sidebands |= ((orders + 1) % teeth == 0) | ((orders - 1) % teeth == 0)
-    sidebands &= (orders > 1) & ~mesh
-    shaft = (orders >= 1) & (orders <= shaft_orders)
-    foreign = np.zeros(orders.size, dtype=bool)
-    for turns in faster_shafts:
-        if turns < 2:
-            raise ValueError(f"a faster shaft turns a whole number >= 2 of times, got {turns}")
-        foreign |= orders % turns == 0
 
     def part(keep: np.ndarray) -> np.ndarray:
         return np.fft.irfft(np.where(keep, coeffs, 0), n)

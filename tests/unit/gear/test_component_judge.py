@@ -66,6 +66,37 @@ def test_a_shafts_fault_and_a_broken_tooth_are_named_on_their_component(seed, fa
 
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
+def test_a_slower_shafts_broken_tooth_on_a_faster_shafts_lines_is_the_slower_ones(seed):
+    """The short box's output turns once in five input turns: its broken tooth strikes at
+    one input angle every fifth input turn, on every input order, so the input's TSA
+    keeps a fifth of it and its residual rises beyond its threshold. The output's change,
+    read in its own TSA beside those lines, accounts for that rise: the input's pinion is
+    good, the output's gear changed."""
+    machine = machine_of(SHORT_BOX)
+    record, baseline = (machine_record(gearbox_record(s, box=SHORT_BOX, **fault), machine,
+                                       SpeedSettings("mesh"), INPUT_HZ)
+                        for s, fault in ((seed, dict(faulty_shaft=2, stage=1)), (1, {})))
+    verdicts, _ = judge_stages(machine, record, [baseline])
+    first = verdicts[0].pinion
+    assert first.change_db > first.threshold_db and first.explained_by == ("output",), first
+    judged = judge_components(machine, record, [baseline], verdicts)
+    assert {v.component.name: v.state for v in judged if v.faulty} == {
+        "50T gear of stage 2": "changed"}
+    pinion = next(v for v in judged if v.component.name == "18T pinion of stage 1")
+    assert "the output shaft's change accounts for its shaft's rise" in pinion.reason, pinion
+    # a kept baseline reads back to the same verdict; one kept before the TSAs' power by
+    # order was, without the explanation (the rise judged whole, as before)
+    from pydiag.gear.machine_indicators import MachineRecord
+    kept = MachineRecord.from_dict(baseline.to_dict())
+    assert judge_stages(machine, record, [kept])[0][0].pinion == first
+    old = baseline.to_dict()
+    for shaft in old["shafts"]:
+        del shaft["power"]
+    again = judge_stages(machine, record, [MachineRecord.from_dict(old)])[0][0]
+    assert again.pinion.explained_by == () and again.changed, again
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
 @pytest.mark.parametrize("shaft, defect", [(1, "inner"), (0, "outer"), (2, "ball"),
                                            (0, "ball")])
 def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):

@@ -12,7 +12,8 @@ from truth.gearbox import INPUT_HZ, gearbox_record as record
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
 from pydiag.gear.speed import SpeedSettings
-from pydiag.gear.stage_judge import at_speed, judge_stages
+from pydiag.gear.comparable import at_speed
+from pydiag.gear.stage_judge import judge_stages
 from pydiag.loop import history
 
 
