@@ -7,10 +7,13 @@ energy: its change against the baselines' mean, in dB, averaged over the channel
 ``K_SPREAD`` times how much two healthy halves (and, with several baselines, two healthy
 records) differ by the same measure, pooled over the machine's components of that kind.
 
-- **A gear** is its stage's: a stage that did not change has good gears; a changed
-  stage's suspect shaft names its gear there, and without a suspect both are "changed".
-  A gear whose shaft's rise another shaft's change accounts for (on the lines they
-  share, :mod:`pydiag.gear.shared_lines`) is good, and says so.
+- **A gear** is its stage's: a stage that did not change has good gears. In a changed
+  stage, a shaft's only gear is "changed" when its shaft changed beyond its own
+  threshold (no other gear of the shaft to blame), unless the stage's suspect is named
+  by impulsiveness; otherwise the suspect shaft names its gear, and without a suspect
+  both are "changed" (an idler's change does not say which of its two gears). A gear
+  whose shaft's rise another shaft's change accounts for (on the lines they share,
+  :mod:`pydiag.gear.shared_lines`) is good, and says so.
 - **A shaft** by its first orders in its own TSA (those that are none of a faster
   shaft's, whose lines survive it): its 1x alone rose, "imbalance"; its 1x and 2x, "bent"
   (a bend or a misalignment: twice a turn); three or more of its first five, "looseness"
@@ -155,6 +158,11 @@ def _gears(machine: Machine, verdicts: Sequence[StageVerdict]) -> list[Component
         elif not v.changed:
             out.append(ComponentVerdict(c, GOOD, evidence, held, margin,
                                         "its stage did not change"))
+        elif sum(g.shaft == c.shaft for g in gears) == 1 and v.suspect_by != "impulsiveness":
+            # its shaft's only gear: the shaft's own change is the gear's
+            out.append(ComponentVerdict(c, CHANGED if margin > 1 else GOOD, evidence, held,
+                                        margin, "its stage changed, and its shaft"
+                                        + (" with it" if margin > 1 else " did not")))
         elif v.suspect == c.role:
             out.append(ComponentVerdict(c, CHANGED, evidence, held, margin,
                                         f"its stage changed, its shaft the suspect "

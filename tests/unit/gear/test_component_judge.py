@@ -184,3 +184,26 @@ def test_a_baseline_kept_before_the_components_were_read_judges_only_the_gears()
     bearings = [v for v in judge_components(machine, record, [old], verdicts)
                 if v.component.kind == "bearing"]
     assert all(v.state == "not judged" and "keep it again" in v.reason for v in bearings)
+
+
+@pytest.mark.parametrize("by, output_gear", [("residual energy", "changed"),
+                                             ("impulsiveness", "good")])
+def test_a_shafts_only_gear_changes_with_its_shaft_beside_a_suspect_idler(by, output_gear):
+    """The PHM09 spur 4 case's shape: stage 2's idler (two gears) moved 5.35 x its
+    threshold and the output (one gear) 2.77 x, each on its own. The idler is the
+    suspect by the larger move, but the output's gear is the only one its shaft could
+    have changed by, so it is changed too; FM4 naming the idler instead (a local fault's
+    impulsiveness, the specific evidence) leaves it good."""
+    from pydiag.gear.stage_judge import ShaftChange, StageVerdict
+    machine = machine_of(BOX)
+    quiet = ShaftChange("input", 0.1, {"acc": 0.1}, 0.0, 1.0)
+    idler = ShaftChange("intermediate", 5.35, {"acc": 5.35}, 0.0, 1.0)
+    output = ShaftChange("output", 2.77, {"acc": 2.77}, 0.0, 1.0)
+    verdicts = [StageVerdict("stage 1", 20, 64, 500.0, quiet, idler, 1.0, True, "gear", 0.5,
+                             "residual energy"),
+                StageVerdict("stage 2", 24, 54, 300.0, idler, output, 1.0, True, "pinion", 0.5,
+                             by)]
+    from pydiag.gear.component_judge import _gears
+    states = {v.component.name: v.state for v in _gears(machine, verdicts)}
+    assert states == {"20T pinion of stage 1": "good", "64T gear of stage 1": "changed",
+                      "24T pinion of stage 2": "changed", "54T gear of stage 2": output_gear}
