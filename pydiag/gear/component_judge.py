@@ -64,7 +64,11 @@ ON_ORDER_SHARE = 0.002
 #: line's rise is its. Half the threshold: the rise is asked of a line the other
 #: bearing's rise already says is struck.
 EXPLAINS = 0.5
-HARMONICS = 10
+#: The highest harmonic of a comb a line is told to be: the j-th harmonic is looked for
+#: within the slip (SLIP_SHARE of the line, so j x SLIP_SHARE of the comb's spacing either
+#: side), and beyond 1 / (4 SLIP_SHARE) that window is more than half the spacing: any
+#: line would lie within the slip of some harmonic more often than not.
+HARMONICS = int(1 / (4 * SLIP_SHARE))
 
 GOOD, CHANGED, NOT_JUDGED = "good", "changed", "not judged"
 
