@@ -65,8 +65,9 @@ def _right(said: str, truth: str) -> bool:
 
 
 #: The simulator's cases: (name, box, the record's faults, what they are: component ->
-#: state). Sizes as tests/unit/gear/test_component_judge.py's; a broken tooth is said
-#: "changed" (the judge tells a gear's change, not its kind).
+#: state). Sizes as tests/unit/gear/test_component_judge.py's (a chip: a dip of its mesh
+#: of depth 0.3, a broken tooth's 0.8; a runout: its mesh swinging by 0.2 once a turn); a
+#: gear's fault is said "changed" (the judge tells a gear's change, not its kind).
 SIMULATED = [
     ("healthy", "BOX", {}, {}),
     ("healthy (short box)", "SHORT_BOX", {}, {}),
@@ -76,6 +77,14 @@ SIMULATED = [
      {"54T gear of stage 2": "changed"}),
     ("broken tooth, short box's output gear", "SHORT_BOX", dict(faulty_shaft=2, stage=1),
      {"50T gear of stage 2": "changed"}),
+    ("chipped input pinion", "BOX", dict(faulty_shaft=0, stage=0, depth=0.3),
+     {"20T pinion of stage 1": "changed"}),
+    ("chipped idler gear (short box)", "SHORT_BOX", dict(faulty_shaft=1, stage=0, depth=0.3),
+     {"36T gear of stage 1": "changed"}),
+    ("eccentric output gear", "BOX", dict(runout=((2, 1, 0.2),)),
+     {"54T gear of stage 2": "changed"}),
+    ("eccentric idler pinion", "BOX", dict(runout=((1, 1, 0.2),)),
+     {"24T pinion of stage 2": "changed"}),
     ("intermediate inner race", "SHORT_BOX", dict(bearing=((1, "inner", 6.0),)),
      {"intermediate bearing": "inner"}),
     ("input outer race", "SHORT_BOX", dict(bearing=((0, "outer", 6.0),)),
