@@ -6,7 +6,7 @@ import math
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.speed import SpeedEstimate
-from pydiag.gear.component_judge import ComponentVerdict
+from pydiag.gear.component import ComponentVerdict
 from pydiag.gear.machine_report import MachineReport
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.diagnose.diagnosis import Diagnosis

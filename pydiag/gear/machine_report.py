@@ -14,7 +14,8 @@ from typing import Protocol
 import numpy as np
 
 from pydiag.core.measurement import Measurement
-from pydiag.gear.component_judge import ComponentVerdict, judge_components
+from pydiag.gear.component import ComponentVerdict
+from pydiag.gear.component_judge import judge_components
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, finite_or_none, machine_record
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings

@@ -7,7 +7,8 @@ a race's and a ball's defect are each named on their component."""
 import pytest
 from truth.gearbox import BOX, INPUT_HZ, SHAFT_NAMES, SHORT_BOX, described, gearbox_record
 
-from pydiag.gear.component_judge import components, judge_components
+from pydiag.gear.component import components
+from pydiag.gear.component_judge import judge_components
 from pydiag.gear.machine_file import machine_from_dict
 from pydiag.gear.machine_indicators import machine_record
 from pydiag.gear.speed import SpeedSettings
@@ -71,13 +72,19 @@ def test_a_shafts_fault_a_chip_a_break_and_a_runout_are_named_on_their_component
 
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
-def test_an_idlers_runout_names_the_idlers_two_gears_and_nothing_else(seed):
-    """The intermediate shaft carries stage 1's gear and stage 2's pinion: its change
-    does not say which of them ran out, so both are "changed" (a known limit: the
-    sidebands of the mesh of the gear that runs out rise, but on a real box the idler's
-    swing moves both its meshes), and no other component is."""
-    assert faulty(judged(BOX, seed, runout=((1, 1, 0.2),))) == {
-        "64T gear of stage 1": "changed", "24T pinion of stage 2": "changed"}
+@pytest.mark.parametrize("box, fault, named, other", [
+    (BOX, dict(runout=((1, 1, 0.2),)), "24T pinion of stage 2", "64T gear of stage 1"),
+    (SHORT_BOX, dict(faulty_shaft=1, stage=0, depth=0.3), "36T gear of stage 1",
+     "20T pinion of stage 2")])
+def test_an_idlers_gear_is_told_from_its_other_gear_by_its_own_sidebands(seed, box, fault,
+                                                                        named, other):
+    """The intermediate shaft carries stage 1's gear and stage 2's pinion, and its
+    residual rises with either one's fault: the sidebands of the faulty gear's mesh
+    harmonics that are none of the other's rose, the other's did not."""
+    found = judged(box, seed, **fault)
+    assert faulty(found) == {named: "changed"}, faulty(found)
+    assert "its mesh's own sidebands rose" in found[named].reason
+    assert "its mesh's own sidebands did not" in found[other].reason, found[other]
 
 
 @pytest.mark.parametrize("seed", [2, 3, 4])
@@ -122,7 +129,7 @@ def test_a_races_defect_is_named_on_its_bearing(seed, shaft, defect):
     output's own; the input's ball strikes its races
     unequally, so its envelope has a line at the spin (2.37), which is the intermediate's
     ball line (twice its spin, at half the input's speed). Each is named on the bearing
-    whose comb's first line rose (:func:`pydiag.gear.component_judge._explainer`)."""
+    whose comb's first line rose (:func:`pydiag.gear.bearing_judge._explainer`)."""
     found = judged(SHORT_BOX, seed, bearing=((shaft, defect, 6.0),))
     bearings = {name: v.state for name, v in found.items() if v.component.kind == "bearing"}
     assert bearings == {f"{s} bearing": defect if k == shaft else "good"
