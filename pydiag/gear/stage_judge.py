@@ -79,7 +79,6 @@ MIN_FM4_SPREAD = 0.1
 NOISE_FLOOR = 0.1
 
 
-
 @dataclass(frozen=True)
 class ShaftChange:
     """A shaft's residual energy against the baseline's, dB (mean over channels), with
