@@ -101,10 +101,10 @@ def test_a_slower_shafts_broken_tooth_on_a_faster_shafts_lines_is_the_slower_one
     verdicts, _ = judge_stages(machine, record, [baseline])
     first = verdicts[0].pinion
     assert first.change_db > first.threshold_db and first.explained_by == ("output",), first
-    judged = judge_components(machine, record, [baseline], verdicts)
-    assert {v.component.name: v.state for v in judged if v.faulty} == {
+    said = judge_components(machine, record, [baseline], verdicts)
+    assert {v.component.name: v.state for v in said if v.faulty} == {
         "50T gear of stage 2": "changed"}
-    pinion = next(v for v in judged if v.component.name == "18T pinion of stage 1")
+    pinion = next(v for v in said if v.component.name == "18T pinion of stage 1")
     assert "the output shaft's change accounts for its shaft's rise" in pinion.reason, pinion
     # a kept baseline reads back to the same verdict; one kept before the TSAs' power by
     # order was, without the explanation (the rise judged whole, as before)
