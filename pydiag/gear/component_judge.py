@@ -109,9 +109,12 @@ def _told_apart(machine: Machine, record: MachineRecord, baselines: Sequence[Mac
             evidence = {**v.evidence, "own_sidebands_db": math.nan if read[v.component.name]
                         is None else read[v.component.name][0]}
             if mine is not None and mine > 1:
+                other = ("the other gear has none" if theirs is None else
+                         f"the other gear's too ({theirs:.2f} x)" if theirs > 1 else
+                         f"the other gear's did not ({theirs:.2f} x)")
                 told[v.component.name] = replace(
-                    v, evidence=evidence, reason=f"{v.reason}; its mesh's own sidebands rose "
-                    f"({mine:.2f} x their threshold)")
+                    v, evidence=evidence, reason=f"its shaft changed, and its mesh's own "
+                    f"sidebands rose ({mine:.2f} x their threshold); {other}")
             elif theirs is not None and theirs > 1:
                 why = ("its mesh's harmonics are all that gear's: it has no sidebands of its "
                        "own" if mine is None else

@@ -7,8 +7,11 @@ harmonic of one mesh that is none of the other's (:data:`SIDEBANDS` orders eithe
 away from the other's harmonics and their sidebands, in the residual) are that gear's
 own; their energy is judged against the baselines' as a shaft's residual is
 (:func:`~pydiag.gear.stage_judge.synchronous_db`: the energy less the noise a TSA keeps
-there, its deviation from how many orders hold it). A gear whose own sidebands rose
-beyond their threshold changed; one whose own did not, while the other's did, did not. A
+there, its deviation from how many orders hold it), less what the shaft's rise spread
+evenly over its residual would put there: a tooth's strike that rings the housing rises
+on every order alike, around either mesh, and says nothing of which gear. A gear whose
+own sidebands rose beyond their threshold, so counted, changed; one whose own did not,
+while the other's did, did not. A
 gear whose mesh harmonics are all the other's (the PHM 2009 spur idler's 96 teeth against
 its 48) has none of its own, and is not told apart from the other by them. The idler's
 swing through a runout modulates both its meshes on a real box, so an eccentric gear
@@ -47,9 +50,10 @@ def sideband_change(machine: Machine, record: MachineRecord,
                     baselines: Sequence[MachineRecord], shaft: int, teeth: int
                     ) -> tuple[float, float] | None:
     """The change of the energy of the own sidebands of shaft ``shaft``'s ``teeth`` gear
-    against the baselines' (dB, averaged over the channels) and its deviation (dB); None
-    where the gear has none (its mesh's harmonics all the other gear's) or a record was
-    kept without its TSA's power by order."""
+    against the baselines', beyond what the shaft's rise spread evenly over its residual
+    puts there (dB, averaged over the channels), and its deviation (dB); None where the
+    gear has none (its mesh's harmonics all the other gear's) or a record was kept without
+    its TSA's power by order."""
     this = record.shafts[shaft]
     seen = [b.shafts[shaft] for b in baselines]
     if len(this.teeth) != 2 or any(not s.power for s in (this, *seen)):
@@ -64,8 +68,12 @@ def sideband_change(machine: Machine, record: MachineRecord,
             return None
         energy = [float(np.sum(np.asarray(s.power[channel][:size])[zone])) for s in (this, *seen)]
         noise = [s.noise[channel] * count / max(s.residual_orders, 1) for s in (this, *seen)]
+        # what the shaft's synchronous rise, spread evenly over its residual, puts there
+        rise = (this.residual_energy[channel] - this.noise[channel]
+                - float(np.mean([s.residual_energy[channel] - s.noise[channel] for s in seen])))
+        even = max(rise, 0.0) * count / max(this.residual_orders, 1)
         change, deviation = synchronous_db(
-            (energy[0], noise[0], count),
+            (energy[0] - even, noise[0], count),
             (float(np.mean(energy[1:])), float(np.mean(noise[1:])), len(seen) * count))
         changes.append(change)
         deviations.append(deviation)
