@@ -6,7 +6,8 @@ a fleet's records can be trended in one table.
 
 With a machine file of several stages (``batch --machine``), every stage of every record
 is diagnosed (:mod:`pydiag.diagnose.stages`), against the ``--baseline`` records when given:
-a column group a stage. Without an FMU of one's own, by the machine's own model, built
+a column group a stage, and with baselines every component's state (``<component>:state``)
+and the faulty ones in one column (``faulty``). Without an FMU of one's own, by the machine's own model, built
 once before the tasks (a task carries it and the FMU's path).
 
 Every measurement is one task; inside a task the estimator runs in a single process
@@ -125,7 +126,8 @@ def _read(task: BatchTask, path: str) -> Measurement:
 def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     """Every stage of a machine's record (:func:`pydiag.diagnose.stages.diagnose_machine`): a
     column group a stage (``<stage>:fault_mode``, ...); the row's own fault mode is the
-    first stage's that is not healthy, its severity and error the highest."""
+    first stage's that is not healthy, its severity and error the highest; with baselines,
+    each component's state and the faulty ones (module docstring)."""
     estimator = FaultEstimator(n_workers=1, **task.estimator)
     machine = load_machine(task.machine)
     if task.model is not None:  # every stage at once, by the machine's own model
@@ -149,6 +151,10 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
         if st.verdict is not None:
             row[f"{st.name}:change_db"] = max(abs(st.verdict.pinion.change_db),
                                               abs(st.verdict.gear.change_db))
+    if result.components:  # judged against baselines: every gear, bearing and shaft
+        row["faulty"] = "; ".join(f"{v.component.name}: {v.state}"
+                                  for v in result.components if v.faulty)
+        row.update({f"{v.component.name}:state": v.state for v in result.components})
     return row
 
 

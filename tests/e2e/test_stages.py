@@ -89,6 +89,10 @@ def test_batch_diagnoses_every_stage_of_every_record(gear_fmu, tmp_path):
                                                                               "healthy")
     assert healthy["fault_mode"] == "healthy" and healthy["severity"] == "none"
     assert broken["stage 1:change_db"] > healthy["stage 1:change_db"]
+    # every component judged against the baseline, a column each, the faulty in one
+    pinion = f"{MACHINE.stages[0].pinion_teeth}T pinion of stage 1"
+    assert broken[f"{pinion}:state"] == "changed" and pinion in broken["faulty"], broken
+    assert healthy[f"{pinion}:state"] == "good" and pd.isna(healthy["faulty"]), healthy
 
 
 def test_compare_of_one_stage_names_the_other_stages_lines(gear_fmu):
