@@ -11,11 +11,12 @@ there, its deviation from how many orders hold it), less what the shaft's rise s
 evenly over its residual would put there: a tooth's strike that rings the housing rises
 on every order alike, around either mesh, and says nothing of which gear. A gear whose
 own sidebands rose beyond their threshold, so counted, changed; one whose own did not,
-while the other's did, did not. A
-gear whose mesh harmonics are all the other's (the PHM 2009 spur idler's 96 teeth against
-its 48) has none of its own, and is not told apart from the other by them. The idler's
-swing through a runout modulates both its meshes on a real box, so an eccentric gear
-raises the other mesh's shared sidebands too: only the gear's own are asked of.
+while the other's did, did not. A gear whose mesh harmonics are all the other's (the PHM
+2009 spur idler's 96 teeth against its 48) has none of its own: where the other's rose,
+one fault accounts for the shaft and it did not change; else the two are not told apart.
+The idler's swing through a runout modulates both its meshes on a real box, so an
+eccentric gear raises the other mesh's shared sidebands too: only a gear's own are asked
+of (:mod:`pydiag.gear.component_judge` applies this).
 """
 
 from __future__ import annotations
