@@ -113,8 +113,10 @@ def _explainer(machine: Machine, orders: dict[str, dict[str, float]],
     return max(found)[1:] if found else None
 
 
-def judge_bearings(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord]
-              ) -> list[ComponentVerdict]:
+def judge_bearings(machine: Machine, record: MachineRecord,
+                   baselines: Sequence[MachineRecord]) -> list[ComponentVerdict]:
+    """Every bearing of ``machine`` in ``record`` against the ``baselines`` (module
+    docstring), in the machine file's order."""
     bearings = [c for c in components(machine) if c.kind == "bearing"]
     if not record.bearings or any(not b.bearings or not b.bearings[0].sd_db
                                   for b in baselines):
