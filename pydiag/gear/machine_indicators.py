@@ -201,7 +201,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             fm4_halves[channel] = tuple(float(tsa_indicators(p)["fm4"]) for p in parts[1:])
             first = [tuple(float(a) for a in p.spectrum[1:SHAFT_ORDERS + 1]) for p in parts]
             orders[channel], order_halves[channel] = first[0], (first[1], first[2])
-            power[channel] = tuple(float(a) for a in np.square(parts[0].spectrum) / 2)
+            power[channel] = tuple((np.square(parts[0].spectrum) / 2).tolist())
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
                                halves, table, fm4_halves, _swing_deg(estimate, ratio),
                                orders, order_halves, noise, noise_halves, residual_orders,
