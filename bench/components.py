@@ -10,7 +10,7 @@ components were called faulty, and the seconds it took), then the counts. Usage:
 ``--simulator``: the same on the independent gearbox simulator's records
 (tests/truth/gearbox.py: faults written from the shafts' angles and the bearing's own
 geometry), each fault alone and two at once, seeds 2-4, each judged against seed 1's
-healthy record.
+healthy record (with a tacho where the case has one).
 
 The records and their labels are the folder README's (a record is judged against the
 case-1 run of its box, speed and load that is not itself); a case whose every component is
@@ -85,6 +85,15 @@ SIMULATED = [
      {"54T gear of stage 2": "changed"}),
     ("eccentric idler pinion", "BOX", dict(runout=((1, 1, 0.2),)),
      {"24T pinion of stage 2": "changed"}),
+    # with a 10-pulse tacho on the input, and the runout swinging the whole drive by 0.002
+    # of an input turn once its shaft's turn (a transmission error the tacho sees)
+    ("healthy (tacho)", "BOX", dict(tacho_pulses=10), {}),
+    ("eccentric idler pinion, drive swinging", "BOX",
+     dict(runout=((1, 1, 0.2),), swing=((1, 0.002),), tacho_pulses=10),
+     {"24T pinion of stage 2": "eccentric"}),
+    ("eccentric output gear, drive swinging", "BOX",
+     dict(runout=((2, 1, 0.2),), swing=((2, 0.002),), tacho_pulses=10),
+     {"54T gear of stage 2": "eccentric"}),
     ("intermediate inner race", "SHORT_BOX", dict(bearing=((1, "inner", 6.0),)),
      {"intermediate bearing": "inner"}),
     ("input outer race", "SHORT_BOX", dict(bearing=((0, "outer", 6.0),)),
@@ -115,12 +124,15 @@ def simulator_rows() -> tuple[list, list]:
     for case, box_name, faults, labels in SIMULATED:
         box = getattr(sim, box_name)
         machine = machine_from_dict(sim.described(box))
-        baseline = machine_record(sim.gearbox_record(1, box=box), machine,
-                                  SpeedSettings("mesh"), sim.INPUT_HZ)
+        pulses = faults.get("tacho_pulses", 0)
+        speed = (SpeedSettings(tacho="tacho", pulses_per_rev=pulses) if pulses
+                 else SpeedSettings("mesh"))
+        baseline = machine_record(sim.gearbox_record(1, box=box, tacho_pulses=pulses), machine,
+                                  speed, sim.INPUT_HZ)
         for seed in (2, 3, 4):
             started = time.perf_counter()
             seen = machine_record(sim.gearbox_record(seed, box=box, **faults), machine,
-                                  SpeedSettings("mesh"), sim.INPUT_HZ)
+                                  speed, sim.INPUT_HZ)
             verdicts, _ = judge_stages(machine, seen, [baseline])
             judged = {v.component.name: v for v in judge_components(machine, seen, [baseline],
                                                                     verdicts)}

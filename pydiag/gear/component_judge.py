@@ -16,6 +16,14 @@ records) differ by the same measure, pooled over the machine's components of tha
   rise (or that has none) while the other's did is good. A gear whose shaft's rise
   another shaft's change accounts for (on the lines they share,
   :mod:`pydiag.gear.shared_lines`) is good, and says so.
+  With a tacho, a shaft's **swing** (the input's angle once its turn and at its next
+  orders, :mod:`pydiag.gear.machine_indicators`) is a transmission error of its gears:
+  one that rose beyond ``K_SPREAD`` times how much noise moves it, in the record and the
+  baselines, makes the shaft's gears "eccentric" when its first order alone rose (a
+  transmission error once a turn: an eccentric gear, a runout), else "changed", whatever
+  their stage's residual says (an eccentric gear moves the mesh's sidebands, which the
+  residual energy of a two-gear shaft may not show beyond its spread); two gears so
+  called are told apart by their sidebands as above.
 - **A shaft** by its first orders in its own TSA (those that are none of a faster
   shaft's, whose lines survive it): its 1x alone rose, "imbalance"; its 1x and 2x, "bent"
   (a bend or a misalignment: twice a turn); three or more of its first five, "looseness"
@@ -37,10 +45,15 @@ from pydiag.gear.component import (CHANGED, GOOD, NOT_JUDGED, ComponentVerdict, 
                                    finite_mean, finite_rms)
 from pydiag.gear.gear_sidebands import sideband_change
 from pydiag.gear.machine import Machine
-from pydiag.gear.machine_indicators import SHAFT_ORDERS, MachineRecord, faster_shafts
+from pydiag.gear.machine_indicators import (SHAFT_ORDERS, SWING_ORDERS, MachineRecord,
+                                            faster_shafts)
 from pydiag.gear.stage_judge import (K_SPREAD, StageVerdict, healthy_differences, knows_noise,
                                      synchronous_spread)
 
+
+
+#: A gear whose shaft swings once a turn (module docstring).
+ECCENTRIC = "eccentric"
 
 
 def _ratio_db(a: float, b: float) -> float:
@@ -93,7 +106,7 @@ def _told_apart(machine: Machine, record: MachineRecord, baselines: Sequence[Mac
     for v in gears:
         pairs.setdefault(v.component.shaft, []).append(v)
     pairs = {s: vs for s, vs in pairs.items()
-             if len(vs) == 2 and all(v.state == CHANGED for v in vs)}
+             if len(vs) == 2 and all(v.state in (CHANGED, ECCENTRIC) for v in vs)}
     if not pairs or not knows_noise([record, *baselines]):
         return gears
     scale = synchronous_spread(list(baselines))[1]
@@ -112,9 +125,10 @@ def _told_apart(machine: Machine, record: MachineRecord, baselines: Sequence[Mac
                 other = ("the other gear has none" if theirs is None else
                          f"the other gear's too ({theirs:.2f} x)" if theirs > 1 else
                          f"the other gear's did not ({theirs:.2f} x)")
+                why = f"{v.reason}; " if v.state == ECCENTRIC else "its shaft changed, and "
                 told[v.component.name] = replace(
-                    v, evidence=evidence, reason=f"its shaft changed, and its mesh's own "
-                    f"sidebands rose ({mine:.2f} x their threshold); {other}")
+                    v, evidence=evidence, reason=f"{why}its mesh's own sidebands rose "
+                    f"({mine:.2f} x their threshold); {other}")
             elif theirs is not None and theirs > 1:
                 why = ("its mesh's harmonics are all that gear's: it has no sidebands of its "
                        "own" if mine is None else
@@ -126,11 +140,53 @@ def _told_apart(machine: Machine, record: MachineRecord, baselines: Sequence[Mac
     return [told.get(v.component.name, v) for v in gears]
 
 
-def _own_orders(machine: Machine, shaft: int) -> list[int]:
-    """The orders of shaft ``shaft`` (1..SHAFT_ORDERS) that are none of a faster shaft's
+def _own_orders(machine: Machine, shaft: int, up_to: int = SHAFT_ORDERS) -> list[int]:
+    """The orders of shaft ``shaft`` (1..``up_to``) that are none of a faster shaft's
     turning a whole number of times per its turn (:func:`faster_shafts`)."""
     faster = faster_shafts(machine, shaft)
-    return [k for k in range(1, SHAFT_ORDERS + 1) if not any(k % n == 0 for n in faster)]
+    return [k for k in range(1, up_to + 1) if not any(k % n == 0 for n in faster)]
+
+
+def _swing_rises(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord],
+                 shaft: int) -> dict[int, tuple[float, float]] | None:
+    """Order -> (the swing's change in dB against the baselines' mean, its threshold in
+    dB: ``K_SPREAD`` deviations in noise above that mean) at each of shaft ``shaft``'s own
+    first :data:`SWING_ORDERS` orders; None where the record or a baseline has no swing
+    read."""
+    lines = [record.shafts[shaft].swing_lines_deg] + [b.shafts[shaft].swing_lines_deg
+                                                      for b in baselines]
+    if any(len(x) < SWING_ORDERS for x in lines):
+        return None
+    out = {}
+    for k in _own_orders(machine, shaft, SWING_ORDERS):
+        now, deviation = lines[0][k - 1]
+        before = finite_mean([x[k - 1][0] for x in lines[1:]])
+        spread = math.hypot(deviation, finite_mean([x[k - 1][1] for x in lines[1:]])
+                            / math.sqrt(len(baselines)))
+        out[k] = (_ratio_db(now, before), _ratio_db(before + K_SPREAD * spread, before))
+    return out
+
+
+def _by_swing(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord],
+              gears: list[ComponentVerdict]) -> list[ComponentVerdict]:
+    """``gears`` with those on a shaft whose swing rose called "eccentric" or "changed"
+    (module docstring)."""
+    out = []
+    for v in gears:
+        read = _swing_rises(machine, record, baselines, machine.shafts.index(v.component.shaft))
+        rose = {k: c / t for k, (c, t) in (read or {}).items() if c / t > 1}
+        if not rose:
+            out.append(v)
+            continue
+        state = ECCENTRIC if list(rose) == [1] else CHANGED
+        said = ", ".join(f"{k}x ({m:.2f} x its threshold)" for k, m in rose.items())
+        evidence = {**v.evidence, **{f"swing_{k}x_db": c for k, (c, _) in read.items()}}
+        out.append(replace(v, state=state, evidence=evidence,
+                           margin=max(max(rose.values()), v.margin or 0.0),
+                           reason=f"its shaft's swing rose at {said}: a transmission error "
+                                  + ("once its turn" if state == ECCENTRIC else
+                                     "repeating with its turn")))
+    return out
 
 
 def _shaft_state(rises: list[int]) -> str:
@@ -183,7 +239,8 @@ def judge_components(machine: Machine, record: MachineRecord,
     """Every component of ``machine`` in ``record`` against the ``baselines`` (module
     docstring); ``verdicts``: the stages' (:func:`~pydiag.gear.stage_judge.judge_stages`).
     Faulty ones first, then in the machine's order (gears, bearings, shafts)."""
-    judged = (_told_apart(machine, record, baselines, _gears(machine, verdicts))
+    gears = _by_swing(machine, record, baselines, _gears(machine, verdicts))
+    judged = (_told_apart(machine, record, baselines, gears)
               + judge_bearings(machine, record, baselines)
               + _shafts(machine, record, baselines))
     return tuple(sorted(judged, key=lambda v: not v.faulty))

@@ -26,8 +26,10 @@ With a tacho on the input shaft, each slower shaft also gets the **swing** of th
 angle once its turn (:func:`~pydiag.signal.angle.once_a_turn_swing`, in degrees of the
 input's turn): a runout or an eccentric gear on that shaft swings the whole drive once a
 turn, which the tacho sees and a mesh's phase, followed in a band narrower than the
-shaft's speed, does not (docs/gearbox.md). It is reported, not judged: how much it varies
-between healthy runs is not known from a record's halves.
+shaft's speed, does not (docs/gearbox.md). The swing at the shaft's first
+:data:`SWING_ORDERS` orders is kept with how much noise moves each
+(:func:`~pydiag.signal.angle.swing_noise`: the speed's wander at rates beside the line,
+read in the record itself), for :mod:`pydiag.gear.component_judge`.
 
 Each shaft's first orders in its TSA (a shaft's unbalance, bend, looseness) and each
 bearing's defect lines (:mod:`pydiag.gear.bearing_lines`) are kept too, of the whole
@@ -51,7 +53,7 @@ from pydiag.gear.bearing_lines import BearingRecord, bearing_records
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
-from pydiag.signal.angle import once_a_turn_swing
+from pydiag.signal.angle import once_a_turn_swing, swing_noise, turn_swing, whole_turns
 from pydiag.signal.condition import (TrendReference, TsaSignals, order_masks,
                                      synchronous_average, tsa_indicators, tsa_signals)
 
@@ -59,6 +61,9 @@ from pydiag.signal.condition import (TrendReference, TsaSignals, order_masks,
 SHAFT_INDICATORS = ("fm0", "fm4", "na4", "nb4", "er", "ser")
 #: A shaft's first orders kept of each record (its own vibration: unbalance, bend, looseness).
 SHAFT_ORDERS = 5
+#: A slower shaft's first orders of the input's swing kept of each record (an eccentric
+#: gear's is once a turn; a transmission error of another form repeats more often).
+SWING_ORDERS = 3
 
 
 @dataclass(frozen=True)
@@ -77,6 +82,10 @@ class ShaftRecord:
         swing_deg: how far the input's angle swings once a turn of this shaft, degrees of
             the input's turn (module docstring); None without a tacho, for the input and
             for a shaft not slower than it, or a baseline kept before it was measured
+        swing_lines_deg: the swing at each of the shaft's first :data:`SWING_ORDERS`
+            orders and how much noise moves it (:func:`~pydiag.signal.angle.swing_noise`),
+            (degrees, degrees); empty where ``swing_deg`` is None or a baseline was kept
+            before they were read
         orders: channel -> the amplitudes of the TSA's first :data:`SHAFT_ORDERS` orders
             (a shaft's unbalance, bend or looseness); order_halves: the same of each half
             (empty: a baseline kept before they were)
@@ -107,6 +116,7 @@ class ShaftRecord:
     noise_halves: dict[str, tuple[float, float]] = field(default_factory=dict)
     residual_orders: int = 0
     power: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    swing_lines_deg: tuple[tuple[float, float], ...] = ()
 
 
 def _teeth_on(machine: Machine, shaft: int) -> tuple[int, ...]:
@@ -205,7 +215,7 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
                                halves, table, fm4_halves, _swing_deg(estimate, ratio),
                                orders, order_halves, noise, noise_halves, residual_orders,
-                               power))
+                               power, _swing_lines_deg(estimate, machine, index)))
     return out
 
 
@@ -226,6 +236,29 @@ def _swing_deg(estimate: SpeedEstimate, ratio: float) -> float | None:
     a, b = estimate.valid
     return finite_or_none(360 * once_a_turn_swing(estimate.revolutions[a:(b + 1) or None],
                                                   ratio))
+
+
+def _swing_lines_deg(estimate: SpeedEstimate, machine: Machine, shaft: int
+                     ) -> tuple[tuple[float, float], ...]:
+    """(swing, its deviation in noise) at each of shaft ``shaft``'s first
+    :data:`SWING_ORDERS` orders, degrees of the input's turn; () where the swing is not
+    measured (:func:`_swing_deg`). The noise is read beside each line, away from every
+    shaft's orders (in this shaft's turns)."""
+    ratio = float(machine.shaft_ratio(shaft))
+    if estimate.source is not SpeedSource.TACHO or not ratio < 1:
+        return ()
+    a, b = estimate.valid
+    revs = estimate.revolutions[a:(b + 1) or None]
+    if whole_turns(revs, ratio) < 2:
+        return ()
+    top = SWING_ORDERS + 1
+    lines = [k * r for r in (float(machine.shaft_ratio(j)) / ratio
+                             for j in range(len(machine.shafts)))
+             for k in range(1, int(top / r) + 2)]
+    orders = np.arange(1, SWING_ORDERS + 1, dtype=float)
+    swings = turn_swing(revs, ratio, orders)
+    return tuple((float(360 * w), float(360 * swing_noise(revs, ratio, k, lines)))
+                 for k, w in zip(orders, swings))
 
 
 @dataclass(frozen=True)
@@ -267,7 +300,9 @@ class MachineRecord:
                             "noise": s.noise,
                             "noise_halves": {c: list(h) for c, h in s.noise_halves.items()},
                             "residual_orders": s.residual_orders,
-                            "power": {c: list(p) for c, p in s.power.items()}}
+                            "power": {c: list(p) for c, p in s.power.items()},
+                            "swing_lines_deg": [[finite_or_none(v) for v in line]
+                                                for line in s.swing_lines_deg]}
                            for s in self.shafts],
                 "bearings": [b.to_dict() for b in self.bearings]}
 
@@ -289,7 +324,8 @@ class MachineRecord:
             dict(s.get("noise", {})),
             {c: (h[0], h[1]) for c, h in s.get("noise_halves", {}).items()},
             s.get("residual_orders", 0),
-            {c: tuple(p) for c, p in s.get("power", {}).items()})
+            {c: tuple(p) for c, p in s.get("power", {}).items()},
+            tuple((_number(a), _number(n)) for a, n in s.get("swing_lines_deg", [])))
             for s in data["shafts"])
         return cls(SpeedEstimate(revolutions=np.empty(0), source=source, **speed), shafts,
                    data["file"], data.get("units"),

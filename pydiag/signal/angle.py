@@ -113,6 +113,17 @@ def extend_linearly(index: np.ndarray, values: np.ndarray, n_samples: int) -> np
     return out
 
 
+#: A swing's deviation in noise is read at up to this many rates either side of its
+#: line, within half an order of it (farther, a slow drift of the speed is read) ...
+SWING_NOISE_RATES = 8
+#: ... spaced this many steps of the record's resolution (one over its whole turns of the
+#: slower shaft) apart: the Hann window's main lobe spans two either side, so rates three
+#: apart read nearly independent noise ...
+SWING_NOISE_SPACING = 3
+#: ... leaving out those within this many steps of a line of any shaft (its main lobe).
+SWING_NOISE_GUARD = 2.5
+
+
 def once_a_turn_swing(revs: np.ndarray, ratio: float) -> float:
     """How far an angle swings once a turn of a slower shaft: the amplitude, in revolutions
     of the tracked shaft, of the first order of its deviation from uniform rotation,
@@ -126,18 +137,54 @@ def once_a_turn_swing(revs: np.ndarray, ratio: float) -> float:
     weighted by a Hann window across them, so that the speed's drift (a motor's slip) and
     other shafts' swings leak little into the first order.
     """
+    return float(turn_swing(revs, ratio, [1.0])[0])
+
+
+def turn_swing(revs: np.ndarray, ratio: float, rates) -> np.ndarray:
+    """The swing of the tracked angle at each of ``rates`` (multiples of the slower shaft's
+    turning rate, as :func:`once_a_turn_swing` reads the first), revolutions of the tracked
+    shaft; nan where ``revs`` holds fewer than two whole turns of the slower shaft."""
     if not 0 < ratio < 1:
         raise ValueError(f"the slower shaft turns 0 to 1 times a turn, got {ratio}")
+    rates = np.atleast_1d(np.asarray(rates, dtype=float))
     revs = np.asarray(revs, dtype=float)
     turn = ratio * revs
-    if np.floor(turn[-1]) - np.ceil(turn[0]) < 2:
-        return math.nan
+    if whole_turns(revs, ratio) < 2:
+        return np.full(rates.shape, math.nan)
     span = np.flatnonzero((turn >= np.ceil(turn[0])) & (turn < np.floor(turn[-1])))
     n = span.astype(float)
     deviation = revs[span] - np.polyval(np.polyfit(n, revs[span], 1), n)
     weight = np.hanning(span.size)
-    return float(2 * np.abs(np.sum(weight * deviation * np.exp(-2j * np.pi * turn[span])))
-                 / np.sum(weight))
+    phase = np.exp(-2j * np.pi * np.outer(rates, turn[span]))
+    return 2 * np.abs(phase @ (weight * deviation)) / np.sum(weight)
+
+
+def whole_turns(revs: np.ndarray, ratio: float) -> int:
+    """The whole turns of the slower shaft (``ratio`` turns a turn of the tracked one) that
+    ``revs`` holds: what a swing is read over."""
+    turn = ratio * np.asarray(revs, dtype=float)
+    return int(np.floor(turn[-1]) - np.ceil(turn[0])) if turn.size else 0
+
+
+def swing_noise(revs: np.ndarray, ratio: float, rate: float, lines) -> float:
+    """How much noise moves :func:`turn_swing` at ``rate``: the RMS of the swing at
+    :data:`SWING_NOISE_RATES` rates either side of it within half an order,
+    :data:`SWING_NOISE_SPACING` steps of the record's resolution apart, none within
+    :data:`SWING_NOISE_GUARD` steps of any
+    of ``lines`` (every shaft's orders, in turns of the slower shaft: a line is no noise);
+    revolutions of the tracked shaft, nan when no rate is left or the record is too short.
+    The speed's own wander near the line (a motor's control, a load's) is what moves a
+    healthy record's swing from run to run, and the record itself shows how much."""
+    step = 1.0 / max(whole_turns(revs, ratio), 1)
+    lines = np.asarray(lines, dtype=float)
+    rates = [rate + j * SWING_NOISE_SPACING * step
+             for j in range(-SWING_NOISE_RATES, SWING_NOISE_RATES + 1) if j]
+    rates = [r for r in rates
+             if abs(r - rate) < 0.5 and (lines.size == 0
+                           or np.min(np.abs(lines - r)) > SWING_NOISE_GUARD * step)]
+    if not rates:
+        return math.nan
+    return float(np.sqrt(np.mean(np.square(turn_swing(revs, ratio, rates)))))
 
 
 def _cubic_at(y: np.ndarray, position: np.ndarray) -> np.ndarray:

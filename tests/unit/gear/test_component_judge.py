@@ -4,6 +4,8 @@ the shafts' angles and the bearing's own geometry, not by pydiag): a healthy rec
 every component good; a shaft's unbalance, a bend, a chipped, broken or eccentric gear,
 a race's and a ball's defect are each named on their component."""
 
+from dataclasses import replace
+
 import pytest
 from truth.gearbox import BOX, INPUT_HZ, SHAFT_NAMES, SHORT_BOX, described, gearbox_record
 
@@ -24,10 +26,13 @@ def machine_of(box):
 
 
 def judged(box, seed, **fault):
+    """Every component of ``box`` in a record of ``seed`` with ``fault`` against seed 1's
+    healthy record; with ``tacho_pulses``, both have a tacho and the speed is its."""
     machine = machine_of(box)
-    record = machine_record(gearbox_record(seed, box=box, **fault), machine,
-                            SpeedSettings("mesh"), INPUT_HZ)
-    baseline = machine_record(gearbox_record(1, box=box), machine, SpeedSettings("mesh"),
+    pulses = fault.get("tacho_pulses", 0)
+    speed = SpeedSettings(tacho="tacho", pulses_per_rev=pulses) if pulses else SpeedSettings("mesh")
+    record = machine_record(gearbox_record(seed, box=box, **fault), machine, speed, INPUT_HZ)
+    baseline = machine_record(gearbox_record(1, box=box, tacho_pulses=pulses), machine, speed,
                               INPUT_HZ)
     verdicts, _ = judge_stages(machine, record, [baseline])
     return {v.component.name: v for v in judge_components(machine, record, [baseline],
@@ -229,3 +234,48 @@ def test_a_shafts_only_gear_changes_with_its_shaft_beside_a_suspect_idler(by, ou
     states = {v.component.name: v.state for v in _gears(machine, verdicts)}
     assert states == {"20T pinion of stage 1": "good", "64T gear of stage 1": "changed",
                       "24T pinion of stage 2": "changed", "54T gear of stage 2": output_gear}
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
+@pytest.mark.parametrize("shaft, named, other", [
+    (1, "24T pinion of stage 2", "64T gear of stage 1"), (2, "54T gear of stage 2", None)])
+def test_a_runout_that_swings_the_drive_is_an_eccentric_gear_where_a_tacho_sees_it(
+        seed, shaft, named, other):
+    """The runout (its mesh swinging by 0.2 once its turn) swings the whole drive by 0.002
+    of an input turn, which a 10-pulse tacho on the input sees: the gear is "eccentric",
+    and the idler's other gear, whose mesh has no sidebands of the runout's own, good."""
+    found = judged(BOX, seed, tacho_pulses=10, runout=((shaft, 1, 0.2),),
+                   swing=((shaft, 0.002),))
+    assert found[named].state == "eccentric", found[named]
+    assert "swing rose at 1x" in found[named].reason
+    if other:
+        assert found[other].state == "good", found[other]
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
+def test_a_healthy_record_with_a_tacho_has_every_component_good(seed):
+    found = judged(BOX, seed, tacho_pulses=10)
+    assert not faulty(found), faulty(found)
+    assert "swing_1x_db" not in found["24T pinion of stage 2"].evidence  # none rose
+
+
+def test_a_swing_that_repeats_more_than_once_a_turn_is_a_change_not_an_eccentric_gear():
+    """The idler's swing rising at its 2x (a transmission error twice a turn: an oval gear,
+    a loose fit) changes its gears without naming them eccentric."""
+    machine = machine_of(BOX)
+    speed = SpeedSettings(tacho="tacho", pulses_per_rev=10)
+    baseline = machine_record(gearbox_record(1, box=BOX, tacho_pulses=10), machine, speed,
+                              INPUT_HZ)
+    record = machine_record(gearbox_record(2, box=BOX, tacho_pulses=10), machine, speed,
+                            INPUT_HZ)
+    idler = record.shafts[1]
+    lines = list(idler.swing_lines_deg)
+    lines[1] = (lines[1][0] + 20 * lines[1][1], lines[1][1])
+    record = replace(record, shafts=(record.shafts[0], replace(idler, swing_lines_deg=tuple(
+        lines)), record.shafts[2]))
+    verdicts, _ = judge_stages(machine, record, [baseline])
+    found = {v.component.name: v for v in judge_components(machine, record, [baseline],
+                                                           verdicts)}
+    assert {n: found[n].state for n in ("64T gear of stage 1", "24T pinion of stage 2")} == {
+        "64T gear of stage 1": "changed", "24T pinion of stage 2": "changed"}
+    assert "2x" in found["24T pinion of stage 2"].reason

@@ -103,6 +103,9 @@ def test_a_tacho_records_swing_is_kept_and_a_baseline_kept_before_it_has_none():
     data = kept.to_dict()
     assert MachineRecord.from_dict(data).shafts == kept.shafts
     assert kept.shafts[1].swing_deg > 0.5
+    assert kept.shafts[1].swing_lines_deg[0][0] == kept.shafts[1].swing_deg
+    assert 0 < kept.shafts[1].swing_lines_deg[0][1] < 0.05 * kept.shafts[1].swing_deg
     for shaft in data["shafts"]:
-        del shaft["swing_deg"]
-    assert [s.swing_deg for s in MachineRecord.from_dict(data).shafts] == [None] * 3
+        del shaft["swing_deg"], shaft["swing_lines_deg"]
+    assert [(s.swing_deg, s.swing_lines_deg) for s in MachineRecord.from_dict(data).shafts
+            ] == [(None, ())] * 3

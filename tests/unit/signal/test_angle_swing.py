@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from pydiag.signal.angle import once_a_turn_swing, tacho_revolutions
+from pydiag.signal.angle import once_a_turn_swing, swing_noise, tacho_revolutions, turn_swing
 
 FS, INPUT_HZ, PULSES = 20_000.0, 25.0, 10
 
@@ -42,3 +42,24 @@ def test_too_few_turns_of_the_slower_shaft_give_nan_and_a_ratio_not_below_one_is
     assert math.isnan(once_a_turn_swing(revs, 1 / 3))
     with pytest.raises(ValueError):
         once_a_turn_swing(revs, 1.0)
+
+
+def test_the_swings_noise_is_the_speeds_wander_beside_the_line_and_no_shafts_line():
+    """An angle wandering as white noise of 1e-4 turns a sample: the swing read beside the
+    slower shaft's 2x is what that noise gives a Hann-weighted line (2 sigma sqrt(sum w^2)
+    / sum w), and another shaft's strong line among the rates is left out."""
+    rng = np.random.default_rng(3)
+    t = np.arange(int(FS * 8.0)) / FS
+    sigma = 1e-4
+    revs = INPUT_HZ * t + sigma * rng.standard_normal(t.size)
+    n = int(np.floor(revs[-1] / 3))  # the slower shaft's whole turns (a third of the input)
+    weight = np.hanning(3 * n * int(FS / INPUT_HZ))
+    expected = 2 * sigma * np.sqrt(np.sum(weight ** 2)) / np.sum(weight)
+    assert swing_noise(revs, 1 / 3, 2.0, [1.0, 2.0, 3.0]) == pytest.approx(expected, rel=0.3)
+    # a line 0.3 order away, 30 dB over that noise (a faster shaft's, as the input's 1x is
+    # at an idler's 3x)
+    size = 30 * expected
+    line = revs + size * np.sin(2 * np.pi * (1 / 3) * 2.3 * revs)
+    assert turn_swing(line, 1 / 3, [2.3])[0] == pytest.approx(size, rel=0.1)
+    assert swing_noise(line, 1 / 3, 2.0, [2.3]) == pytest.approx(expected, rel=0.3)
+    assert swing_noise(line, 1 / 3, 2.0, []) > 2 * swing_noise(line, 1 / 3, 2.0, [2.3])
