@@ -28,7 +28,9 @@ records) differ by the same measure, pooled over the machine's components of tha
   shaft's, whose lines survive it): its 1x alone rose, "imbalance"; its 1x and 2x, "bent"
   (a bend or a misalignment: twice a turn); three or more of its first five, "looseness"
   (a loose fit, a sheared key: a turn that repeats with harmonics); any other rise,
-  "changed".
+  "changed". A shaft whose swing rose as well is good, and says why: its gears'
+  transmission error moves its orders (an eccentric gear's mass and mesh force turn with
+  it), and a fault of the shaft itself is not told beside it.
 - **A bearing** by its defect lines in the envelope (:mod:`pydiag.gear.bearing_judge`).
 """
 
@@ -167,6 +169,12 @@ def _swing_rises(machine: Machine, record: MachineRecord, baselines: Sequence[Ma
     return out
 
 
+def _risen(read: dict[int, tuple[float, float]] | None) -> dict[int, float]:
+    """Order -> its change over its threshold, of the orders of a :func:`_swing_rises`
+    reading that rose beyond their threshold."""
+    return {k: c / t for k, (c, t) in (read or {}).items() if c / t > 1}
+
+
 def _by_swing(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord],
               gears: list[ComponentVerdict]) -> list[ComponentVerdict]:
     """``gears`` with those on a shaft whose swing rose called "eccentric" or "changed"
@@ -174,7 +182,7 @@ def _by_swing(machine: Machine, record: MachineRecord, baselines: Sequence[Machi
     out = []
     for v in gears:
         read = _swing_rises(machine, record, baselines, machine.shafts.index(v.component.shaft))
-        rose = {k: c / t for k, (c, t) in (read or {}).items() if c / t > 1}
+        rose = _risen(read)
         if not rose:
             out.append(v)
             continue
@@ -226,10 +234,15 @@ def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[Machine
         rises = sorted(k for k, v in changes.items() if v > threshold)
         state = _shaft_state(rises)
         biggest = max((abs(v) for v in changes.values() if math.isfinite(v)), default=math.nan)
+        why = f"orders risen: {', '.join(f'{k}x' for k in rises)}" if rises else ""
+        swung = _risen(_swing_rises(machine, record, baselines, s.index)) if rises else {}
+        if swung:  # its gears' transmission error moves its orders (module docstring)
+            state, why = GOOD, (f"{why}, with its swing ({', '.join(f'{k}x' for k in swung)}): "
+                                "its gears' transmission error, which hides a fault of the "
+                                "shaft itself")
         out.append(ComponentVerdict(
             c, state, {f"order_{k}_db": v for k, v in changes.items()}, threshold,
-            biggest / threshold,
-            f"orders risen: {', '.join(f'{k}x' for k in rises)}" if rises else ""))
+            biggest / threshold, why))
     return out
 
 

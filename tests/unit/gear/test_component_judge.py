@@ -279,3 +279,16 @@ def test_a_swing_that_repeats_more_than_once_a_turn_is_a_change_not_an_eccentric
     assert {n: found[n].state for n in ("64T gear of stage 1", "24T pinion of stage 2")} == {
         "64T gear of stage 1": "changed", "24T pinion of stage 2": "changed"}
     assert "2x" in found["24T pinion of stage 2"].reason
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
+def test_a_shaft_whose_gear_swings_it_is_not_called_faulty_for_its_orders(seed):
+    """An eccentric idler pinion whose mass turns off the axis: the idler's 1x at the
+    sensor rises with the swing. The gear is named, the shaft is good and says why; the
+    same 1x without the swing is the shaft's imbalance."""
+    fault = dict(tacho_pulses=10, unbalance=((1, 0.3),))
+    swinging = judged(BOX, seed, runout=((1, 1, 0.2),), swing=((1, 0.002),), **fault)
+    assert swinging["24T pinion of stage 2"].state == "eccentric"
+    assert swinging["intermediate"].state == "good", swinging["intermediate"]
+    assert "orders risen: 1x, with its swing (1x)" in swinging["intermediate"].reason
+    assert judged(BOX, seed, **fault)["intermediate"].state == "imbalance"
