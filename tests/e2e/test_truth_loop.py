@@ -238,23 +238,12 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
             [(s.effect, round(s.score, 2), s.message) for s in c.suggested_effects]
 
 
-#: A hidden effect's seeds in make test-slow only, so that make test stays under its 8
-#: minutes (their costs: bench/CHANGELOG.md, 2026-11-28): the housing mode's and the outer
-#: race's second and third.
-SLOW_SEEDS = {"housing_sensor": SEEDS[1:], "bearing_outer_race": SEEDS[1:]}
-
-
-def _seeded(effect: str, seed: int):
-    return (pytest.param(effect, seed, marks=pytest.mark.slow)
-            if seed in SLOW_SEEDS.get(effect, ()) else (effect, seed))
-
-
 @pytest.mark.parametrize("effect, seed", [
-    _seeded(e, seed) for e in sorted(HIDDEN) for seed in SEEDS
+    (e, seed) for e in sorted(HIDDEN) for seed in SEEDS
     if seed != SEEDS[0] or e not in (*DISCOVERED_IN_MAKE_TEST, "bearing_outer_race")])
 def test_hidden_effect_is_the_one_confident_suggestion(gear_fmu, truth_records, effect_fmu_of,
                                                        effect, seed):
-    """Every hidden effect on three seeds in make test (but SLOW_SEEDS): the first with
+    """Every hidden effect on three seeds in make test: the first with
     discover (above) where that runs in make test, the outer race's from the command line
     (below), the others here."""
     assert_one_confident_suggestion(validated(gear_fmu, truth_records[effect], seed,
