@@ -33,7 +33,9 @@ class Component:
 class ComponentVerdict:
     """One component judged: its ``state`` ("good", the fault, "changed" where something
     changed and the fault is not told, "not judged" and why), the changes it was judged by
-    (``evidence``, dB, or FM4 for a gear's impulsiveness), the threshold they were held
+    (``evidence``, dB, or FM4 for a gear's impulsiveness, and a size where one is read:
+    ``swing_1x_deg``, the input's angle once a turn of a swinging gear's shaft, degrees of
+    the input's turn), the threshold they were held
     to (dB), and how sure: the largest change over that threshold (None: not judged)."""
 
     component: Component

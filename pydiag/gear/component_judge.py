@@ -188,7 +188,9 @@ def _by_swing(machine: Machine, record: MachineRecord, baselines: Sequence[Machi
             continue
         state = ECCENTRIC if list(rose) == [1] else CHANGED
         said = ", ".join(f"{k}x ({m:.2f} x its threshold)" for k, m in rose.items())
-        evidence = {**v.evidence, **{f"swing_{k}x_db": c for k, (c, _) in read.items()}}
+        swing = record.shafts[machine.shafts.index(v.component.shaft)].swing_lines_deg
+        evidence = {**v.evidence, **{f"swing_{k}x_db": c for k, (c, _) in read.items()},
+                    "swing_1x_deg": swing[0][0]}
         out.append(replace(v, state=state, evidence=evidence,
                            margin=max(max(rose.values()), v.margin or 0.0),
                            reason=f"its shaft's swing rose at {said}: a transmission error "

@@ -248,6 +248,7 @@ def test_a_runout_that_swings_the_drive_is_an_eccentric_gear_where_a_tacho_sees_
                    swing=((shaft, 0.002),))
     assert found[named].state == "eccentric", found[named]
     assert "swing rose at 1x" in found[named].reason
+    assert found[named].evidence["swing_1x_deg"] == pytest.approx(0.72, rel=0.05)  # 0.002 turn
     if other:
         assert found[other].state == "good", found[other]
 
