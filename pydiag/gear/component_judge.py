@@ -248,14 +248,32 @@ def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[Machine
     return out
 
 
+def _swing_unread(machine: Machine, record: MachineRecord,
+                  baselines: Sequence[MachineRecord], gears: list[ComponentVerdict]
+                  ) -> list[ComponentVerdict]:
+    """``gears`` with those whose shaft's swing the record has and a baseline lacks (kept
+    before pydiag read it) saying so."""
+    out = []
+    for v in gears:
+        shaft = record.shafts[machine.shafts.index(v.component.shaft)]
+        if shaft.swing_lines_deg and any(not b.shafts[shaft.index].swing_lines_deg
+                                         for b in baselines):
+            v = replace(v, reason="; ".join(w for w in (v.reason, (
+                "its shaft's swing not judged: a baseline was kept before pydiag read it "
+                "(keep it again)")) if w))
+        out.append(v)
+    return out
+
+
 def judge_components(machine: Machine, record: MachineRecord,
                      baselines: Sequence[MachineRecord],
                      verdicts: Sequence[StageVerdict]) -> tuple[ComponentVerdict, ...]:
     """Every component of ``machine`` in ``record`` against the ``baselines`` (module
     docstring); ``verdicts``: the stages' (:func:`~pydiag.gear.stage_judge.judge_stages`).
     Faulty ones first, then in the machine's order (gears, bearings, shafts)."""
-    gears = _by_swing(machine, record, baselines, _gears(machine, verdicts))
-    judged = (_told_apart(machine, record, baselines, gears)
+    gears = _told_apart(machine, record, baselines,
+                        _by_swing(machine, record, baselines, _gears(machine, verdicts)))
+    judged = (_swing_unread(machine, record, baselines, gears)
               + judge_bearings(machine, record, baselines)
               + _shafts(machine, record, baselines))
     return tuple(sorted(judged, key=lambda v: not v.faulty))

@@ -293,3 +293,25 @@ def test_a_shaft_whose_gear_swings_it_is_not_called_faulty_for_its_orders(seed):
     assert swinging["intermediate"].state == "good", swinging["intermediate"]
     assert "orders risen: 1x, with its swing (1x)" in swinging["intermediate"].reason
     assert judged(BOX, seed, **fault)["intermediate"].state == "imbalance"
+
+
+def test_a_baseline_kept_before_the_swing_was_read_says_so_on_the_gears_it_would_judge():
+    """The eccentric idler pinion swinging the drive, judged against a tacho baseline kept
+    before pydiag read the swing's lines: the gears are judged as without a tacho, and
+    those on the slower shafts say that their shaft's swing was not."""
+    from pydiag.gear.machine_indicators import MachineRecord
+    machine = machine_of(BOX)
+    speed = SpeedSettings(tacho="tacho", pulses_per_rev=10)
+    record = machine_record(gearbox_record(2, box=BOX, tacho_pulses=10, runout=((1, 1, 0.2),),
+                                           swing=((1, 0.002),)), machine, speed, INPUT_HZ)
+    old = machine_record(gearbox_record(1, box=BOX, tacho_pulses=10), machine, speed,
+                         INPUT_HZ).to_dict()
+    for shaft in old["shafts"]:
+        del shaft["swing_lines_deg"]
+    old = MachineRecord.from_dict(old)
+    verdicts, _ = judge_stages(machine, record, [old])
+    found = {v.component.name: v for v in judge_components(machine, record, [old], verdicts)}
+    assert found["24T pinion of stage 2"].state == "changed"  # by its sidebands, not eccentric
+    for name in ("64T gear of stage 1", "24T pinion of stage 2", "54T gear of stage 2"):
+        assert "swing not judged" in found[name].reason and "keep it again" in found[name].reason
+    assert "swing" not in found["20T pinion of stage 1"].reason  # the input has none
