@@ -52,8 +52,6 @@ from pydiag.gear.machine_indicators import (SHAFT_ORDERS, SWING_ORDERS, MachineR
 from pydiag.gear.stage_judge import (K_SPREAD, StageVerdict, healthy_differences, knows_noise,
                                      synchronous_spread)
 
-
-
 #: A gear whose shaft swings once a turn (module docstring).
 ECCENTRIC = "eccentric"
 

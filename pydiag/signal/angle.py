@@ -167,21 +167,19 @@ def whole_turns(revs: np.ndarray, ratio: float) -> int:
 
 
 def swing_noise(revs: np.ndarray, ratio: float, rate: float, lines) -> float:
-    """How much noise moves :func:`turn_swing` at ``rate``: the RMS of the swing at
+    """How much noise moves :func:`turn_swing` at ``rate``: the RMS of the swing at up to
     :data:`SWING_NOISE_RATES` rates either side of it within half an order,
     :data:`SWING_NOISE_SPACING` steps of the record's resolution apart, none within
-    :data:`SWING_NOISE_GUARD` steps of any
-    of ``lines`` (every shaft's orders, in turns of the slower shaft: a line is no noise);
-    revolutions of the tracked shaft, nan when no rate is left or the record is too short.
-    The speed's own wander near the line (a motor's control, a load's) is what moves a
-    healthy record's swing from run to run, and the record itself shows how much."""
+    :data:`SWING_NOISE_GUARD` steps of any of ``lines`` (every shaft's orders, in turns of
+    the slower shaft: a line is no noise); revolutions of the tracked shaft, nan when no
+    rate is left or the record is too short. It is the speed's own wander near the line (a
+    motor's control, a load's), read in the record itself."""
     step = 1.0 / max(whole_turns(revs, ratio), 1)
     lines = np.asarray(lines, dtype=float)
     rates = [rate + j * SWING_NOISE_SPACING * step
              for j in range(-SWING_NOISE_RATES, SWING_NOISE_RATES + 1) if j]
-    rates = [r for r in rates
-             if abs(r - rate) < 0.5 and (lines.size == 0
-                           or np.min(np.abs(lines - r)) > SWING_NOISE_GUARD * step)]
+    rates = [r for r in rates if abs(r - rate) < 0.5 and (
+        lines.size == 0 or np.min(np.abs(lines - r)) > SWING_NOISE_GUARD * step)]
     if not rates:
         return math.nan
     return float(np.sqrt(np.mean(np.square(turn_swing(revs, ratio, rates)))))
