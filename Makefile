@@ -46,8 +46,10 @@ test: fmu lint
 test-fast: lint build/GearPair.fmu
 	$(PY) -m pytest -q -n auto tests/unit tests/test_layers.py
 
+# the slow tier (more seeds, backlash at the mesh resonance, every Table 1 case, a fresh
+# install), on every core as make test is
 test-slow: fmu
-	$(PY) -m pytest -q -m slow
+	$(PY) -m pytest -q -m slow -n auto --dist worksteal --durations=10
 
 regress: fmu
 	$(PY) -m pydiag regress --fmu build/GearPair.fmu --golden tests/golden/GearPair.json
