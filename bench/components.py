@@ -1,7 +1,8 @@
 """Every gear, bearing and shaft of the PHM 2009 gearboxes judged against a healthy record of
 the same box, speed and load (``indicators --machine --baseline``: the stage judge and
 the component judge, no model fit), beside the data set's labels. Prints a row a faulty
-component (what the label says and what was said) and a row a record (how many of its
+component (what the label says, what was said, how far over its threshold and its size:
+:func:`size`) and a row a record (how many of its
 components were called faulty, and the seconds it took), then the counts. Usage:
 
     .venv/bin/python bench/components.py [DIR]     # default ../shared/data/phm09
@@ -56,6 +57,24 @@ LABELS = {
     ("helical", 4): {"IS:OS": "outer/inner", "ID:OS": "ball", "input": "imbalance"},
     ("helical", 6): {"input": "bent"},
 }
+
+
+def size(verdict) -> str:
+    """What a verdict's evidence says of its size: a swing's degrees (of the input's turn),
+    a bearing's defect line's rise, a shaft's largest order's, a gear's shaft's residual
+    energy's (dB against the baseline)."""
+    e = verdict.evidence
+    kind = verdict.component.kind
+    if "swing_1x_deg" in e:
+        return f"{e['swing_1x_deg']:.3f} deg swing"
+    if kind == "bearing" and f"{verdict.state}_db" in e:
+        return f"{e[verdict.state + '_db']:+.1f} dB {verdict.state}"
+    if kind == "shaft" and e:
+        k, v = max(e.items(), key=lambda kv: kv[1] if kv[1] == kv[1] else -1e9)
+        return f"{v:+.1f} dB at {k.split('_')[1]}x"
+    if "residual_energy_db" in e:
+        return f"{e['residual_energy_db']:+.1f} dB residual"
+    return "-"
 
 
 def _right(said: str, truth: str) -> bool:
@@ -139,8 +158,9 @@ def simulator_rows() -> tuple[list, list]:
             faulty = [v for v in judged.values() if v.faulty]
             records.append((case, seed, len(faulty), time.perf_counter() - started))
             for name, truth in labels.items():
-                rows.append((case, seed, name, truth, judged[name].state, judged[name].margin))
-            rows += [(case, seed, v.component.name, "good", v.state, v.margin)
+                rows.append((case, seed, name, truth, judged[name].state, judged[name].margin,
+                             size(judged[name])))
+            rows += [(case, seed, v.component.name, "good", v.state, v.margin, size(v))
                      for v in faulty if v.component.name not in labels]
     return records, rows
 
@@ -151,10 +171,11 @@ def simulator_main() -> int:
     for case, seed, said, seconds in records:
         print(f"{case:<40}{seed:>5}{said:>12}{seconds:>6.1f}")
     print()
-    print(f"{'case':<40}{'seed':>5}  {'component':<22}{'truth':<11}{'said':<11}{'x thr':>6}")
-    for case, seed, name, truth, said, margin in rows:
+    print(f"{'case':<40}{'seed':>5}  {'component':<22}{'truth':<11}{'said':<11}{'x thr':>6}"
+          f"  size")
+    for case, seed, name, truth, said, margin, seen in rows:
         shown = "-" if margin is None else f"{margin:.2f}"
-        print(f"{case:<40}{seed:>5}  {name:<22}{truth:<11}{said:<11}{shown:>6}")
+        print(f"{case:<40}{seed:>5}  {name:<22}{truth:<11}{said:<11}{shown:>6}  {seen}")
     labelled = [r for r in rows if r[3] != "good"]
     right = sum(r[4] == r[3] for r in labelled)
     wrong = sum(r[3] == "good" for r in rows)
@@ -214,17 +235,18 @@ def main() -> int:
             v = judged[name]
             counts["faults"] += 1
             counts["right"] += _right(v.state, truth)
-            rows.append((path.stem, name, truth, v.state, v.margin))
+            rows.append((path.stem, name, truth, v.state, v.margin, size(v)))
         for v in faulty:
             counts["said"] += 1
             if v.component.name not in labels:
                 counts["wrong"] += 1
-                rows.append((path.stem, v.component.name, "good", v.state, v.margin))
+                rows.append((path.stem, v.component.name, "good", v.state, v.margin,
+                             size(v)))
     print()
-    print(f"{'record':<28}{'component':<28}{'truth':<12}{'said':<12}{'x thr':>6}")
-    for record, name, truth, said, margin in rows:
+    print(f"{'record':<28}{'component':<28}{'truth':<12}{'said':<12}{'x thr':>6}  size")
+    for record, name, truth, said, margin, seen in rows:
         shown = "-" if margin is None else f"{margin:.2f}"
-        print(f"{record:<28}{name:<28}{truth:<12}{said:<12}{shown:>6}")
+        print(f"{record:<28}{name:<28}{truth:<12}{said:<12}{shown:>6}  {seen}")
     print()
     print(f"labelled faults named on their component: {counts['right']} of {counts['faults']}; "
           f"components called faulty that are not labelled: {counts['wrong']} of "
