@@ -243,7 +243,7 @@ def test_a_runout_that_swings_the_drive_is_an_eccentric_gear_where_a_tacho_sees_
         seed, shaft, named, other):
     """The runout (its mesh swinging by 0.2 once its turn) swings the whole drive by 0.002
     of an input turn, which a 10-pulse tacho on the input sees: the gear is "eccentric",
-    and the idler's other gear, whose mesh has no sidebands of the runout's own, good."""
+    and the idler's other gear, whose own mesh's sidebands did not rise, good."""
     found = judged(BOX, seed, tacho_pulses=10, runout=((shaft, 1, 0.2),),
                    swing=((shaft, 0.002),))
     assert found[named].state == "eccentric", found[named]
