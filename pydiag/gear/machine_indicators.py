@@ -53,7 +53,7 @@ from pydiag.gear.bearing_lines import BearingRecord, bearing_records
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate, SpeedSettings, SpeedSource, estimate_speed
 from pydiag.gear.tracking import Upsampled, track_revolutions, upsampled_record
-from pydiag.signal.angle import once_a_turn_swing, swing_noise, turn_swing, whole_turns
+from pydiag.signal.angle import swing_noise, turn_swing, whole_turns
 from pydiag.signal.condition import (TrendReference, TsaSignals, order_masks,
                                      synchronous_average, tsa_indicators, tsa_signals)
 
@@ -212,10 +212,11 @@ def shaft_records(measurement: Measurement, machine: Machine, estimate: SpeedEst
             first = [tuple(float(a) for a in p.spectrum[1:SHAFT_ORDERS + 1]) for p in parts]
             orders[channel], order_halves[channel] = first[0], (first[1], first[2])
             power[channel] = tuple((np.square(parts[0].spectrum) / 2).tolist())
+        swing = _swing_lines_deg(estimate, machine, index)
         out.append(ShaftRecord(name, index, speed_hz, n_revs, samples_per_rev, teeth, energy,
-                               halves, table, fm4_halves, _swing_deg(estimate, ratio),
+                               halves, table, fm4_halves, swing[0][0] if swing else None,
                                orders, order_halves, noise, noise_halves, residual_orders,
-                               power, _swing_lines_deg(estimate, machine, index)))
+                               power, swing))
     return out
 
 
@@ -228,22 +229,13 @@ def _noise_left(first: np.ndarray, second: np.ndarray, samples_per_rev: int,
     return float(np.var(signals(difference).residual)) / 4
 
 
-def _swing_deg(estimate: SpeedEstimate, ratio: float) -> float | None:
-    """The input's angle's swing once a turn of a shaft ``ratio`` times as fast (module
-    docstring), degrees; None where it is not measured."""
-    if estimate.source is not SpeedSource.TACHO or not ratio < 1:
-        return None
-    a, b = estimate.valid
-    return finite_or_none(360 * once_a_turn_swing(estimate.revolutions[a:(b + 1) or None],
-                                                  ratio))
-
-
 def _swing_lines_deg(estimate: SpeedEstimate, machine: Machine, shaft: int
                      ) -> tuple[tuple[float, float], ...]:
     """(swing, its deviation in noise) at each of shaft ``shaft``'s first
     :data:`SWING_ORDERS` orders, degrees of the input's turn; () where the swing is not
-    measured (:func:`_swing_deg`). The noise is read beside each line, away from every
-    shaft's orders (in this shaft's turns)."""
+    measured: without a tacho, for a shaft not slower than the input, or over fewer than
+    two of its turns. The noise is read beside each line, away from every shaft's orders
+    (in this shaft's turns); the first line's swing is ``ShaftRecord.swing_deg``."""
     ratio = float(machine.shaft_ratio(shaft))
     if estimate.source is not SpeedSource.TACHO or not ratio < 1:
         return ()
