@@ -22,6 +22,7 @@ results.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import platform
 import re
@@ -70,7 +71,7 @@ def size(verdict) -> str:
     if kind == "bearing" and f"{verdict.state}_db" in e:
         return f"{e[verdict.state + '_db']:+.1f} dB {verdict.state}"
     if kind == "shaft" and e:
-        k, v = max(e.items(), key=lambda kv: kv[1] if kv[1] == kv[1] else -1e9)
+        k, v = max(e.items(), key=lambda kv: kv[1] if math.isfinite(kv[1]) else -math.inf)
         return f"{v:+.1f} dB at {k.split('_')[1]}x"
     if "residual_energy_db" in e:
         return f"{e['residual_energy_db']:+.1f} dB residual"

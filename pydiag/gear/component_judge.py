@@ -173,13 +173,14 @@ def _risen(read: dict[int, tuple[float, float]] | None) -> dict[int, float]:
     return {k: c / t for k, (c, t) in (read or {}).items() if c / t > 1}
 
 
-def _by_swing(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord],
+def _by_swing(machine: Machine, record: MachineRecord,
+              swings: Sequence[dict[int, tuple[float, float]] | None],
               gears: list[ComponentVerdict]) -> list[ComponentVerdict]:
     """``gears`` with those on a shaft whose swing rose called "eccentric" or "changed"
-    (module docstring)."""
+    (module docstring); ``swings``: each shaft's :func:`_swing_rises`."""
     out = []
     for v in gears:
-        read = _swing_rises(machine, record, baselines, machine.shafts.index(v.component.shaft))
+        read = swings[machine.shafts.index(v.component.shaft)]
         rose = _risen(read)
         if not rose:
             out.append(v)
@@ -209,8 +210,10 @@ def _shaft_state(rises: list[int]) -> str:
     return CHANGED
 
 
-def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord]
-            ) -> list[ComponentVerdict]:
+def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord],
+            swings: Sequence[dict[int, tuple[float, float]] | None]) -> list[ComponentVerdict]:
+    """Every shaft by its own orders (module docstring); ``swings``: each shaft's
+    :func:`_swing_rises`."""
     shafts = [c for c in components(machine) if c.kind == "shaft"]
     if any(not s.order_halves for b in baselines for s in b.shafts):
         return [ComponentVerdict(c, NOT_JUDGED, reason="a baseline was kept before pydiag "
@@ -235,7 +238,7 @@ def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[Machine
         state = _shaft_state(rises)
         biggest = max((abs(v) for v in changes.values() if math.isfinite(v)), default=math.nan)
         why = f"orders risen: {', '.join(f'{k}x' for k in rises)}" if rises else ""
-        swung = _risen(_swing_rises(machine, record, baselines, s.index)) if rises else {}
+        swung = _risen(swings[s.index]) if rises else {}
         if swung:  # its gears' transmission error moves its orders (module docstring)
             state, why = GOOD, (f"{why}, with its swing ({', '.join(f'{k}x' for k in swung)}): "
                                 "its gears' transmission error, which hides a fault of the "
@@ -269,9 +272,10 @@ def judge_components(machine: Machine, record: MachineRecord,
     """Every component of ``machine`` in ``record`` against the ``baselines`` (module
     docstring); ``verdicts``: the stages' (:func:`~pydiag.gear.stage_judge.judge_stages`).
     Faulty ones first, then in the machine's order (gears, bearings, shafts)."""
+    swings = [_swing_rises(machine, record, baselines, i) for i in range(len(machine.shafts))]
     gears = _told_apart(machine, record, baselines,
-                        _by_swing(machine, record, baselines, _gears(machine, verdicts)))
+                        _by_swing(machine, record, swings, _gears(machine, verdicts)))
     judged = (_swing_unread(machine, record, baselines, gears)
               + judge_bearings(machine, record, baselines)
-              + _shafts(machine, record, baselines))
+              + _shafts(machine, record, baselines, swings))
     return tuple(sorted(judged, key=lambda v: not v.faulty))
