@@ -99,7 +99,7 @@ def load_driver() -> ctypes.CDLL:
                   ctypes.c_double, ctypes.c_int, ctypes.c_int, ctypes.POINTER(ctypes.c_uint32),
                   dp, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_long,
                   ctypes.c_int, ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_long),
-                  ctypes.c_int, ctypes.c_double, dp, dp, ctypes.POINTER(ctypes.c_int)]
+                  ctypes.c_int, ctypes.c_double, dp, dp, dp, ctypes.POINTER(ctypes.c_int)]
     f.restype = ctypes.c_int
     _LIBRARY = lib
     return lib
@@ -154,14 +154,18 @@ class NativeMeRunner:
         self.n_steps = 0
 
     def run(self, start_values: dict, first_output_s: float, interval_s: float,
-            n_out: int, check_at: int = 0, check_tolerance: float = 0.0) -> np.ndarray:
+            n_out: int, check_at: int = 0, check_tolerance: float = 0.0,
+            free_outputs: bool = False) -> np.ndarray:
         """Outputs at ``first_output_s + k*interval_s``, k < n_out, shape (n_out, n_outputs).
 
         ``check_at`` (0 < check_at < n_out): the outputs a period of the forcing apart;
         when the response repeats from output 0 (every state back at output
         ``check_at``, the derivatives and outputs the same one period later, each within
         ``check_tolerance`` of its range: the driver's header), the run stops there and
-        the period's ``check_at`` rows are returned."""
+        the period's ``check_at`` rows are returned. ``free_outputs``: when the states and
+        derivatives repeat and the outputs do not (a strike added at the sensor at a rate
+        of its own), the integration stops there too and every later output is read at
+        its own time from the period's states: all ``n_out`` rows are returned."""
         inst = self.instance
         if self.fmi_version == 3:
             inst.enterInitializationMode(tolerance=self.rtol, startTime=0.0)
@@ -196,6 +200,8 @@ class NativeMeRunner:
         work = np.zeros(7 * max(self.nx, 1) + 5 * self.ny)
         mismatch, returned = ctypes.c_double(np.inf), ctypes.c_int(0)
         dptr = ctypes.POINTER(ctypes.c_double)
+        free = free_outputs and 0 < check_at < n_out and self.nx > 0
+        store = np.empty(check_at * self.nx) if free else None
         # DOP853 interpolates outputs, so its steps are free; Dormand-Prince lands on the grid.
         h_max = interval_s if self.method == 5 else first_output_s + n_out * interval_s
         rc = self.lib.pd_integrate(
@@ -203,7 +209,8 @@ class NativeMeRunner:
             first_output_s, interval_s, n_out, self.ny, self.refs, out.ctypes.data_as(dptr),
             self.rtol, 1e-12, h_max, 10_000_000, self.method, ctypes.byref(n_rhs),
             ctypes.byref(n_steps), int(check_at), float(check_tolerance),
-            work.ctypes.data_as(dptr), ctypes.byref(mismatch), ctypes.byref(returned))
+            work.ctypes.data_as(dptr), None if store is None else store.ctypes.data_as(dptr),
+            ctypes.byref(mismatch), ctypes.byref(returned))
         self.n_rhs += n_rhs.value
         self.n_steps += n_steps.value
         self._stop()
@@ -211,7 +218,7 @@ class NativeMeRunner:
             raise NeedsEvents("the FMU asked for an event at a completed step")
         if rc != 0:
             raise RuntimeError(f"native integration failed: {ERRORS.get(rc, rc)}")
-        return out[:check_at] if returned.value else out
+        return out[:check_at] if returned.value == 1 else out
 
     def _apply(self, start_values: dict) -> None:
         from fmpy.simulation import apply_start_values

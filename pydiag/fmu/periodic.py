@@ -36,7 +36,10 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     of 33 periods then costs 1 or 2 simulated periods instead of 33.
     Anything that is not periodic in ``period_s`` (a bearing's strikes, a ripple at a free
     frequency, a subharmonic, a transient still decaying) makes the periods differ, and
-    the whole duration is simulated as before.
+    the whole duration is simulated, or, where only the outputs differ (the states and
+    derivatives repeat: a bearing's strikes added at the sensor), one period is integrated
+    and the later outputs are read from its states
+    (:meth:`~pydiag.fmu.plant.FmuPlant.simulate_repeating_states`).
     """
     fs = plant.sample_rate_hz
     total = int(round(duration_s * fs))
@@ -44,6 +47,10 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
         y = simulate_period(plant, values, warmup_s, period_s)
         if y is not None:
             return np.tile(y, (1, -(-total // y.shape[1])))[:, :total]
+        per = period_s * fs
+        if abs(per - round(per)) <= 1e-6 * per:
+            return plant.simulate_repeating_states(values, duration_s, warmup_s,
+                                                   int(round(per)), STATE_TOLERANCE)
     return plant.simulate(values, duration_s, warmup_s)
 
 

@@ -27,6 +27,13 @@
  * each to within tol of its range over the period plus ten times the integrator's error,
  * and the period crossed in CHECK_MIN_STEPS steps at least (fewer sample the forcing too
  * sparsely).
+ *
+ * With free outputs (a store for the period's states), a run whose states and derivatives
+ * repeat but whose outputs do not (returned 2: an output that depends on time otherwise
+ * than through the period, as a bearing's strikes added at the sensor, while the dynamics
+ * depend on it only through the period) is not integrated further either: each later
+ * output is read at its own time from the state one or more whole periods earlier, which
+ * the state is (the derivatives are the same there, so the trajectory repeats).
  */
 #include <math.h>
 #include <stdbool.h>
@@ -153,7 +160,10 @@ typedef struct {
     long n_steps;       /* accepted steps checked inside the window */
     bool spoiled;       /* a value one period later was not finite: no verdict */
     double mismatch;    /* out: the largest miss over its allowance */
-    bool returned;      /* out: the response repeats: the run stopped after n_check */
+    int returned;       /* out: 1 the response repeats, 2 its states and derivatives do
+                           (free outputs): the run stopped after n_check; 0 neither */
+    double *store;      /* n_check x nx: the states at outputs 0..n_check-1 (free outputs),
+                           or NULL */
 } Check;
 
 /* Fewer accepted steps than this inside the period sample its forcing too sparsely to
@@ -204,17 +214,36 @@ static bool check_state(Check *c, int k, const double *s, double rtol, double at
     if (!c || k > c->n_check) return false;
     widen(c->lo, c->hi, s, c->nx, k == 0);
     if (k == 0) memcpy(c->x0, s, c->nx * sizeof(double));
-    if (k < c->n_check) return false;
-    double worst = 0.0;
+    if (k < c->n_check) {
+        if (c->store) memcpy(c->store + (size_t)k * c->nx, s, c->nx * sizeof(double));
+        return false;
+    }
+    double states = 0.0, outputs = 0.0;
     for (size_t i = 0; i < c->nx; i++) {
-        worst = fmax(worst, ratio(fabs(s[i] - c->x0[i]), c->lo[i], c->hi[i], c->tol, rtol, atol));
-        worst = fmax(worst, ratio(c->dmiss[i], c->dlo[i], c->dhi[i], c->tol, rtol, atol));
+        states = fmax(states, ratio(fabs(s[i] - c->x0[i]), c->lo[i], c->hi[i], c->tol, rtol, atol));
+        states = fmax(states, ratio(c->dmiss[i], c->dlo[i], c->dhi[i], c->tol, rtol, atol));
     }
     for (size_t j = 0; j < c->ny; j++)
-        worst = fmax(worst, ratio(c->ymiss[j], c->ylo[j], c->yhi[j], c->tol, rtol, atol));
-    c->mismatch = worst;
-    c->returned = worst <= 1.0 && c->n_steps >= CHECK_MIN_STEPS && !c->spoiled;
-    return c->returned;
+        outputs = fmax(outputs, ratio(c->ymiss[j], c->ylo[j], c->yhi[j], c->tol, rtol, atol));
+    c->mismatch = fmax(states, outputs);
+    bool judged = c->n_steps >= CHECK_MIN_STEPS && !c->spoiled;
+    c->returned = !judged || states > 1.0 ? 0 : outputs <= 1.0 ? 1 : c->store ? 2 : 0;
+    return c->returned != 0;
+}
+
+/* Outputs k = first..n_out-1 read at their own times from the stored period's states
+ * (free outputs, returned 2: see the top). */
+static int outputs_from_period(const Model *m, const Check *c, int first, int n_out,
+                               double t_first_out, double h_out, double *out) {
+    for (int k = first; k < n_out; k++) {
+        const double *s = c->store + (size_t)(k % c->n_check) * c->nx;
+        if (!FMI_OK(m->set_time(m->inst, t_first_out + k * h_out))
+                || !FMI_OK(m->set_states(m->inst, s, c->nx)))
+            return PD_FMI_ERROR;
+        int rc = get_outputs(m, c->vr, c->ny, out + (size_t)k * c->ny);
+        if (rc) return rc;
+    }
+    return PD_OK;
 }
 
 /* DOP853 with dense output. */
@@ -397,8 +426,8 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
                  double t0, double t_first_out, double h_out, int n_out, int ny_,
                  const uint32_t *vr, double *out, double rtol, double atol, double h_max,
                  long max_steps, int method, long *n_rhs, long *n_steps,
-                 int n_check, double check_tol, double *check_work, double *mismatch,
-                 int *returned) {
+                 int n_check, double check_tol, double *check_work, double *store,
+                 double *mismatch, int *returned) {
     Model m = {inst, fmi_version, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
                (fn_get_derivs)p_get_derivs, p_get_outputs, p_completed, (size_t)nx_, n_rhs};
     size_t nx = (size_t)nx_, ny = (size_t)ny_;
@@ -406,7 +435,7 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
     Check check = {n_check, check_tol, t_first_out, n_check * h_out, nx, ny, vr,
                    v, v + nx, v + 2 * nx, v + 3 * nx, v + 4 * nx, v + 5 * nx, v + 6 * nx,
                    v + 7 * nx, v + 7 * nx + ny, v + 7 * nx + 2 * ny, v + 7 * nx + 3 * ny,
-                   v + 7 * nx + 4 * ny, 0, false, INFINITY, false};
+                   v + 7 * nx + 4 * ny, 0, false, INFINITY, 0, store};
     Check *c = n_check > 0 && n_check < n_out && nx ? &check : NULL;
     if (c) {  /* ranges empty (lo > hi) until the first step inside the window */
         for (size_t i = 0; i < nx; i++) { c->dlo[i] = 1.0; c->dhi[i] = 0.0; c->dmiss[i] = 0.0; }
@@ -424,6 +453,8 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
                             atol, h_max, max_steps, n_steps, c);
     else
         return PD_BAD_METHOD;
+    if (rc == PD_OK && check.returned == 2)
+        rc = outputs_from_period(&m, &check, n_check + 1, n_out, t_first_out, h_out, out);
     *mismatch = check.mismatch;
     *returned = check.returned;
     return rc;

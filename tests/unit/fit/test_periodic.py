@@ -25,6 +25,10 @@ class Plant:
         periods = 1 if self.states_return else 2
         return self.simulate(values, periods * period_samples / RATE_HZ, start_s)
 
+    def simulate_repeating_states(self, values, duration_s, start_s, period_samples,
+                                  state_tolerance):
+        return self.simulate(values, duration_s, start_s)  # no states: integrated whole
+
     def simulate(self, values, duration_s, start_s=0.0):
         self.durations.append(duration_s)
         n = int(round(duration_s * RATE_HZ))
