@@ -37,7 +37,9 @@ class Effect:
         synchronous: every line it makes is an order of the fundamental period, so its
             model is simulated over one period and repeated; False for a bearing's strikes
             or a ripple at a frequency of its own, simulated whole (discover starts those
-            first) unless it is a ``ripple`` read from periods of the model
+            first) unless it is a ``ripple`` read from periods of the model or the outputs
+            alone see it (read from one period of the states:
+            :func:`pydiag.fmu.periodic.simulate_periodic`)
         outputs: the GearPair outputs whose lines it changes (None: all): a housing mode or
             a bearing's strikes ring the acceleration at the sensor, not the mesh's
             displacement, so peaks of disp are no evidence for them
