@@ -11,6 +11,7 @@ whether it is confident and what it fitted, the largest rise first. Usage:
 
     .venv/bin/python bench/healthy_model.py BASELINE RECORD [RECORD ...]
         [--machine examples/phm09_spur.toml] [--channel ch1] [--rpm 1800] [--effects K,K] [--refit]
+        [--sample-rate HZ]     # default the PHM09 records' 66666.67; 0: the record's own
 
 Records are the PHM 2009 challenge's (cite the PHM Society 2009 Data Challenge where you
 report results); the machine file gives their sensor's sensitivity and the tacho.
@@ -30,7 +31,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _setup(machine: str, record: str, channel: str, rpm: float, build_dir: str):
+def _setup(machine: str, record: str, channel: str, rpm: float, build_dir: str,
+           sample_rate_hz: float = 200_000 / 3):
     """The record and the machine's model as `pydiag discover --machine` sees them (the
     command line's defaults: the file's sensors and sensitivity, the tacho's speed)."""
     from pydiag.app import loop_commands as lc
@@ -40,8 +42,8 @@ def _setup(machine: str, record: str, channel: str, rpm: float, build_dir: str):
     from pydiag.app.reading import read_input
     args = build_parser().parse_args(
         ["discover", "--machine", machine, "--measurement", record, "--channel", channel,
-         "--rpm", str(rpm), "--sample-rate", str(200_000 / 3), "--quiet",
-         "--build-dir", build_dir])
+         "--rpm", str(rpm), "--quiet", "--build-dir", build_dir]
+        + (["--sample-rate", str(sample_rate_hz)] if sample_rate_hz else []))
     args.machine_description = apply_machine(args)
     m = read_input(args)
     machines = machine_models(args)
@@ -57,6 +59,8 @@ def main() -> int:
     ap.add_argument("--channel", default="ch1")
     ap.add_argument("--rpm", type=float, default=1800.0)
     ap.add_argument("--effects", help="comma-separated effect keys (default: the catalogue)")
+    ap.add_argument("--sample-rate", type=float, default=200_000 / 3,
+                    help="the records' sample rate, Hz (0: read from the record)")
     ap.add_argument("--refit", action="store_true",
                     help="each record's base is the healthy fit polished on the record (its "
                          "own healthy refit), not the baseline's fit held")
@@ -74,7 +78,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         build_dir = str(Path(tmp) / "build")
         started = time.perf_counter()
-        seen = _setup(a.machine, a.baseline, a.channel, a.rpm, build_dir)
+        seen = _setup(a.machine, a.baseline, a.channel, a.rpm, build_dir, a.sample_rate)
         args, _, problem, model = seen
         healthy = compare_machine(problem, model, FaultEstimator(**estimator_settings(args)),
                                   refit)
@@ -84,7 +88,8 @@ def main() -> int:
         for index, record in enumerate([a.baseline] + a.records):
             started = time.perf_counter()
             if index:  # the baseline's is read and built once, above
-                seen = _setup(a.machine, record, a.channel, a.rpm, build_dir)
+                seen = _setup(a.machine, record, a.channel, a.rpm, build_dir,
+                              a.sample_rate)
             args, machines, problem, model = seen
             values = healthy.parameters
             if a.refit and index:  # the healthy model at its best on this record
