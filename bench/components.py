@@ -7,6 +7,7 @@ components were called faulty, and the seconds it took), then the counts. Usage:
 
     .venv/bin/python bench/components.py [DIR]     # default ../shared/data/phm09
     .venv/bin/python bench/components.py --simulator
+    .venv/bin/python bench/components.py --every-baseline [DIR]
 
 ``--simulator``: the same on the independent gearbox simulator's records
 (tests/truth/gearbox.py: faults written from the shafts' angles and the bearing's own
@@ -14,7 +15,9 @@ geometry), each fault alone and two at once, seeds 2-4, each judged against seed
 healthy record (with a tacho where the case has one).
 
 The records and their labels are the folder README's (a record is judged against the
-case-1 run of its box, speed and load that is not itself); a case whose every component is
+case-1 run of its box, speed and load that is not itself, run 2 first; with
+``--every-baseline``, against every such run, as a user gives every healthy record of the
+operating point he has); a case whose every component is
 good is a healthy record. Cite the PHM Society 2009 Data Challenge where you report
 results.
 """
@@ -190,6 +193,9 @@ def simulator_main() -> int:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", nargs="?", default=str(ROOT.parent / "shared" / "data" / "phm09"))
+    ap.add_argument("--every-baseline", action="store_true",
+                    help="judge each record against every healthy run of its box, speed and "
+                         "load but itself, not only the first")
     ap.add_argument("--simulator", action="store_true",
                     help="the independent gearbox simulator's cases instead")
     args = ap.parse_args()
@@ -211,8 +217,8 @@ def main() -> int:
         healthy = sorted((p for p in files if p != path
                           and NAME.search(p.name).groups()[:4] == (box, "1", hz, load)),
                          key=lambda p: NAME.search(p.name).group(5) != "2")
-        baseline = healthy[0] if healthy else None
-        if labels is None or baseline is None:
+        baselines = healthy if args.every_baseline else healthy[:1]
+        if labels is None or not baselines:
             continue
         machine = machines[box]
         started = time.perf_counter()
@@ -222,13 +228,15 @@ def main() -> int:
                               pulses_per_rev=machine.tacho.pulses_per_rev)
         seen = [machine_record(read_measurement(p, RATE_HZ, units=units,
                                                 sensitivities=sensitivity),
-                               machine, speed, float(hz)) for p in (path, baseline)]
-        verdicts, _ = judge_stages(machine, seen[0], [seen[1]])
-        judged = {v.component.name: v for v in judge_components(machine, seen[0], [seen[1]],
+                               machine, speed, float(hz)) for p in (path, *baselines)]
+        verdicts, _ = judge_stages(machine, seen[0], seen[1:])
+        judged = {v.component.name: v for v in judge_components(machine, seen[0], seen[1:],
                                                                 verdicts)}
         seconds = time.perf_counter() - started
         faulty = [v for v in judged.values() if v.faulty]
-        print(f"{path.stem:<28}{baseline.stem:<28}{len(faulty):>12}{seconds:>6.1f}")
+        named = " + ".join(NAME.search(b.name).group(0).split("_", 1)[1] if i else b.stem
+                           for i, b in enumerate(baselines))
+        print(f"{path.stem:<28}{named:<28}{len(faulty):>12}{seconds:>6.1f}")
         if not labels:
             counts["healthy"] += 1
             counts["clean"] += not faulty
