@@ -99,7 +99,8 @@ def load_driver() -> ctypes.CDLL:
                   ctypes.c_double, ctypes.c_int, ctypes.c_int, ctypes.POINTER(ctypes.c_uint32),
                   dp, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_long,
                   ctypes.c_int, ctypes.POINTER(ctypes.c_long), ctypes.POINTER(ctypes.c_long),
-                  ctypes.c_int, ctypes.c_double, dp, dp, dp, ctypes.POINTER(ctypes.c_int)]
+                  ctypes.c_int, ctypes.c_double, dp, dp, ctypes.c_int, dp,
+                  ctypes.POINTER(ctypes.c_int)]
     f.restype = ctypes.c_int
     _LIBRARY = lib
     return lib
@@ -155,7 +156,7 @@ class NativeMeRunner:
 
     def run(self, start_values: dict, first_output_s: float, interval_s: float,
             n_out: int, check_at: int = 0, check_tolerance: float = 0.0,
-            free_outputs: bool = False) -> np.ndarray:
+            free_outputs: bool = False, stop_at: int = 0) -> np.ndarray:
         """Outputs at ``first_output_s + k*interval_s``, k < n_out, shape (n_out, n_outputs).
 
         ``check_at`` (0 < check_at < n_out): the outputs a period of the forcing apart;
@@ -165,7 +166,9 @@ class NativeMeRunner:
         the period's ``check_at`` rows are returned. ``free_outputs``: when the states and
         derivatives repeat and the outputs do not (a strike added at the sensor at a rate
         of its own), the integration stops there too and every later output is read at
-        its own time from the period's states: all ``n_out`` rows are returned."""
+        its own time from the period's states: all ``n_out`` rows are returned.
+        ``stop_at`` (check_at < stop_at < n_out): a run whose response does not repeat
+        stops after that many rows, which are returned."""
         inst = self.instance
         if self.fmi_version == 3:
             inst.enterInitializationMode(tolerance=self.rtol, startTime=0.0)
@@ -210,7 +213,7 @@ class NativeMeRunner:
             self.rtol, 1e-12, h_max, 10_000_000, self.method, ctypes.byref(n_rhs),
             ctypes.byref(n_steps), int(check_at), float(check_tolerance),
             work.ctypes.data_as(dptr), None if store is None else store.ctypes.data_as(dptr),
-            ctypes.byref(mismatch), ctypes.byref(returned))
+            int(stop_at), ctypes.byref(mismatch), ctypes.byref(returned))
         self.n_rhs += n_rhs.value
         self.n_steps += n_steps.value
         self._stop()
@@ -218,7 +221,11 @@ class NativeMeRunner:
             raise NeedsEvents("the FMU asked for an event at a completed step")
         if rc != 0:
             raise RuntimeError(f"native integration failed: {ERRORS.get(rc, rc)}")
-        return out[:check_at] if returned.value == 1 else out
+        if returned.value == 1:
+            return out[:check_at]
+        if returned.value == 0 and 0 < check_at < stop_at < n_out:
+            return out[:stop_at]
+        return out
 
     def _apply(self, start_values: dict) -> None:
         from fmpy.simulation import apply_start_values

@@ -36,36 +36,35 @@ def simulate_periodic(plant: FmuPlant, values: dict[str, float], duration_s: flo
     of 33 periods then costs 1 or 2 simulated periods instead of 33.
     Anything that is not periodic in ``period_s`` (a bearing's strikes, a ripple at a free
     frequency, a subharmonic, a transient still decaying) makes the periods differ, and
-    the whole duration is simulated, or, where only the outputs differ (the states and
-    derivatives repeat: a bearing's strikes added at the sensor), one period is integrated
-    and the later outputs are read from its states
-    (:meth:`~pydiag.fmu.plant.FmuPlant.simulate_repeating_states`).
+    the whole duration is simulated; where only the outputs differ (the states and
+    derivatives repeat: a bearing's strikes added at the sensor), the native engine
+    integrates one period and reads the later outputs from its states, in the same run
+    (:meth:`~pydiag.fmu.plant.FmuPlant.simulate_periods`' ``total``).
     """
     fs = plant.sample_rate_hz
     total = int(round(duration_s * fs))
     if period_s is not None and total > 3 * period_s * fs:
-        y = simulate_period(plant, values, warmup_s, period_s)
+        y = simulate_period(plant, values, warmup_s, period_s, total=total)
         if y is not None:
-            return np.tile(y, (1, -(-total // y.shape[1])))[:, :total]
-        per = period_s * fs
-        if abs(per - round(per)) <= 1e-6 * per:
-            return plant.simulate_repeating_states(values, duration_s, warmup_s,
-                                                   int(round(per)), STATE_TOLERANCE)
+            return y if y.shape[1] == total else np.tile(y, (1, -(-total // y.shape[1])))[:, :total]
     return plant.simulate(values, duration_s, warmup_s)
 
 
 def simulate_period(plant: FmuPlant, values: dict[str, float], warmup_s: float,
-                    period_s: float, oversample: int = 1) -> np.ndarray | None:
+                    period_s: float, oversample: int = 1, total: int | None = None
+                    ) -> np.ndarray | None:
     """One period of the model's response from the warm-up on, sampled at ``oversample``
     times the plant's rate (:func:`simulate_periodic`'s tests of a response that repeats),
     or None when the response does not repeat in ``period_s`` or the period is no whole
-    number of samples."""
+    number of samples. ``total`` (samples): where only the outputs do not repeat, the
+    record of ``total`` samples read from one period's states instead
+    (:meth:`~pydiag.fmu.plant.FmuPlant.simulate_periods`)."""
     per = period_s * plant.sample_rate_hz * oversample
     n = int(round(per))
     if n <= 1 or abs(per - n) > 1e-6 * per:
         return None
-    y = plant.simulate_periods(values, n, warmup_s, STATE_TOLERANCE, oversample)
-    if y.shape[1] == n:
+    y = plant.simulate_periods(values, n, warmup_s, STATE_TOLERANCE, oversample, total)
+    if y.shape[1] in (n, total):
         return y
     first, last = y[:, :n], y[:, n:2 * n]
     peak = np.max(np.abs(last), axis=1)

@@ -192,8 +192,8 @@ class FmuPlant:
                             int(round(duration_s * self.sample_rate_hz)))
 
     def simulate_periods(self, parameters: dict[str, float], period_samples: int,
-                         start_s: float, state_tolerance: float,
-                         oversample: int = 1) -> np.ndarray:
+                         start_s: float, state_tolerance: float, oversample: int = 1,
+                         total: int | None = None) -> np.ndarray:
         """Sensor signals from ``start_s`` over two periods of the model's forcing
         (``period_samples`` each), shape (n_sensors, 2 * period_samples); or over one,
         shape (n_sensors, period_samples), when the native engine finds that the response
@@ -202,30 +202,22 @@ class FmuPlant:
         ``state_tolerance`` of their ranges (:meth:`pydiag.fmu.native_engine.
         NativeMeRunner.run`); half the simulation is saved. fmpy gives no states: always
         two periods. ``oversample``: samples at that many times the plant's rate (a period
-        of ``period_samples`` of them), for a signal read between its samples."""
+        of ``period_samples`` of them), for a signal read between its samples.
+
+        ``total`` (samples, more than two periods): where the states and derivatives
+        repeat and the outputs do not (a bearing's strikes added at the sensor, the
+        dynamics turning with the period), the whole ``total`` samples, each later one
+        read at its own time from the state whole periods earlier, for one period's
+        integration (the native engine; ``total`` samples are the record, however made)."""
         if period_samples < 2:
             raise PlantError(f"a period needs at least two samples, got {period_samples}")
         rate = self.sample_rate_hz * oversample
-        return self._cached(parameters, int(round(start_s * rate)), 2 * period_samples,
-                            (period_samples, state_tolerance), rate)
-
-    def simulate_repeating_states(self, parameters: dict[str, float], duration_s: float,
-                                  start_s: float, period_samples: int,
-                                  state_tolerance: float) -> np.ndarray:
-        """:meth:`simulate`, integrated over one period of ``period_samples`` from
-        ``start_s`` where the native engine finds that the states and derivatives repeat
-        from there (:meth:`simulate_periods`' check, the outputs left out of it): each
-        later output is then read at its own time from the state a whole number of periods
-        earlier. Outputs that depend on time otherwise than through the period (a
-        bearing's strikes added at the sensor, its dynamics the gears') cost about one
-        period's integration instead of the record's. fmpy gives no states: the record is
-        integrated."""
-        n = int(round(duration_s * self.sample_rate_hz))
-        if not 2 <= period_samples < n:
-            return self.simulate(parameters, duration_s, start_s)
-        y = self._cached(parameters, int(round(start_s * self.sample_rate_hz)), n,
-                         (period_samples, state_tolerance, True))
-        return np.tile(y, (1, -(-n // y.shape[1])))[:, :n] if y.shape[1] < n else y
+        first = int(round(start_s * rate))
+        if total is None or total <= 2 * period_samples or self._native is None:
+            return self._cached(parameters, first, 2 * period_samples,
+                                (period_samples, state_tolerance), rate)
+        return self._cached(parameters, first, total,
+                            (period_samples, state_tolerance, True, 2 * period_samples), rate)
 
     def _cached(self, parameters: dict[str, float], first: int, n: int,
                 check: tuple = (0, 0.0), rate_hz: float | None = None
@@ -245,9 +237,9 @@ class FmuPlant:
                   check: tuple = (0, 0.0), rate_hz: float | None = None
                   ) -> np.ndarray:
         """Signals at samples first..first+n-1 at ``rate_hz`` (default the plant's); with a
-        ``check`` (period in samples, state tolerance[, free outputs]), the native engine
-        may return the first period alone (or, with free outputs, every sample past one
-        period's integration: :meth:`simulate_repeating_states`)."""
+        ``check`` (period in samples, state tolerance[, free outputs, stop]), the native
+        engine may return the first period alone (or, with free outputs, every sample past
+        one period's integration, or the stop's first samples: :meth:`simulate_periods`)."""
         rate_hz = rate_hz or self.sample_rate_hz
         stop = (first + n) / rate_hz
         if self._native is not None:

@@ -33,7 +33,9 @@
  * than through the period, as a bearing's strikes added at the sensor, while the dynamics
  * depend on it only through the period) is not integrated further either: each later
  * output is read at its own time from the state one or more whole periods earlier, which
- * the state is (the derivatives are the same there, so the trajectory repeats).
+ * the state is (the derivatives are the same there, so the trajectory repeats). A run
+ * given a stop whose response does not repeat stops after that many outputs (two periods:
+ * the caller compares them) instead of integrating on.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -164,6 +166,8 @@ typedef struct {
                            (free outputs): the run stopped after n_check; 0 neither */
     double *store;      /* n_check x nx: the states at outputs 0..n_check-1 (free outputs),
                            or NULL */
+    int stop;           /* > n_check: a run whose response did not repeat stops after this
+                           many outputs (the caller compares two periods); 0: it goes on */
 } Check;
 
 /* Fewer accepted steps than this inside the period sample its forcing too sparsely to
@@ -231,6 +235,11 @@ static bool check_state(Check *c, int k, const double *s, double rtol, double at
     return c->returned != 0;
 }
 
+/* The run did not repeat and stops after output k (Check.stop). */
+static bool stops(const Check *c, int k) {
+    return c && c->stop > c->n_check && !c->returned && k + 1 >= c->stop;
+}
+
 /* Outputs k = first..n_out-1 read at their own times from the stored period's states
  * (free outputs, returned 2: see the top). */
 static int outputs_from_period(const Model *m, const Check *c, int first, int n_out,
@@ -270,7 +279,8 @@ static int integrate_dense(Model *m, double *x,
             rc = PD_FMI_ERROR;
         else
             rc = get_outputs(m, vr, ny, out + (size_t)k * ny);
-        if (rc == PD_OK && check_state(check, k, x, rtol, atol)) n_out = k + 1;
+        if (rc == PD_OK && (check_state(check, k, x, rtol, atol) || stops(check, k)))
+            n_out = k + 1;
         k++;
     }
     while (rc == PD_OK && k < n_out && nx) {
@@ -338,7 +348,7 @@ static int integrate_dense(Model *m, double *x,
                     break;
                 }
                 if ((rc = get_outputs(m, vr, ny, out + (size_t)k * ny))) break;
-                if (check_state(check, k, xs, rtol, atol)) n_out = k + 1;
+                if (check_state(check, k, xs, rtol, atol) || stops(check, k)) n_out = k + 1;
                 k++;
             }
             if (rc) break;
@@ -415,7 +425,7 @@ static int integrate_grid(Model *m, double *x,
         if (!FMI_OK(m->set_time(m->inst, target))) { rc = PD_FMI_ERROR; break; }
         if (nx && !FMI_OK(m->set_states(m->inst, x, nx))) { rc = PD_FMI_ERROR; break; }
         if ((rc = get_outputs(m, vr, ny, out + (size_t)k * ny))) break;
-        if (check_state(check, k, x, rtol, atol)) break;
+        if (check_state(check, k, x, rtol, atol) || stops(check, k)) break;
     }
     free(w);
     return rc;
@@ -427,7 +437,7 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
                  const uint32_t *vr, double *out, double rtol, double atol, double h_max,
                  long max_steps, int method, long *n_rhs, long *n_steps,
                  int n_check, double check_tol, double *check_work, double *store,
-                 double *mismatch, int *returned) {
+                 int n_stop, double *mismatch, int *returned) {
     Model m = {inst, fmi_version, (fn_set_time)p_set_time, (fn_set_states)p_set_states,
                (fn_get_derivs)p_get_derivs, p_get_outputs, p_completed, (size_t)nx_, n_rhs};
     size_t nx = (size_t)nx_, ny = (size_t)ny_;
@@ -435,7 +445,7 @@ int pd_integrate(void *inst, int fmi_version, void *p_set_time, void *p_set_stat
     Check check = {n_check, check_tol, t_first_out, n_check * h_out, nx, ny, vr,
                    v, v + nx, v + 2 * nx, v + 3 * nx, v + 4 * nx, v + 5 * nx, v + 6 * nx,
                    v + 7 * nx, v + 7 * nx + ny, v + 7 * nx + 2 * ny, v + 7 * nx + 3 * ny,
-                   v + 7 * nx + 4 * ny, 0, false, INFINITY, 0, store};
+                   v + 7 * nx + 4 * ny, 0, false, INFINITY, 0, store, n_stop};
     Check *c = n_check > 0 && n_check < n_out && nx ? &check : NULL;
     if (c) {  /* ranges empty (lo > hi) until the first step inside the window */
         for (size_t i = 0; i < nx; i++) { c->dlo[i] = 1.0; c->dhi[i] = 0.0; c->dmiss[i] = 0.0; }

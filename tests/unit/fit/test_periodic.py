@@ -20,14 +20,11 @@ class Plant:
         self.durations = []
         self.states_return = states_return
 
-    def simulate_periods(self, values, period_samples, start_s, state_tolerance, oversample=1):
+    def simulate_periods(self, values, period_samples, start_s, state_tolerance, oversample=1,
+                         total=None):
         assert oversample == 1
         periods = 1 if self.states_return else 2
         return self.simulate(values, periods * period_samples / RATE_HZ, start_s)
-
-    def simulate_repeating_states(self, values, duration_s, start_s, period_samples,
-                                  state_tolerance):
-        return self.simulate(values, duration_s, start_s)  # no states: integrated whole
 
     def simulate(self, values, duration_s, start_s=0.0):
         self.durations.append(duration_s)

@@ -161,7 +161,7 @@ def test_driver_integrates_and_stops_when_the_fmu_asks_for_an_event(fmi_version,
     rc = native_me.load_driver().pd_integrate(
         1, fmi_version, *pointers, 1, x.ctypes.data_as(dptr), 0.0, 0.0, 0.1, 11, 1, refs,
         out.ctypes.data_as(dptr), 1e-8, 1e-12, 1.0, 100_000, 8, C.byref(n_rhs), C.byref(n_steps),
-        0, 0.0, np.zeros(12).ctypes.data_as(dptr), None, C.byref(C.c_double()),
+        0, 0.0, np.zeros(12).ctypes.data_as(dptr), None, 0, C.byref(C.c_double()),
         C.byref(C.c_int()))
     if event_after_steps is None:
         assert rc == 0
@@ -228,7 +228,7 @@ def test_the_periodicity_check_stops_only_a_run_whose_period_it_sampled_densely(
     rc = native_me.load_driver().pd_integrate(
         1, 3, *pointers, 1, x.ctypes.data_as(dptr), 0.0, 40.0, 0.1, 21, 1, (C.c_uint32 * 1)(0),
         out.ctypes.data_as(dptr), 1e-8, 1e-12, h_max, 100_000, 8, C.byref(C.c_long()),
-        C.byref(C.c_long()), 10, 1e-4, np.zeros(12).ctypes.data_as(dptr), None,
+        C.byref(C.c_long()), 10, 1e-4, np.zeros(12).ctypes.data_as(dptr), None, 0,
         C.byref(mismatch), C.byref(stopped))
     assert rc == 0 and mismatch.value <= 1.0
     assert bool(stopped.value) is returned
