@@ -234,8 +234,8 @@ def main() -> int:
                                                                 verdicts)}
         seconds = time.perf_counter() - started
         faulty = [v for v in judged.values() if v.faulty]
-        named = " + ".join(NAME.search(b.name).group(0).split("_", 1)[1] if i else b.stem
-                           for i, b in enumerate(baselines))
+        named = baselines[0].stem + "".join(f",{NAME.search(b.name).group(5)}"
+                                            for b in baselines[1:])  # "..._High_2,1"
         print(f"{path.stem:<28}{named:<28}{len(faulty):>12}{seconds:>6.1f}")
         if not labels:
             counts["healthy"] += 1
