@@ -23,8 +23,8 @@ which a TSA averages down faster than noise, is counted as the TSA counts it). T
 from the quarters gives each half's.
 
 With a tacho on the input shaft, each slower shaft also gets the **swing** of the input's
-angle once its turn (:func:`~pydiag.signal.angle.once_a_turn_swing`, in degrees of the
-input's turn): a runout or an eccentric gear on that shaft swings the whole drive once a
+angle once its turn (:func:`~pydiag.signal.angle.turn_swing` at its first order, in
+degrees of the input's turn): a runout or an eccentric gear on that shaft swings the whole drive once a
 turn, which the tacho sees and a mesh's phase, followed in a band narrower than the
 shaft's speed, does not (docs/gearbox.md). The swing at the shaft's first
 :data:`SWING_ORDERS` orders is kept with how much noise moves each

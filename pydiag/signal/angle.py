@@ -124,26 +124,19 @@ SWING_NOISE_SPACING = 3
 SWING_NOISE_GUARD = 2.5
 
 
-def once_a_turn_swing(revs: np.ndarray, ratio: float) -> float:
-    """How far an angle swings once a turn of a slower shaft: the amplitude, in revolutions
-    of the tracked shaft, of the first order of its deviation from uniform rotation,
-    demodulated along the slower shaft's angle (``ratio`` times ``revs``, 0 < ratio < 1)
-    over that shaft's whole turns; nan when ``revs`` holds fewer than two of them.
+def turn_swing(revs: np.ndarray, ratio: float, rates) -> np.ndarray:
+    """How far an angle swings at each of ``rates`` (multiples of a slower shaft's turning
+    rate; 1: once its turn): the amplitude, in revolutions of the tracked shaft, of its
+    deviation from uniform rotation demodulated along the slower shaft's angle (``ratio``
+    times ``revs``, 0 < ratio < 1) over that shaft's whole turns; nan where ``revs`` holds
+    fewer than two of them.
 
     A runout or an eccentric gear on the slower shaft is a transmission error once its
     turn, which swings the whole drive: a tacho on a faster shaft measures it. The
     tracked shaft's own orders (a tacho wheel's unevenly spaced pulses) are none of the
     slower shaft's. The deviation is from the straight line fitted over those turns, and
     weighted by a Hann window across them, so that the speed's drift (a motor's slip) and
-    other shafts' swings leak little into the first order.
-    """
-    return float(turn_swing(revs, ratio, [1.0])[0])
-
-
-def turn_swing(revs: np.ndarray, ratio: float, rates) -> np.ndarray:
-    """The swing of the tracked angle at each of ``rates`` (multiples of the slower shaft's
-    turning rate, as :func:`once_a_turn_swing` reads the first), revolutions of the tracked
-    shaft; nan where ``revs`` holds fewer than two whole turns of the slower shaft."""
+    other shafts' swings leak little into the line read."""
     if not 0 < ratio < 1:
         raise ValueError(f"the slower shaft turns 0 to 1 times a turn, got {ratio}")
     rates = np.atleast_1d(np.asarray(rates, dtype=float))
