@@ -1,6 +1,7 @@
 """Does a record need, held out, what the machine's healthy model lacks? An experiment for
-the component verdict (issue 60): the machine's own model (no ``--fmu``) is fitted once to
-a healthy baseline record; each other record is then seen through that healthy model (its
+the component verdict (issue 60): the machine's own model (no ``--fmu``; the effects the
+machine file lists, and its ``[start]``, as compare takes them) is fitted once to a healthy
+baseline record; each other record is then seen through that healthy model (its
 stages' parameters held at the baseline's fit, the channels' gains the record's own), and
 every effect each stage can have is tried held out against it (``discover --machine``'s
 test, on a base not fitted to the record; with ``--refit``, on that fit polished on the
@@ -81,7 +82,7 @@ def main() -> int:
         seen = _setup(a.machine, a.baseline, a.channel, a.rpm, build_dir, a.sample_rate)
         args, _, problem, model = seen
         healthy = compare_machine(problem, model, FaultEstimator(**estimator_settings(args)),
-                                  refit)
+                                  refit, start=args.machine_description.fit_start())
         print(f"healthy fit: error {healthy.fit_error:.3f}, "
               f"{time.perf_counter() - started:.0f} s", flush=True)
         own: dict[tuple[str, str], float] = {}  # the baseline's z against its own fit
