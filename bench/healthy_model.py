@@ -6,12 +6,16 @@ stages' parameters held at the baseline's fit, the channels' gains the record's 
 every effect each stage can have is tried held out against it (``discover --machine``'s
 test, on a base not fitted to the record; with ``--refit``, on that fit polished on the
 record: what the healthy model can do there). The baseline itself is tried the same way
-against its own fit: what the healthy model lacks on a healthy record. Prints, per
+against its own fit: what the healthy model lacks on a healthy record. With ``--own``,
+instead, each effect the machine file gives a stage (the healthy model's own, say from
+``pydiag loop`` on the baseline) is polished on half A from the baseline's values and
+scored on half B against them: whether the record asks for other values of it. Prints, per
 record, every (stage, effect) tried with its held-out z, the baseline's own, the rise,
 whether it is confident and what it fitted, the largest rise first. Usage:
 
     .venv/bin/python bench/healthy_model.py BASELINE RECORD [RECORD ...]
         [--machine examples/phm09_spur.toml] [--channel ch1] [--rpm 1800] [--effects K,K] [--refit]
+        [--own]
         [--sample-rate HZ]     # default the PHM09 records' 66666.67; 0: the record's own
 
 Records are the PHM 2009 challenge's (cite the PHM Society 2009 Data Challenge where you
@@ -65,12 +69,15 @@ def main() -> int:
     ap.add_argument("--refit", action="store_true",
                     help="each record's base is the healthy fit polished on the record (its "
                          "own healthy refit), not the baseline's fit held")
+    ap.add_argument("--own", action="store_true",
+                    help="refit the effects the machine file gives its stages from the "
+                         "baseline's values, held out, instead of trying those they lack")
     a = ap.parse_args()
     from pydiag.app.commands import estimator_settings
     from pydiag.fit.estimator import FaultEstimator
     from pydiag.loop.compare import compare
     from pydiag.loop.effect_fit import EFFECT_REFIT
-    from pydiag.loop.machine_discover import discover_machine
+    from pydiag.loop.machine_discover import discover_machine, refit_own_effects
     from pydiag.loop.machine_fit import compare_machine
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
           f"{platform.python_version()}; {Path(a.machine).name}, {a.channel}, "
@@ -98,9 +105,13 @@ def main() -> int:
                     problem, {p.name: values[p.name] for p in problem.parameters}).parameters
             base = compare(problem, None, healthy.false_alarm_rate, parameters=values)
             base = dataclasses.replace(base, fit_error=base.error)
-            found = discover_machine(problem, args.machine_description, model, base,
-                                     lambda machine, ms=machines: str(ms(machine)[1].fmu),
-                                     refit, a.effects.split(",") if a.effects else None)
+            if a.own:
+                found = refit_own_effects(problem, args.machine_description, model, base,
+                                          refit)
+            else:
+                found = discover_machine(problem, args.machine_description, model, base,
+                                         lambda machine, ms=machines: str(ms(machine)[1].fmu),
+                                         refit, a.effects.split(",") if a.effects else None)
             took = time.perf_counter() - started
             print(f"\n## {Path(record).name}: healthy model's error {base.error:.3f}, "
                   f"{took:.0f} s", flush=True)
@@ -117,7 +128,8 @@ def main() -> int:
                 zb = own.get((d.stage, d.effect), float("nan"))
                 names = {p.name for p in
                          model.stage_effects(stages.index(d.stage))[d.effect].parameters}
-                fitted = ", ".join(f"{k.split('.', 1)[1]} {v:.3g}"
+                fitted = ", ".join(f"{k.split('.', 1)[1]} "
+                                   + (f"{values[k]:.3g} -> " if a.own else "") + f"{v:.3g}"
                                    for k, v in h.parameters.items() if k in names)
                 print(f"| {d.stage} | {d.effect} | {h.z:.1f} | {zb:.1f} | {h.z - zb:+.1f} | "
                       f"{'yes' if d.confident else ''} | {h.explained:.2f} | "

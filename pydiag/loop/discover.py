@@ -113,12 +113,12 @@ def failed_row(key: str, err: Exception, started: float, stage: str | None = Non
 
 def held_out_row(problem: FitProblem, base: Comparison, effect: Effect, fmu: str,
                  estimator: FaultEstimator, memo: dict | None = None,
-                 stage: str | None = None) -> Suggestion:
+                 stage: str | None = None, own: bool = False) -> Suggestion:
     """``effect`` (on ``stage`` of a machine's model) held out, as a row; an effect that
-    cannot be fitted is a row too."""
+    cannot be fitted is a row too; ``own``: :func:`~pydiag.loop.held_out.held_out`'s."""
     started = time.perf_counter()
     try:
-        h = held_out(problem, base, effect, fmu, estimator, memo=memo)
+        h = held_out(problem, base, effect, fmu, estimator, memo=memo, own=own)
     except PydiagError as err:
         return failed_row(effect.key, err, started, stage)
     return Suggestion(effect.key, status=h.status, message=h.message, held_out=h,

@@ -133,6 +133,25 @@ def fit_effect(problem: FitProblem, base: Comparison, effect: Effect, effect_fmu
     return free, best.parameters
 
 
+def refit_own(problem: FitProblem, base: Comparison, effect: Effect,
+              featurizer: FullSpectrumFeaturizer, estimator: FaultEstimator
+              ) -> tuple[FitProblem, dict[str, float]]:
+    """(the problem, its fit) of ``effect``, one the model has: those of its parameters
+    ``problem`` fits, polished on ``featurizer``'s bins from ``base``'s values within the
+    ranges ``problem`` gives them, everything else held at ``base``'s. Whether a record
+    asks for other values of an effect the model has (a deeper modulation of a gear a
+    healthy model has already), where :func:`fit_effect`'s swarm within bounds read from
+    the peaks looks for one it lacks and may not find the base's values again."""
+    variables = {p.fmu_variable for p in effect.parameters}
+    own = tuple(p for p in problem.parameters if p.fmu_variable in variables)
+    if not own:
+        raise ValueError(f"{effect.key} is not in the model: it has none of its parameters")
+    held = problem.derive(parameters=own, featurizer=featurizer,
+                          fixed_values=problem.fmu_values(base.parameters))
+    return held, estimator.refine(held, {p.name: base.parameters[p.name] for p in own}
+                                  ).parameters
+
+
 def check_transfer_base(fmu_path: str, effect: Effect) -> None:
     """UsageError when ``fmu_path`` already has the transfer path ``effect`` is (a
     HousingSensor FMU given for housing_sensor): pydiag applies it to the base model's

@@ -41,6 +41,11 @@ repeats each fundamental period), the channel gains held at the base fit's. An e
 none of whose lines is among the scored bins has no residual to explain: it is not fitted
 ("not tried"). ``delta_bic`` is the Bayesian information criterion on half A, reported
 beside z: it takes any systematic misfit as evidence, so z is the ranking.
+
+The same test asks of an effect the model has (``own``) whether the record wants other
+values of it: its parameters polished on A from the base fit's values, everything else
+held, and scored on B against those values (a healthy model's gear modulation on a
+record of a broken tooth: :func:`pydiag.loop.machine_discover.refit_own_effects`).
 """
 
 from __future__ import annotations
@@ -62,7 +67,7 @@ from pydiag.gear.effect import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
 from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
 from pydiag.loop.effect_fit import (EFFECT_REFIT, effect_parameters, evidence_channels,
-                                    fit_effect, free_polish)
+                                    fit_effect, free_polish, refit_own)
 from pydiag.loop.residual import MeasuredSpectra, measured_spectra
 from pydiag.loop.results import Comparison, HeldOut
 from pydiag.signal.spectra import ENVELOPE_TOP, local_maxima
@@ -204,14 +209,17 @@ def _at_bound(problem: FitProblem, effect: Effect, fitted: dict[str, float]) -> 
 def held_out(problem: FitProblem, base: Comparison, effect: Effect,
              effect_fmu: str | Callable[[], str], estimator: FaultEstimator | None = None,
              false_alarm_rate: float = FALSE_ALARM_RATE,
-             memo: dict | None = None) -> HeldOut:
+             memo: dict | None = None, own: bool = False) -> HeldOut:
     """Fit ``effect`` on half A, score it against the base model on half B.
 
     ``problem`` is the base fit's problem and ``base`` its comparison (parameters, peaks
     for the effect's bounds); ``effect_fmu`` the effect's FMU, or what builds it (called
     only when the effect is fitted: not for one with nothing to explain); ``estimator``
     defaults to ``FaultEstimator(**EFFECT_REFIT)``; ``memo``: band -> :class:`Halves` of
-    this record and fit, filled as effects need them (what every effect shares)."""
+    this record and fit, filled as effects need them (what every effect shares). ``own``:
+    ``effect`` is one the model has, and the question is whether the record asks for
+    other values of it than ``base``'s (:func:`~pydiag.loop.effect_fit.refit_own`, the
+    base held; ``effect_fmu`` unused), not whether the model lacks it."""
     kin = problem.kinematics
     n_half = base.n_periods // 2
     if kin is None or n_half < 1:
@@ -227,7 +235,7 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     # before any spectrum: its lines unknown, or none it could fit stands above the noise
     if why_not := effect.unknown_lines(kin):
         return untried(why_not)
-    if not effect_parameters(problem, base, effect):
+    if not own and not effect_parameters(problem, base, effect):
         return untried("no line of it stands out (of the noise, or of another shaft's orders "
                        "around it) where it can be told from the pair's")
     memo = {} if memo is None else memo
@@ -259,12 +267,17 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     base_problem = shared.base_problem
     base_fit = dict(base.parameters)
-    if callable(effect_fmu):
-        effect_fmu = effect_fmu()
-    effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half, estimator)
-    if effect.reshapes_base:  # its fit freed the base: the base model gets the same polish
+    if own:
+        effect_problem, fitted = refit_own(problem, base, effect, fit_half, estimator)
+    else:
+        if callable(effect_fmu):
+            effect_fmu = effect_fmu()
+        effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half,
+                                            estimator)
+    frees_base = effect.reshapes_base and not own
+    if frees_base:  # its fit freed the base: the base model gets the same polish
         base_fit = shared.free_base(estimator, base_fit)
-    if effect.reshapes_base:  # channel gains fitted on A (or held)
+    if frees_base:  # channel gains fitted on A (or held)
         y0 = _signals(base_problem, base_fit)
     else:
         if shared.base_signals is None:

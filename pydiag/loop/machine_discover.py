@@ -197,6 +197,31 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     return dataclasses.replace(comparison, suggested_effects=found)
 
 
+def refit_own_effects(problem: FitProblem, machine: Machine, model: MachineModel,
+                      base: Comparison, estimator: FaultEstimator | None = None
+                      ) -> list[Suggestion]:
+    """Every effect the machine file gives a stage, its parameters polished on half the
+    periods from ``base``'s values and scored on the other half against them
+    (:func:`~pydiag.loop.held_out.held_out`, ``own``), on the stage's view of ``problem``
+    (the machine's model, ``base`` a fit of it: a healthy baseline's, seen on another
+    record): whether the record asks for other values of what the model has (a gear's
+    deeper modulation), where :func:`discover_machine` asks what it lacks. Rows stage by
+    stage, a stage's by key."""
+    estimator = estimator or FaultEstimator(**EFFECT_REFIT)
+    rows = []
+    for k, stage in enumerate(machine.stages):
+        keys = sorted(machine.effect_keys(k))
+        if not keys:
+            continue
+        view = stage_view(problem, machine, model, k, base.parameters)
+        seen = compare(view, None, base.false_alarm_rate, base.n_periods,
+                       parameters=base.parameters)
+        memo: dict = {}
+        rows += [held_out_row(view, seen, model.stage_effects(k)[key], view.spec.fmu_path,
+                              estimator, memo, stage.name, own=True) for key in keys]
+    return rows
+
+
 def _with_effect(machine: Machine, key: str, stage: int) -> Machine:
     """``machine`` with the effect ``key`` on stage ``stage`` too: the model it is tried on."""
     return dataclasses.replace(machine, effects=machine.effects + (StageEffect(key, stage),))
