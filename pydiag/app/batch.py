@@ -24,13 +24,12 @@ import signal
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
-from multiprocessing.connection import wait
 from pathlib import Path
 from typing import Callable, Iterable
 
 from pydiag.core.errors import MeasurementError, PydiagError, UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.core.termination import deferred, raise_once
+from pydiag.core.termination import deferred, raise_once, stop_pool
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.gear.classify import SEVERITIES
@@ -183,7 +182,7 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
                 futures = [pool.submit(_task_in_worker, t) for t in tasks]
             rows = _collect(futures, lambda f: f.result(), progress)
         except BaseException:  # Ctrl-C, SIGTERM: stop the workers now, not after their tasks
-            _stop_workers(pool)
+            stop_pool(pool)
             raise
         pool.shutdown()
         return rows
@@ -228,30 +227,6 @@ def _die_with_parent() -> None:
         return
     if os.getppid() == 1:  # the parent died before the call: follow it
         os.kill(os.getpid(), signal.SIGTERM)
-
-
-#: Wall time a local worker has to end after a SIGTERM (its task's cleanup: its fit's
-#: workers joined, 5 s each at most) before it is sent another, and then killed.
-STOP_S = 15.0
-
-
-def _stop_workers(pool: ProcessPoolExecutor) -> None:
-    """End the pool's workers and drop the queue: a SIGTERM each (its task's cleanup runs),
-    another to those still running after STOP_S (Python drops a TERM whose exception is
-    raised in a fork hook or a finaliser), then SIGKILL (the janitor of a killed worker's
-    run folder removes what it held, :mod:`pydiag.fmu.isolation`)."""
-    running = [p for p in list((getattr(pool, "_processes", None) or {}).values())
-               if p.is_alive()]
-    for send in ("terminate", "terminate", "kill"):
-        for proc in running:
-            getattr(proc, send)()
-        end = time.monotonic() + STOP_S
-        while running and time.monotonic() < end:  # a sentinel is ready once its worker ended
-            ended = wait([p.sentinel for p in running], end - time.monotonic())
-            running = [p for p in running if p.sentinel not in ended]
-        if not running:
-            break
-    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _collect(items, result, progress) -> list[dict]:

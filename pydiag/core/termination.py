@@ -21,7 +21,10 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import time
 from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing.connection import wait
 from typing import Callable
 
 
@@ -78,3 +81,28 @@ def deferred() -> Iterator[None]:
             exc_type, _HELD.pending = _HELD.pending, None
             if not unwinding(exc_type):
                 raise exc_type()
+
+
+#: Wall time a pool's worker has to end after a SIGTERM (its task's cleanup: its fit's
+#: workers joined, 5 s each at most) before it is sent another, and then killed.
+STOP_S = 15.0
+
+
+def stop_pool(pool: ProcessPoolExecutor, stop_s: float = STOP_S) -> None:
+    """End the pool's workers and drop its queue, now rather than after its tasks (Ctrl-C,
+    SIGTERM in the process that owns it): a SIGTERM each (its task's cleanup runs),
+    another to those still running after ``stop_s`` (Python drops a TERM whose exception
+    is raised in a fork hook or a finaliser), then SIGKILL (the janitor of a killed
+    worker's run folder removes what it held, :mod:`pydiag.fmu.isolation`)."""
+    running = [p for p in list((getattr(pool, "_processes", None) or {}).values())
+               if p.is_alive()]
+    for send in ("terminate", "terminate", "kill"):
+        for proc in running:
+            getattr(proc, send)()
+        end = time.monotonic() + stop_s
+        while running and time.monotonic() < end:  # a sentinel is ready once its worker ended
+            ended = wait([p.sentinel for p in running], end - time.monotonic())
+            running = [p for p in running if p.sentinel not in ended]
+        if not running:
+            break
+    pool.shutdown(wait=True, cancel_futures=True)

@@ -45,6 +45,7 @@ from fmu_build import ModelicaBuildError as BuildError
 from fmu_build import build_fmu
 
 from pydiag.core.errors import PydiagError, UsageError
+from pydiag.core.termination import deferred, stop_pool
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.fmu.archive import usable_cache
@@ -185,16 +186,34 @@ def side_by_side(call: Callable[[object, FaultEstimator], tuple[Callable, tuple]
         return rows
     one = estimator.replace(n_workers=cores, progress=None)
     done: dict[int, Suggestion] = {}
-    with ProcessPoolExecutor(jobs) as pool:
+    pool = ProcessPoolExecutor(jobs)
+    try:
         running = {}
-        for i, task in enumerate(tasks):
-            function, args = call(task, one)
-            running[pool.submit(function, *args)] = i
+        with deferred():  # the first submits fork the workers: a TERM then is not lost
+            for i, task in enumerate(tasks):
+                function, args = call(task, one)
+                running[pool.submit(_in_worker, function, args)] = i
         for future in as_completed(running):
             done[running[future]] = future.result()
             if progress:
                 progress(done[running[future]])
+    except BaseException:  # Ctrl-C, SIGTERM: stop the fits now, not after every queued one
+        stop_pool(pool)
+        raise
+    pool.shutdown()
     return [done[i] for i in range(len(tasks))]
+
+
+def _in_worker(function: Callable, args: tuple):
+    """``function(*args)`` in a worker of :func:`side_by_side`'s pool, which ends once a
+    stop (a SIGTERM's exception, Ctrl-C) has unwound the task and its cleanup has run:
+    the executor would otherwise keep the worker for its next task."""
+    try:
+        return function(*args)
+    except BaseException as err:
+        if isinstance(err, Exception):
+            raise
+        os._exit(143)
 
 
 def discover(problem: FitProblem, estimator: FaultEstimator | None = None,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from pydiag.app import batch
+from pydiag.core.termination import stop_pool
 
 CODE = """
 import os, signal, time
@@ -56,8 +56,7 @@ def _deaf(marker: str) -> None:
     time.sleep(120)
 
 
-def test_a_worker_that_does_not_end_on_term_is_killed(tmp_path, monkeypatch):
-    monkeypatch.setattr(batch, "STOP_S", 0.5)
+def test_a_worker_that_does_not_end_on_term_is_killed(tmp_path):
     pool = ProcessPoolExecutor(1)
     pool.submit(_deaf, str(tmp_path / "started"))
     end = time.monotonic() + 60
@@ -65,7 +64,7 @@ def test_a_worker_that_does_not_end_on_term_is_killed(tmp_path, monkeypatch):
         time.sleep(0.02)
     workers = list(pool._processes.values())
     started = time.monotonic()
-    batch._stop_workers(pool)
+    stop_pool(pool, stop_s=0.5)
     assert time.monotonic() - started < 10
     assert workers and not any(p.is_alive() for p in workers)
 
