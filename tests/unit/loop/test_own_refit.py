@@ -12,11 +12,11 @@ from pydiag.fit.build import build_problem
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fmu.plant import FmuPlant
 from pydiag.gear.conventions import kinematics_from
-from pydiag.model.adapter import gear_default
 from pydiag.gear.effects import EFFECTS
 from pydiag.loop.compare import compare
 from pydiag.loop.effect_fit import EFFECT_REFIT, refit_own
 from pydiag.loop.held_out import held_out
+from pydiag.model.adapter import gear_default
 from pydiag.signal.noise import add_white_noise
 
 SHAPE = EFFECTS["mesh_stiffness_shape"]
