@@ -274,10 +274,8 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
             effect_fmu = effect_fmu()
         effect_problem, fitted = fit_effect(problem, base, effect, effect_fmu, fit_half,
                                             estimator)
-    frees_base = effect.reshapes_base and not own
-    if frees_base:  # its fit freed the base: the base model gets the same polish
-        base_fit = shared.free_base(estimator, base_fit)
-    if frees_base:  # channel gains fitted on A (or held)
+    if effect.reshapes_base and not own:  # its fit freed the base: the base model gets
+        base_fit = shared.free_base(estimator, base_fit)  # the same polish, gains on A
         y0 = _signals(base_problem, base_fit)
     else:
         if shared.base_signals is None:

@@ -5,6 +5,7 @@ still queued."""
 import os
 import signal
 import time
+from pathlib import Path
 
 import pytest
 from conftest import alive, children
@@ -26,7 +27,8 @@ def _raise_stop(signum, frame):
     raise Stop
 
 
-@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs POSIX timers")
+@pytest.mark.skipif(not (hasattr(signal, "setitimer") and Path("/proc/self/task").exists()),
+                    reason="needs POSIX timers and Linux /proc")
 def test_a_stop_in_the_main_process_ends_the_fits_side_by_side_at_once():
     before = children(os.getpid())
     RUNNING.clear()
