@@ -13,7 +13,7 @@ FMUS := build/GearPair.fmu $(patsubst %,build/effects/%.fmu,$(EFFECTS))
 MODELICA := $(shell find modelica -name '*.mo')
 BRIDGE := $(wildcard fmu_build/*.py)
 
-.PHONY: venv fmu demo lint test test-fast test-slow regress bless bench loop loop-real loop-phm09 clean
+.PHONY: venv fmu demo lint test test-fast test-e2e test-slow regress bless bench loop loop-real loop-phm09 clean
 
 venv: $(STAMP)
 
@@ -38,13 +38,19 @@ demo: fmu
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 
-# every test but the slow tier, on every core (pytest-xdist), after the linter
+# after the linter, on every core (pytest-xdist): the unit tests, the FMU builds and the
+# evidence (every hidden effect of the independent simulator on three seeds, none on three)
 test: fmu lint
-	$(PY) -m pytest -q -n auto --dist worksteal --durations=10
+	$(PY) -m pytest -q -n auto --dist worksteal --durations=10 --ignore=tests/e2e tests
 
 # the edit-test loop: the linter and the unit tests (a handful of FMU simulations)
 test-fast: lint build/GearPair.fmu
 	$(PY) -m pytest -q -n auto tests/unit tests/test_layers.py
+
+# the commands end to end (the CLI, the shared real records, the machine's own model, the
+# loop); CI runs it after make test (.ci/run)
+test-e2e: fmu
+	$(PY) -m pytest -q -n auto --dist worksteal --durations=10 tests/e2e
 
 # the slow tier (more seeds, backlash at the mesh resonance, every Table 1 case, a fresh
 # install), on every core as make test is

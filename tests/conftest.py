@@ -47,6 +47,48 @@ def effects_dir(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="session")
+def effect_fmu_of(effects_dir):
+    """The FMU of a catalogue effect (built into ``effects_dir`` on first use), by effect."""
+    from pydiag.loop.discover import effect_fmu
+    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", effects_dir))
+
+
+def _made_once(tmp_path_factory, name: str, make):
+    """``make()``, once a test run: under pytest-xdist the workers share it through a file
+    of this run (the first makes it while the others wait)."""
+    import os
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    if run is None:
+        return make()
+    import fcntl
+    import pickle
+    shared = tmp_path_factory.getbasetemp().parent / f"{name}_{run}.pickle"
+    with open(shared.with_suffix(".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not shared.exists():
+            shared.write_bytes(pickle.dumps(make()))
+        return pickle.loads(shared.read_bytes())
+
+
+@pytest.fixture(scope="session")
+def truth_records(tmp_path_factory):
+    """The independent simulator's noise-free records of no effect (``"none"``) and of each
+    hidden effect alone (tests/truth_fits.py), made once a test run."""
+    from truth_fits import HIDDEN, truth_clean_records
+    return _made_once(tmp_path_factory, "truth_records",
+                      lambda: truth_clean_records({"none": {}, **HIDDEN}))
+
+
+@pytest.fixture(scope="session")
+def combined_records(tmp_path_factory):
+    """The independent simulator's noise-free records of two effects at once and of a
+    tilted gear (truth_fits.COMBINED), made once a test run."""
+    from truth_fits import COMBINED, truth_clean_records
+    return _made_once(tmp_path_factory, "combined_records",
+                      lambda: truth_clean_records(COMBINED))
+
+
+@pytest.fixture(scope="session")
 def housing_fmu(effects_dir) -> Path:
     """GearDiag.Effects.HousingSensor's FMU: the housing mode in Modelica, which no fit uses
     (the effect is a transfer path: pydiag.signal.transfer) but tests hold it to."""

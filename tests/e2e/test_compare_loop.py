@@ -39,13 +39,6 @@ def problem_of(fmu, m: Measurement):
 
 
 @pytest.fixture(scope="module")
-def effect_fmu_of(effects_dir):
-    """Effect -> its FMU, built on first use (what compare's validation asks for)."""
-    from pydiag.loop.discover import effect_fmu
-    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", effects_dir))
-
-
-@pytest.fixture(scope="module")
 def effect_fmus(tmp_path_factory):
     folder = tmp_path_factory.mktemp("effects")
     return {key: inspected(build_fmu(ROOT / "modelica/GearDiag/Effects" / f"{name}.mo",
@@ -63,8 +56,8 @@ def record(fmu, seed=5, periods=20):
 
 #: Hidden effects ranked in make test-slow only: their records are made by the catalogue's
 #: own models (plumbing, an inverse crime as evidence), and the independent simulator's
-#: records of each (a runout, a ripple, an outer race) are checked in make test, the outer
-#: race on its first seed, the others on three (tests/e2e/test_truth_loop.py).
+#: records of each (a runout, a ripple, an outer race) are checked in make test on three
+#: seeds (tests/evidence).
 @pytest.mark.slow
 @pytest.mark.parametrize("effect", sorted(HIDDEN))
 def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect_fmu_of, effect):
@@ -80,7 +73,7 @@ def test_hidden_effect_is_ranked_first(gear_fmu, effect_fmus, effect_fmu_of, eff
         [(s.effect, s.message) for s in v.suggested_effects]
 
 
-@pytest.mark.slow  # the model's own record: the simulator's, in make test (test_truth_loop)
+@pytest.mark.slow  # the model's own record: the simulator's, in make test (tests/evidence)
 def test_no_hidden_effect_no_confident_suggestion(gear_fmu, effect_fmu_of):
     for seed in (5, 6, 7):
         problem = problem_of(gear_fmu, record(gear_fmu, seed))

@@ -5,15 +5,14 @@ a contact-ratio law in series with the shafts, its faulty tooth a weaker tooth o
 parabolic contact, its speed not constant."""
 
 import json
-import os
 
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli
-from truth.gear_sim import TruthGear, dynamics_of, pinion_speed_hz, record, simulate_many
-from truth_fits import (BASE_PARAMETERS, BEARING, OPERATING_POINT, RESONANCE_RATE_HZ,
-                        RESONANCE_TOP_HZ, envelope_margin_db, line_margin_db, resonance_clean,
-                        resonance_problem)
+from truth.gear_sim import TruthGear, pinion_speed_hz, record, simulate_many
+from truth_fits import (BASE_PARAMETERS, BEARING, ENVELOPE_BAND, FAST, HIDDEN, OPERATING_POINT,
+                        PERIODS, RATE_HZ, RESONANCE_RATE_HZ, RESONANCE_TOP_HZ, STRIKES, assert_one_confident_suggestion, line_margin_db, resonance_clean,
+                        resonance_problem, validated)
 
 from pydiag.fit.affine import fit_affine
 from pydiag.fit.estimator import FaultEstimator
@@ -24,97 +23,15 @@ from pydiag.io.measurements import write_measurement
 from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.loop.compose import composed_fmu
-from pydiag.loop.discover import discover, effect_fmu
+from pydiag.loop.discover import discover
 from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.held_out import held_out
-from pydiag.signal.spectra import ENVELOPE_TOP
 from pydiag.loop.residual import measured_spectra
 from pydiag.loop.results import Status
 from pydiag.loop.validate import validate
 
-PERIODS = 20
-#: The noise seeds every hidden effect, and its absence, is checked on in make test.
-SEEDS = (5, 6, 7)
-RATE_HZ = 10_000.0
-FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
-#: The hidden effects these tests check at the rig's 25 Hz, made the simulator's way: those
-#: of bench/independent_truth.py (RESULTS.md section 9). The simulator's backlash is not
-#: among them: its teeth separate only with the mesh at its resonance (truth.RESONANCE).
-HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
-          "gear_tooth_fault": dict(gear_tooth_loss=0.4),
-          # pinion tooth 5 as weak as the gear's tooth above, beside the faulty tooth 0
-          "second_pinion_tooth_fault": dict(second_pinion_tooth_loss=0.4),
-          # a torque ripple on the input shaft, which moves the speed (gear_sim)
-          "speed_fluctuation": dict(torque_ripple=0.005),
-          # pulses with random slip through a 2.8 kHz resonance (GearDiag: a 3 kHz ring-down
-          # without slip); seen in the envelope above the gear's bands
-          "bearing_outer_race": dict(outer_race_acc=60.0),
-          "bearing_inner_race": dict(inner_race_acc=60.0),
-          # a spalled ball: an outer and a weaker inner strike each spin of the ball, the
-          # cage's turn through the load zone (GearDiag: equal strikes at 2 x BSF)
-          "bearing_ball": dict(ball_acc=60.0),
-          # the accelerometer sees the mesh force through a 2.5 kHz mode, above the band
-          "housing_sensor": dict(housing_hz=2500.0),
-          # a misaligned coupling: 1x-3x of the pinion angle at the sensor (GearDiag: ten
-          # orders of time, no phases)
-          "pinion_shaft_orders": dict(coupling_acc=3.0),
-          # a misaligned motor shaft behind a first stage, 29/17 of the pinion's speed: 1x-3x
-          # of its angle, 2x the strongest (GearDiag: ten orders of time, no phases)
-          "other_shaft_orders": dict(other_shaft_acc=3.0),
-          # a load heavier over half of each gear turn: through the shafts' inertia their
-          # speed swings 0.7 % once a gear turn (GearDiag: the angle's swing written down)
-          "shaft_swing": dict(load_swing=0.004)}
-#: A gear tilted on its shaft: the face width in contact, so every tooth pair's stiffness
-#: in the simulator's law (mean and wave), varies by 10 % once per gear turn
-#: (MeshModulation scales its own stiffness law). A small tilt's deflection under load is
-#: a line at the gear's turn as a runout's transmission error is, so a runout explains
-#: it about as well: the two compete for this record.
-TILT = dict(gear_tilt=0.1)
-#: Two hidden effects in one record: a gear runout and the motor shaft's orders (a
-#: sensor-only difference from the runout's record: one integration for both).
-TWO_HIDDEN = dict(gear_runout_m=10e-6, other_shaft_acc=3.0)
-#: A gear runout and a torque ripple on the input shaft in one record.
-RUNOUT_AND_RIPPLE = dict(gear_runout_m=10e-6, torque_ripple=0.005)
-#: The strike frequency of each bearing effect on the simulator, Hz.
-STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": TruthGear().bpfi_hz,
-           "bearing_ball": 2 * TruthGear().ball_spin_hz}
-#: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
-ENVELOPE_BAND = (1575.0, ENVELOPE_TOP * RATE_HZ)
-
 #: The gap the simulator's teeth open at the mesh resonance (truth.RESONANCE).
 BACKLASH_M = 5e-6
-
-
-@pytest.fixture(scope="module")
-def truth_records(tmp_path_factory):
-    """The simulator's noise-free records, made once a test run: under pytest-xdist the
-    workers share them through a file of this run (the first makes it, the others wait)."""
-    def make():  # one integration a core (the other workers wait for them, idle)
-        from concurrent.futures import ProcessPoolExecutor
-        gears = {key: TruthGear().with_effects(**magnitudes)
-                 for key, magnitudes in {"none": {}, **HIDDEN, "two": TWO_HIDDEN,
-                                         "tilt": TILT, "runout_ripple": RUNOUT_AND_RIPPLE
-                                         }.items()}
-        groups: dict = {}  # the records that differ only in what the sensor sees
-        for key, g in gears.items():
-            groups.setdefault(dynamics_of(g), []).append(key)
-        with ProcessPoolExecutor(os.cpu_count() or 1) as pool:
-            made = {tuple(keys): pool.submit(simulate_many, [gears[k] for k in keys],
-                                             PERIODS * TruthGear().period_s, RATE_HZ)
-                    for keys in groups.values()}
-            return {k: clean for keys, future in made.items()
-                    for k, clean in zip(keys, future.result())}
-    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
-    if run is None:
-        return make()
-    import fcntl
-    import pickle
-    shared = tmp_path_factory.getbasetemp().parent / f"truth_records_{run}.pickle"
-    with open(shared.with_suffix(".lock"), "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not shared.exists():
-            shared.write_bytes(pickle.dumps(make()))
-        return pickle.loads(shared.read_bytes())
 
 
 @pytest.fixture(scope="module")
@@ -122,63 +39,12 @@ def resonance_records():
     return {"none": resonance_clean(), "backlash": resonance_clean(BACKLASH_M)}
 
 
-@pytest.fixture(scope="module")
-def effect_fmu_of(effects_dir):
-    return lambda effect: str(effect_fmu(effect.key, ROOT / "modelica", effects_dir))
-
-
-def validated(gear_fmu, clean, seed, effect_fmu_of, operating_point=OPERATING_POINT):
-    m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=clean)
-    problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
-                            operating_point=operating_point)
-    return validate(problem, compare(problem, FaultEstimator(**FAST)), effect_fmu_of)
-
-
-@pytest.mark.parametrize("effect", sorted(STRIKES))
-def test_bearing_lines_stand_above_the_noise_in_the_envelope(truth_records, effect):
-    strikes = [k * STRIKES[effect] for k in (1, 2, 3)]
-    margins = {}
-    for key in (effect, "none"):
-        m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records[key])
-        margins[key] = envelope_margin_db(m.channels["acc"], RATE_HZ, ENVELOPE_BAND, strikes)
-        print(f"{key}: envelope line at {margins[key][0]:.1f} Hz, {margins[key][1]:.1f} dB over "
-              "its noise")
-    assert margins[effect][1] > 20 and margins["none"][1] < 12
-
-
-@pytest.mark.parametrize("effect", sorted(set(HIDDEN) - set(STRIKES)))
-def test_hidden_lines_stand_above_the_noise(truth_records, effect):
-    margins = []
-    for channel in ("acc", "disp"):
-        freq, margin = line_margin_db(truth_records[effect][channel],
-                                      truth_records["none"][channel], 10.0, RATE_HZ, 1575.0)
-        print(f"{effect} {channel}: strongest change at {freq:.1f} Hz, {margin:.1f} dB over "
-              "the noise")
-        margins.append(margin)
-    assert max(margins) > 20
-
-
-@pytest.mark.parametrize("seed", SEEDS)
-def test_no_hidden_effect_no_confident_suggestion(gear_fmu, truth_records, effect_fmu_of, seed):
-    """Three seeds, as for every hidden effect."""
-    c = validated(gear_fmu, truth_records["none"], seed, effect_fmu_of)
-    assert not [s for s in c.suggested_effects if s.confident], \
-        [(s.effect, s.message) for s in c.suggested_effects]
-    assert [s for s in c.suggested_effects if s.held_out]  # the misfit pointed somewhere
-
 
 #: The effects discover tries on the simulator's records (the base has the others).
 DISCOVERED = ["gear_eccentricity", "gear_tooth_fault", "second_pinion_tooth_fault",
               "load_fluctuation", "speed_fluctuation", "mesh_stiffness_shape",
               "bearing_outer_race", "bearing_inner_race", "bearing_ball", "housing_sensor",
               "pinion_shaft_orders", "other_shaft_orders", "shaft_swing"]
-
-
-def assert_one_confident_suggestion(c, effect):
-    confident = [s for s in c.suggested_effects if s.confident]
-    assert [s.effect for s in confident] == [effect], \
-        [(s.effect, round(s.score, 2), s.message) for s in c.suggested_effects]
-    assert confident[0].held_out.error_effect < confident[0].held_out.error_base
 
 
 def assert_discovered_first(found, effect):
@@ -189,16 +55,15 @@ def assert_discovered_first(found, effect):
 
 
 #: Hidden effects whose discovery (every catalogue effect tried held out, a bearing's
-#: strikes simulated whole) runs in make test too, one of the spectrum's and one of the
-#: envelope's; the others' in make test-slow (make test stays under its budget), their first seed
-#: validated in make test as their others are (below; the outer race's from the command
-#: line). The speed fluctuation's refit frees the base it bent (below); the
-#: housing mode's discovery (49 s, the costliest after the loop's since the loop tries
-#: every synchronous effect) has its record fitted with a gain curve in make test too.
-DISCOVERED_IN_MAKE_TEST = ("gear_tooth_fault", "bearing_inner_race")
+#: strikes simulated whole) runs in make test-e2e, one of the spectrum's and one of the
+#: envelope's; the others' in make test-slow. Every hidden effect is validated on three
+#: seeds in make test (tests/evidence). The speed fluctuation's refit frees the base it
+#: bent (below); the housing mode's discovery (the costliest: the loop tries every
+#: synchronous effect) has its record fitted with a gain curve (below).
+DISCOVERED_IN_E2E = ("gear_tooth_fault", "bearing_inner_race")
 
 
-@pytest.mark.parametrize("effect", [e if e in DISCOVERED_IN_MAKE_TEST else
+@pytest.mark.parametrize("effect", [e if e in DISCOVERED_IN_E2E else
                                     pytest.param(e, marks=pytest.mark.slow)
                                     for e in sorted(HIDDEN)])
 def test_compare_and_discover_find_the_hidden_effect(gear_fmu, truth_records, effect_fmu_of,
@@ -238,21 +103,10 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
             [(s.effect, round(s.score, 2), s.message) for s in c.suggested_effects]
 
 
-@pytest.mark.parametrize("effect, seed", [
-    (e, seed) for e in sorted(HIDDEN) for seed in SEEDS
-    if seed != SEEDS[0] or e not in (*DISCOVERED_IN_MAKE_TEST, "bearing_outer_race")])
-def test_hidden_effect_is_the_one_confident_suggestion(gear_fmu, truth_records, effect_fmu_of,
-                                                       effect, seed):
-    """Every hidden effect on three seeds in make test: the first with
-    discover (above) where that runs in make test, the outer race's from the command line
-    (below), the others here."""
-    assert_one_confident_suggestion(validated(gear_fmu, truth_records[effect], seed,
-                                              effect_fmu_of), effect)
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [5, 6])
 def test_a_tilted_gear_is_found_and_a_runout_is_not_taken_for_one(gear_fmu, truth_records,
+                                                                   combined_records,
                                                                    effect_fmu_of, seed):
     """The stiffness modulated once per gear turn lowers the held-out error of a tilted
     gear's record far beyond noise and explains its lines; on a runout's record it is not
@@ -260,7 +114,8 @@ def test_a_tilted_gear_is_found_and_a_runout_is_not_taken_for_one(gear_fmu, trut
     modulation = EFFECTS["mesh_modulation"]
     verdicts = {}
     for record_of in ("tilt", "gear_eccentricity"):
-        m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=truth_records[record_of])
+        m = record(TruthGear(), PERIODS, seed, RATE_HZ,
+                   clean={**truth_records, **combined_records}[record_of])
         problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                                 operating_point=OPERATING_POINT)
         verdicts[record_of] = held_out(problem, compare(problem, FaultEstimator(**FAST)),
@@ -463,7 +318,7 @@ def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_recor
     ``validate_after`` that second compare validates what is left too, and nothing is
     confident: the housing tried on a model whose lines are not all synchronous simulates
     the whole record at every step of its fits (a minute on 2 cores). Both in make
-    test-slow; make test runs the loop on the command line and in the library
+    test-slow; make test-e2e runs the loop on the command line and in the library
     (test_cli_loop_stops_at_its_step_limit..., test_two_hidden_effects...)."""
     meas, db = tmp_path / "m.csv", tmp_path / "h.sqlite"
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
@@ -504,13 +359,13 @@ def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_recor
     assert float(runs[1][4]) < float(runs[0][4])
 
 
-def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, truth_records,
+def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, combined_records,
                                                          effect_fmu_of, tmp_path):
     """A gear runout and the motor shaft's orders in one record: the loop accepts the
     runout (the most confident), fits it, then finds the motor shaft confident on the
     model of both (written from the two effects' files), accepts it, and nothing is
     confident after; the error falls at each step."""
-    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"])
+    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=combined_records["two"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS, operating_point={
         **OPERATING_POINT, "other_shaft_ratio": TruthGear().effects.other_shaft_ratio})
     steps, final = accumulate(problem, effect_fmu_of,
@@ -526,7 +381,7 @@ def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, truth_record
     assert steps[2].comparison.parameters["ecc_gear"] == pytest.approx(10e-6, rel=0.2)
 
 
-def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(truth_records,
+def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(combined_records,
                                                                          tmp_path):
     """`pydiag loop --machine pair.toml` without --fmu, the pair as a machine of one stage
     (no sensors described: the record's acc and disp channels are the model's outputs of
@@ -538,7 +393,7 @@ def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(truth_r
     effect is fitted on the bins the comparison scores)."""
     meas, machine, out = tmp_path / "m.csv", tmp_path / "pair.toml", tmp_path / "loop.json"
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
-                                   clean=truth_records["runout_ripple"]))
+                                   clean=combined_records["runout_ripple"]))
     machine.write_text('name = "pair"\ninput_rpm = 1500\n[[stages]]\npinion_teeth = 14\n'
                        'gear_teeth = 21\n')
     res = run_cli("-m", "pydiag", "loop", "--machine", str(machine), "--measurement",
@@ -599,12 +454,14 @@ def test_a_bearing_the_machine_file_places_is_judged_by_the_machines_model(
         assert "envelope" in rows[hidden]["message"], rows[hidden]
 
 
-def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu, truth_records,
+def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu,
+                                                                      combined_records,
                                                                       tmp_path):
     """pydiag loop, one comparison allowed: the runout is confident on the two-effect
     record, not accepted, and the line and the JSON say so."""
     meas, out = tmp_path / "m.csv", tmp_path / "loop.json"
-    write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"]))
+    write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
+                                   clean=combined_records["two"]))
     res = run_cli("-m", "pydiag", "loop", "--fmu", str(gear_fmu), "--measurement", str(meas),
                   "--other-shaft", "29/17", "--gain", "fixed", "--max-steps", "1", "--json",
                   str(out), "--particles", "4", "--iterations", "3", "--polish", "20",
