@@ -7,9 +7,15 @@
     otherwise        y = k sin(2 pi 5 t) + 0.5 sin(2 pi 12 t)
 """
 
+import tomllib
 from pathlib import Path
 
+import numpy as np
+
 from fmus import build_pythonfmu
+from pydiag.core.measurement import Measurement
+from pydiag.fmu.plant import FmuPlant
+from pydiag.model.adapter import Adapter, parse_adapter
 
 SOURCE = '''
 import math
@@ -67,3 +73,15 @@ high = {high}
 
 def build(folder: Path) -> Path:
     return build_pythonfmu(folder, "Hostile", SOURCE)
+
+
+def adapter(low: float, high: float) -> Adapter:
+    """The hostile FMU's adapter, its one fault parameter k searched over [low, high]."""
+    return parse_adapter(tomllib.loads(ADAPTER.format(low=low, high=high)), "hostile.toml")
+
+
+def measurement(fmu: Path, k: float) -> Measurement:
+    """1 s of the FMU's y at 100 Hz at ``k``, with a little noise (seed 0)."""
+    with FmuPlant(fmu, ("y",), sample_rate_hz=100.0) as plant:
+        y = plant.simulate({"k": k}, 1.0, 0.0)[0]
+    return Measurement({"y": y + np.random.default_rng(0).normal(0, 0.01, y.size)}, 100.0)

@@ -2,39 +2,25 @@
 
 import dataclasses
 import os
-import tempfile
 import time
-import tomllib
 
 import numpy as np
 import pytest
-from conftest import children, inspected
+from conftest import inspected
 from fmus import hostile
+from fmus.hostile import adapter, measurement
 
 from pydiag.core.errors import EstimationError, PlantError
-from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import build_problem
-from pydiag.fit.problem import ProblemObjective
 from pydiag.fmu.isolation import IsolatedPool
 from pydiag.fmu.plant import FmuPlant
-from pydiag.model.adapter import parse_adapter
 
 
 @pytest.fixture(scope="module")
 def hostile_fmu(tmp_path_factory):
     pytest.importorskip("pythonfmu")
     return inspected(hostile.build(tmp_path_factory.mktemp("hostile")))
-
-
-def adapter(low, high):
-    return parse_adapter(tomllib.loads(hostile.ADAPTER.format(low=low, high=high)), "hostile.toml")
-
-
-def measurement(fmu, k):
-    with FmuPlant(fmu, ("y",), sample_rate_hz=100.0) as plant:
-        y = plant.simulate({"k": k}, 1.0, 0.0)[0]
-    return Measurement({"y": y + np.random.default_rng(0).normal(0, 0.01, y.size)}, 100.0)
 
 
 def test_plant_reports_nan_and_failed_step(hostile_fmu):
@@ -125,44 +111,6 @@ def test_a_swarm_whose_every_simulation_fails_stops_with_the_first_cause(hostile
     with pytest.raises(EstimationError, match=r"every simulation of the plant failed \(4 "
                                               r"evaluations\); the first failed with: .*SIGSEGV"):
         est.fit(problem)
-
-
-def _open_fds() -> set[str]:
-    return set(os.listdir("/proc/self/fd"))
-
-
-@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="needs Linux /proc")
-def test_two_thousand_hostile_evaluations_leave_no_process_folder_or_descriptor(
-        hostile_fmu, tmp_path, monkeypatch):
-    """Crashes, NaN outputs, failed steps and hangs mixed into 2,000 evaluations: every good
-    one gives its answer, every bad one is counted, and nothing of the pool remains."""
-    scratch = tmp_path / "tmp"
-    scratch.mkdir()
-    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
-    rng = np.random.default_rng(7)
-    kind = rng.choice(["good", "fail", "nan", "crash", "hang"], size=2000,
-                      p=[0.82, 0.06, 0.05, 0.06, 0.01])
-    kind[0] = "good"
-    k = np.select([kind == "good", kind == "fail", kind == "nan", kind == "crash"],
-                  [rng.uniform(0.1, 1.0, 2000), 1.1, 1.3, 1.8], 1.5)
-    problem = build_problem(str(hostile_fmu), measurement(hostile_fmu, 0.4), adapter(0.0, 2.0))
-    objective = ProblemObjective(problem)
-    before_fds, before_children = _open_fds(), children(os.getpid())
-    with IsolatedPool(objective, n_workers=2, timeout_s=0.5,
-                      max_consecutive_failures=10_000) as pool:
-        results = pool.map(k[:, None])
-    good = kind == "good"
-    assert all((r is not None) == g for r, g in zip(results, good))
-    assert pool.failures.count == int((~good).sum())
-    reasons = " | ".join(pool.failures.reasons)
-    assert all(s in reasons for s in ("SIGSEGV", "exceeded 0.5 s", "non-finite", "failed"))
-    # the good ones are right: the residual is smallest at the true k
-    errors = {round(float(x), 3): float(np.linalg.norm(r)) for x, r in zip(k, results)
-              if r is not None}
-    assert abs(min(errors, key=errors.get) - 0.4) < 0.01
-    assert children(os.getpid()) == before_children
-    assert _open_fds() == before_fds
-    assert not any(scratch.iterdir()), list(scratch.rglob("*"))[:10]
 
 
 class SlowToLoad:
