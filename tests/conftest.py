@@ -2,6 +2,7 @@ import json
 import shutil
 import subprocess
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -70,22 +71,43 @@ def _made_once(tmp_path_factory, name: str, make):
         return pickle.loads(shared.read_bytes())
 
 
-@pytest.fixture(scope="session")
-def truth_records(tmp_path_factory):
-    """The independent simulator's noise-free records of no effect (``"none"``) and of each
-    hidden effect alone (tests/truth_fits.py), made once a test run."""
-    from truth_fits import HIDDEN, truth_clean_records
-    return _made_once(tmp_path_factory, "truth_records",
-                      lambda: truth_clean_records({"none": {}, **HIDDEN}))
+class _SimulatedOnFirstUse(Mapping):
+    """The independent simulator's records by key, each group of them that shares one
+    integration (truth_fits.record_groups) made the first time one of them is asked for,
+    once a test run (:func:`_made_once`): a worker makes only those its tests use, and
+    waits only for a group another is making."""
+
+    def __init__(self, tmp_path_factory, magnitudes: dict[str, dict]):
+        from truth_fits import record_groups
+        self._tmp, self._magnitudes = tmp_path_factory, magnitudes
+        self._group = {key: keys for keys in record_groups(magnitudes) for key in keys}
+        self._made: dict = {}
+
+    def __getitem__(self, key: str):
+        if key not in self._made:
+            import hashlib
+
+            from truth_fits import clean_records
+            keys = self._group[key]
+            name = "truth_" + hashlib.sha1(",".join(keys).encode()).hexdigest()[:12]
+            self._made.update(_made_once(self._tmp, name,
+                                         lambda: clean_records(self._magnitudes, keys)))
+        return self._made[key]
+
+    def __iter__(self):
+        return iter(self._magnitudes)
+
+    def __len__(self) -> int:
+        return len(self._magnitudes)
 
 
 @pytest.fixture(scope="session")
-def combined_records(tmp_path_factory):
-    """The independent simulator's noise-free records of two effects at once and of a
-    tilted gear (truth_fits.COMBINED), made once a test run."""
-    from truth_fits import COMBINED, truth_clean_records
-    return _made_once(tmp_path_factory, "combined_records",
-                      lambda: truth_clean_records(COMBINED))
+def truth_records(tmp_path_factory) -> Mapping:
+    """The independent simulator's noise-free records at the rig's 25 Hz, by key
+    (truth_fits.RECORDS: ``"none"``, each hidden effect alone, the combinations), each
+    simulated when a test first asks for it."""
+    from truth_fits import RECORDS
+    return _SimulatedOnFirstUse(tmp_path_factory, RECORDS)
 
 
 @pytest.fixture(scope="session")

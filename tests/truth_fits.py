@@ -146,24 +146,25 @@ ENVELOPE_BAND = (1575.0, ENVELOPE_TOP * RATE_HZ)
 
 #: The combinations the end-to-end tests make (tests/e2e), each effect's magnitudes.
 COMBINED = {"two": TWO_HIDDEN, "tilt": TILT, "runout_ripple": RUNOUT_AND_RIPPLE}
+#: Every record the tests make of the simulator at 25 Hz: none, each hidden effect alone,
+#: the combinations.
+RECORDS = {"none": {}, **HIDDEN, **COMBINED}
 
 
-def truth_clean_records(magnitudes: dict[str, dict]) -> dict:
-    """The simulator's noise-free records of ``magnitudes`` (a record's key -> the
-    simulator's effects, ``{}`` for none) at :data:`RATE_HZ` over :data:`PERIODS` periods:
-    one integration a core, those that differ only in what the sensor sees made by one."""
-    import os
-    from concurrent.futures import ProcessPoolExecutor
-    gears = {key: TruthGear().with_effects(**effects) for key, effects in magnitudes.items()}
+def record_groups(magnitudes: dict[str, dict]) -> list[tuple[str, ...]]:
+    """The keys of ``magnitudes`` (a record's key -> the simulator's effects, ``{}`` for
+    none) in groups that differ only in what the sensor sees: one integration a group."""
     groups: dict = {}
-    for key, g in gears.items():
-        groups.setdefault(dynamics_of(g), []).append(key)
-    with ProcessPoolExecutor(min(len(groups), os.cpu_count() or 1)) as pool:
-        made = {tuple(keys): pool.submit(simulate_many, [gears[k] for k in keys],
-                                         PERIODS * TruthGear().period_s, RATE_HZ)
-                for keys in groups.values()}
-        return {k: clean for keys, future in made.items()
-                for k, clean in zip(keys, future.result())}
+    for key, effects in magnitudes.items():
+        groups.setdefault(dynamics_of(TruthGear().with_effects(**effects)), []).append(key)
+    return [tuple(keys) for keys in groups.values()]
+
+
+def clean_records(magnitudes: dict[str, dict], keys: tuple[str, ...]) -> dict:
+    """The simulator's noise-free records of ``keys`` (one of :func:`record_groups`) at
+    :data:`RATE_HZ` over :data:`PERIODS` periods, by key."""
+    gears = [TruthGear().with_effects(**magnitudes[k]) for k in keys]
+    return dict(zip(keys, simulate_many(gears, PERIODS * TruthGear().period_s, RATE_HZ)))
 
 
 def validated(gear_fmu, clean: dict, seed: int, effect_fmu_of,

@@ -106,7 +106,6 @@ def test_a_shafts_orders_are_found_where_every_one_is_the_other_shafts_too(gear_
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [5, 6])
 def test_a_tilted_gear_is_found_and_a_runout_is_not_taken_for_one(gear_fmu, truth_records,
-                                                                   combined_records,
                                                                    effect_fmu_of, seed):
     """The stiffness modulated once per gear turn lowers the held-out error of a tilted
     gear's record far beyond noise and explains its lines; on a runout's record it is not
@@ -114,8 +113,7 @@ def test_a_tilted_gear_is_found_and_a_runout_is_not_taken_for_one(gear_fmu, trut
     modulation = EFFECTS["mesh_modulation"]
     verdicts = {}
     for record_of in ("tilt", "gear_eccentricity"):
-        m = record(TruthGear(), PERIODS, seed, RATE_HZ,
-                   clean={**truth_records, **combined_records}[record_of])
+        m = record(TruthGear(), PERIODS, seed, RATE_HZ, clean=truth_records[record_of])
         problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS,
                                 operating_point=OPERATING_POINT)
         verdicts[record_of] = held_out(problem, compare(problem, FaultEstimator(**FAST)),
@@ -359,13 +357,13 @@ def test_cli_loop_adds_the_other_shaft_and_the_error_falls(gear_fmu, truth_recor
     assert float(runs[1][4]) < float(runs[0][4])
 
 
-def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, combined_records,
+def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, truth_records,
                                                          effect_fmu_of, tmp_path):
     """A gear runout and the motor shaft's orders in one record: the loop accepts the
     runout (the most confident), fits it, then finds the motor shaft confident on the
     model of both (written from the two effects' files), accepts it, and nothing is
     confident after; the error falls at each step."""
-    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=combined_records["two"])
+    m = record(TruthGear(), PERIODS, 5, RATE_HZ, clean=truth_records["two"])
     problem = build_problem(str(gear_fmu), m, parameters=BASE_PARAMETERS, operating_point={
         **OPERATING_POINT, "other_shaft_ratio": TruthGear().effects.other_shaft_ratio})
     steps, final = accumulate(problem, effect_fmu_of,
@@ -381,7 +379,7 @@ def test_two_hidden_effects_are_found_one_after_the_other(gear_fmu, combined_rec
     assert steps[2].comparison.parameters["ecc_gear"] == pytest.approx(10e-6, rel=0.2)
 
 
-def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(combined_records,
+def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(truth_records,
                                                                          tmp_path):
     """`pydiag loop --machine pair.toml` without --fmu, the pair as a machine of one stage
     (no sensors described: the record's acc and disp channels are the model's outputs of
@@ -393,7 +391,7 @@ def test_the_loop_on_a_machine_of_one_stage_finds_a_runout_then_a_ripple(combine
     effect is fitted on the bins the comparison scores)."""
     meas, machine, out = tmp_path / "m.csv", tmp_path / "pair.toml", tmp_path / "loop.json"
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
-                                   clean=combined_records["runout_ripple"]))
+                                   clean=truth_records["runout_ripple"]))
     machine.write_text('name = "pair"\ninput_rpm = 1500\n[[stages]]\npinion_teeth = 14\n'
                        'gear_teeth = 21\n')
     res = run_cli("-m", "pydiag", "loop", "--machine", str(machine), "--measurement",
@@ -455,13 +453,13 @@ def test_a_bearing_the_machine_file_places_is_judged_by_the_machines_model(
 
 
 def test_cli_loop_stops_at_its_step_limit_and_says_what_was_confident(gear_fmu,
-                                                                      combined_records,
+                                                                      truth_records,
                                                                       tmp_path):
     """pydiag loop, one comparison allowed: the runout is confident on the two-effect
     record, not accepted, and the line and the JSON say so."""
     meas, out = tmp_path / "m.csv", tmp_path / "loop.json"
     write_measurement(meas, record(TruthGear(), PERIODS, 5, RATE_HZ,
-                                   clean=combined_records["two"]))
+                                   clean=truth_records["two"]))
     res = run_cli("-m", "pydiag", "loop", "--fmu", str(gear_fmu), "--measurement", str(meas),
                   "--other-shaft", "29/17", "--gain", "fixed", "--max-steps", "1", "--json",
                   str(out), "--particles", "4", "--iterations", "3", "--polish", "20",
