@@ -10,10 +10,10 @@ against its own fit: what the healthy model lacks on a healthy record. With ``--
 instead, each effect the machine file gives a stage (the healthy model's own, say from
 ``pydiag loop`` on the baseline) is polished on half A from the baseline's values and
 scored on half B against them: whether the record asks for other values of it. With
-``--repeat``, the first record is a healthy repeat of the baseline: its rise of each
-(stage, effect) is the healthy spread, and every later record's rise is printed over
-``K_SPREAD`` times it (never below a z of 1), as the component judge holds a change to
-``K_SPREAD`` times its healthy spread. Prints, per record, every (stage, effect) tried
+``--repeat`` (with ``--own``), the first record is a healthy repeat of the baseline: its
+rise of each (stage, effect) is the healthy spread every later record's rise is held to
+(:func:`pydiag.loop.own_changes.own_changes`: over ``K_SPREAD`` times it, never below a z
+of 1), and a change beyond it is named on the part its largest change sizes. Prints, per record, every (stage, effect) tried
 with its held-out z, the baseline's own, the rise, whether it is confident and what it
 fitted, the largest rise first. Usage:
 
@@ -86,7 +86,7 @@ def main() -> int:
     from pydiag.loop.effect_fit import EFFECT_REFIT
     from pydiag.loop.machine_discover import discover_machine, refit_own_effects
     from pydiag.loop.machine_fit import compare_machine
-    from pydiag.gear.stage_judge import K_SPREAD
+    from pydiag.loop.own_changes import own_changes
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
           f"{platform.python_version()}; {Path(a.machine).name}, {a.channel}, "
           f"{a.rpm:g} rpm nominal; baseline {Path(a.baseline).name}")
@@ -101,7 +101,8 @@ def main() -> int:
         print(f"healthy fit: error {healthy.fit_error:.3f}, "
               f"{time.perf_counter() - started:.0f} s", flush=True)
         own: dict[tuple[str, str], float] = {}  # the baseline's z against its own fit
-        spread: dict[tuple[str, str], float] = {}  # the healthy repeat's rise (--repeat)
+        baseline_rows: list = []
+        repeat_rows: list | None = None  # the healthy repeat's (--repeat)
         for index, record in enumerate([a.baseline] + a.records):
             started = time.perf_counter()
             if index:  # the baseline's is read and built once, above
@@ -124,28 +125,34 @@ def main() -> int:
             took = time.perf_counter() - started
             print(f"\n## {Path(record).name}: healthy model's error {base.error:.3f}, "
                   f"{took:.0f} s", flush=True)
-            print("| stage | effect | z | baseline's z | rise | x thr | confident | explained | "
-                  "error base -> with | fitted |")
-            print("|---|---|---|---|---|---|---|---|---|---|")
+            print("| stage | effect | z | baseline's z | rise | x thr | named | confident | "
+                  "explained | error base -> with | fitted |")
+            print("|---|---|---|---|---|---|---|---|---|---|---|")
             rows = [d for d in found if d.held_out is not None and d.held_out.tried]
             if index == 0:
                 own = {(d.stage, d.effect): d.held_out.z for d in rows}
+                baseline_rows = found
             elif index == 1 and a.repeat:
-                spread = {(d.stage, d.effect): abs(d.held_out.z - own.get((d.stage, d.effect),
-                                                                         0.0)) for d in rows}
+                repeat_rows = found
+            changes = {(c.stage, c.effect): c for c in own_changes(
+                args.machine_description, model, values, found, baseline_rows, repeat_rows)
+                } if a.own else {}
             rows.sort(key=lambda d: -(d.held_out.z - own.get((d.stage, d.effect), 0.0)))
             stages = [s.name for s in args.machine_description.stages]
             for d in rows:
                 h = d.held_out
                 zb = own.get((d.stage, d.effect), float("nan"))
-                held_to = K_SPREAD * max(spread.get((d.stage, d.effect), float("nan")), 1.0)
+                change = changes.get((d.stage, d.effect))
+                margin = change.margin if change else float("nan")
+                named = ", ".join(change.components) if change and change.changed else ""
                 names = {p.name for p in
                          model.stage_effects(stages.index(d.stage))[d.effect].parameters}
                 fitted = ", ".join(f"{k.split('.', 1)[1]} "
                                    + (f"{values[k]:.3g} -> " if a.own else "") + f"{v:.3g}"
                                    for k, v in h.parameters.items() if k in names)
                 print(f"| {d.stage} | {d.effect} | {h.z:.1f} | {zb:.1f} | {h.z - zb:+.1f} | "
-                      f"{(h.z - zb) / held_to:.2f} | {'yes' if d.confident else ''} | {h.explained:.2f} | "
+                      f"{margin:.2f} | {named} | {'yes' if d.confident else ''} | "
+                      f"{h.explained:.2f} | "
                       f"{h.error_base:.3f} -> {h.error_effect:.3f} | {fitted} |", flush=True)
     return 0
 

@@ -17,6 +17,12 @@ from pydiag.signal.ripple import Ripple
 from pydiag.signal.transfer import HousingMode
 
 
+#: The parts of a stage an effect's parameters can size a fault of (``Effect.parts``).
+PINION, GEAR, MESH, PINION_SHAFT, GEAR_SHAFT, PINION_BEARING = (
+    "pinion", "gear", "mesh", "pinion shaft", "gear shaft", "pinion bearing")
+PARTS = (PINION, GEAR, MESH, PINION_SHAFT, GEAR_SHAFT, PINION_BEARING)
+
+
 @dataclass(frozen=True)
 class Effect:
     """One catalogue effect (docs/effects.md).
@@ -69,6 +75,10 @@ class Effect:
             model's periodic response without it (:mod:`pydiag.signal.ripple`) rather
             than simulated over the whole record (its ``model`` has it inside, which a
             test holds it to)
+        parts: (parameter, part) of each parameter that sizes a fault of one part of its
+            stage (:data:`PARTS`: the pinion, the gear, both through their mesh, a shaft,
+            the pinion shaft's bearing); a phase or a frequency sizes none, and an
+            effect of the drive or the sensor (a ripple, a housing mode) has none
     """
 
     key: str
@@ -88,6 +98,7 @@ class Effect:
     missing: Callable[[GearKinematics | None], str] | None = None
     transfer: HousingMode | None = None
     ripple: Ripple | None = None
+    parts: tuple[tuple[str, str], ...] = ()
 
     @property
     def own_fmu(self) -> bool:
@@ -117,6 +128,15 @@ class Effect:
         """Why ``kinematics`` do not say where its lines are, or "" when they do."""
         missing = self.missing(kinematics) if self.missing else ""
         return f"its lines are not known without {missing}" if missing else ""
+
+    def part_of(self, changes: dict[str, float]) -> str | None:
+        """The part whose fault the effect's ``changes`` (parameter -> its change) size:
+        that of the sizing parameter that changed most (its :attr:`parts`; amplitudes of
+        one effect share their units); None when none of them changed, or for an effect
+        that sizes no part."""
+        sized = [(abs(changes[name]), part) for name, part in self.parts if name in changes]
+        size, part = max(sized, key=lambda s: s[0], default=(0.0, None))
+        return part if size > 0 else None
 
     def neutral_values(self) -> dict[str, float]:
         """FMU values that switch the effect off (each parameter's value nearest zero,

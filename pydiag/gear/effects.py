@@ -8,7 +8,8 @@ from __future__ import annotations
 import math
 
 from pydiag.core.parameters import Parameter
-from pydiag.gear.effect import Effect
+from pydiag.gear.effect import (GEAR, MESH, PINION, PINION_BEARING, PINION_SHAFT, GEAR_SHAFT,
+                               Effect)
 from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPPLE_HZ,
                                     MAX_SHAFT_ORDER_M_S2, MAX_STRIKE_M_S2, MAX_SWING,
                                     backlash, ball_defect, bearing_missing, bearing_values,
@@ -28,27 +29,28 @@ EFFECTS = {e.key: e for e in (
            "even harmonics of the mesh stiffness wave (contact ratio, tip relief)",
            (Parameter("k2", 0.0, 0.3), Parameter("phi2", -math.pi, math.pi, periodic=True),
             Parameter("k4", 0.0, 0.1), Parameter("phi4", -math.pi, math.pi, periodic=True)),
-           stiffness_shape, in_base=True),
+           stiffness_shape, in_base=True, parts=(("k2", MESH), ("k4", MESH))),
     Effect("pinion_tooth_softening", "GearDiag.GearPair",
            "the faulty pinion tooth is also softer over its contact, most while alone in it "
            "(a crack, a chip)",
            (Parameter("d_f", 0.0, 0.6), Parameter("eps_c", 1.1, 1.9),
             Parameter("q_c", 1.0, 5.0), Parameter("r_c", 0.02, 0.5)),
-           second_pinion_tooth, in_base=True),
+           second_pinion_tooth, in_base=True, parts=(("d_f", PINION),)),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
-           (Parameter("ecc_gear", 0.0, 50e-6),), gear_eccentricity),
+           (Parameter("ecc_gear", 0.0, 50e-6),), gear_eccentricity,
+           parts=(("ecc_gear", GEAR),)),
     # an eccentric or tilted gear: the load along the face varies around the turn
     Effect("mesh_modulation", "GearDiag.Effects.MeshModulation",
            "the mesh stiffness modulated once per turn of each shaft (a gear mounted tilted "
            "or eccentric: the face width in contact varies around its turn)",
            (Parameter("m_p", 0.0, 0.5), Parameter("phi_p", -math.pi, math.pi, periodic=True),
             Parameter("m_g", 0.0, 0.5), Parameter("phi_g", -math.pi, math.pi, periodic=True)),
-           mesh_modulation),
+           mesh_modulation, parts=(("m_p", PINION), ("m_g", GEAR))),
     # a softer tooth over its contact; which tooth is unknown (one turn of the index, the
     # bump moving smoothly with it; the hint sets the turn from the wheel's teeth)
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
            (Parameter("d_g", 0.0, 0.6), Parameter("tooth_g", 0.0, 21.0, periodic=True)),
-           gear_tooth_fault, tooth_hint("tooth_g", "n_gear")),
+           gear_tooth_fault, tooth_hint("tooth_g", "n_gear"), parts=(("d_g", GEAR),)),
     # a second tooth is not tooth 0; its index is a whole tooth (step 1: each tooth is
     # searched by particles of its own; a smooth index stopped between teeth), counted the
     # shorter way from tooth 0 (the hint: tooth k and N - k are one pattern, reversed)
@@ -56,25 +58,27 @@ EFFECTS = {e.key: e for e in (
            "a second faulty pinion tooth",
            (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5, step=1.0)),
            second_pinion_tooth, tooth_hint("tooth2", "n_pinion", other_than_zero=True),
-           reshapes_base=True),
+           reshapes_base=True, parts=(("d_f2", PINION),)),
     # the teeth separate only where the dynamic deflection outgrows the static one (the mesh
     # at a resonance): the loss then reshapes the lines the base makes, which a base fit
     # without it bends to. Its transition is the teeth's surfaces coming into contact: from
     # a hard contact to the roughness of ground teeth (Ra 0.3 um). Wider, the factor is a
     # softening stiffness law over the whole deflection instead (RESULTS.md, changelog).
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
-           (Parameter("delta_c", 0.01e-6, 0.3e-6),), backlash, reshapes_base=True),
+           (Parameter("delta_c", 0.01e-6, 0.3e-6),), backlash, reshapes_base=True,
+           parts=(("delta_c", MESH),)),
     Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), family(("bpfo",)), synchronous=False,
            outputs=("acc",), envelope=True, affine=True, machine_values=bearing_values,
-           missing=bearing_missing),
+           missing=bearing_missing, parts=(("A_b", PINION_BEARING),)),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
             Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
            family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
-           machine_values=bearing_values, missing=bearing_missing),
+           machine_values=bearing_values, missing=bearing_missing,
+           parts=(("A_b", PINION_BEARING),)),
     # a spalled ball strikes both races once each a turn about its axis (2 x BSF, the
     # kinematic map's even BSF lines), the cage carrying it through the load zone
     Effect("bearing_ball", "GearDiag.Effects.BearingBall",
@@ -83,7 +87,8 @@ EFFECTS = {e.key: e for e in (
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
             Parameter("phi_cage", -math.pi, math.pi, periodic=True)),
            ball_defect, synchronous=False, outputs=("acc",), envelope=True,
-           machine_values=bearing_values, missing=bearing_missing),
+           machine_values=bearing_values, missing=bearing_missing,
+           parts=(("A_b", PINION_BEARING),)),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,
            ripple_hint("f_load"), synchronous=False,
@@ -107,7 +112,7 @@ EFFECTS = {e.key: e for e in (
            "shaft's speed)",
            (Parameter("s_p", 0.0, MAX_SWING), Parameter("psi_p", -math.pi, math.pi, periodic=True),
             Parameter("s_g", 0.0, MAX_SWING), Parameter("psi_g", -math.pi, math.pi, periodic=True)),
-           shaft_swing, reshapes_base=True),
+           shaft_swing, reshapes_base=True, parts=(("s_p", PINION_SHAFT), ("s_g", GEAR_SHAFT))),
     # a shaft's unbalance, misalignment or looseness, seen at the sensor through its
     # bearings: one amplitude an order (the outputs are affine in all of them)
     Effect("pinion_shaft_orders", "GearDiag.Effects.PinionShaftOrders",
@@ -115,7 +120,8 @@ EFFECTS = {e.key: e for e in (
            "looseness)",
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
-           pinion_shaft, pinion_shaft_hint, outputs=("acc",), affine=True),
+           pinion_shaft, pinion_shaft_hint, outputs=("acc",), affine=True,
+           parts=tuple((f"A_s{k}", PINION_SHAFT) for k in range(1, SHAFT_ORDERS + 1))),
     # the same, of a shaft beyond the pair at a speed ratio the kinematics give: not
     # synchronous with the pair's period in general (a motor shaft at 29/17 of the pinion's)
     Effect("other_shaft_orders", "GearDiag.Effects.OtherShaftOrders",

@@ -69,9 +69,9 @@ def _free_start(effect: Effect, instance: str, top_hz: float) -> dict:
 
 def stage_effect(effect: Effect, instance: str, outputs: dict[str, str],
                  alone: bool = False) -> Effect:
-    """``effect`` as the stage ``instance`` of a machine's model has it: its parameters, and
-    the values its hint, the kinematics and its free start give, named
-    ``<instance>.<name>``; the outputs it changes, those of the model's ``outputs`` (each
+    """``effect`` as the stage ``instance`` of a machine's model has it: its parameters (and
+    the parts they size), and the values its hint, the kinematics and its free start give,
+    named ``<instance>.<name>``; the outputs it changes, those of the model's ``outputs`` (each
     output's name and the quantity it measures: ``acc``, ``disp``) that measure them. A speed
     ripple (``Effect.ripple``) is read from the model's periodic response only on a stage
     ``alone`` in its machine, where it is the whole model's; on a stage among others its
@@ -87,6 +87,7 @@ def stage_effect(effect: Effect, instance: str, outputs: dict[str, str],
                                                        in outputs.items() if quantity == "acc"))
     return dataclasses.replace(
         effect, parameters=tuple(renamed(p) for p in effect.parameters), ripple=ripple,
+        parts=tuple((f"{instance}.{name}", part) for name, part in effect.parts),
         hint=None if effect.hint is None else functools.partial(_hint, effect, instance),
         machine_values=None if effect.machine_values is None else
         functools.partial(_machine_values, effect, instance),

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from pydiag.gear.effect import GEAR, PARTS, PINION
 from pydiag.gear.effects import EFFECTS
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -68,3 +69,23 @@ def test_each_range_searched_lies_where_the_model_holds(key):
         assert declared["min"] <= p.low < p.high <= declared.get("max", math.inf), \
             (key, p.name, declared, (p.low, p.high))
 
+
+
+def test_every_fault_of_a_part_is_sized_by_its_own_amplitudes():
+    """An effect that is a fault of a part of its stage names the parameters that size it
+    (its own, none a phase); a ripple, a housing mode and another shaft's orders size no
+    part of the stage (the drive, the sensor's path, a shaft beyond the pair)."""
+    for key, effect in EFFECTS.items():
+        names = {p.name: p for p in effect.parameters}
+        assert all(name in names and not names[name].periodic and part in PARTS
+                   for name, part in effect.parts), key
+    without = {k for k, e in EFFECTS.items() if not e.parts}
+    assert without == {"load_fluctuation", "speed_fluctuation", "other_shaft_orders",
+                       "housing_sensor"}
+
+
+def test_the_part_is_that_of_the_sizing_parameter_that_changed_most():
+    modulation = EFFECTS["mesh_modulation"]
+    assert modulation.part_of({"m_p": 0.24, "m_g": -0.04, "phi_g": 3.0}) == PINION
+    assert modulation.part_of({"m_p": 0.01, "m_g": -0.05}) == GEAR
+    assert EFFECTS["speed_fluctuation"].part_of({"ds": 0.01}) is None
