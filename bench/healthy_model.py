@@ -13,9 +13,9 @@ scored on half B against them: whether the record asks for other values of it. W
 ``--repeat`` (with ``--own``), the first record is a healthy repeat of the baseline: its
 rise of each (stage, effect) is the healthy spread every later record's rise is held to
 (:func:`pydiag.loop.own_changes.own_changes`: over ``K_SPREAD`` times it, never below a z
-of 1), and a change beyond it is named on the part its largest change sizes. Prints, per record, every (stage, effect) tried
-with its held-out z, the baseline's own, the rise, whether it is confident and what it
-fitted, the largest rise first. Usage:
+of 1), and a change beyond it is named on the part its largest change sizes. Prints, per
+record, every (stage, effect) tried with its held-out z, the baseline's own, the rise,
+whether it is confident and what it fitted, the largest rise first. Usage:
 
     .venv/bin/python bench/healthy_model.py BASELINE RECORD [RECORD ...]
         [--machine examples/phm09_spur.toml] [--channel ch1] [--rpm 1800] [--effects K,K] [--refit]

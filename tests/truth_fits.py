@@ -93,14 +93,16 @@ def envelope_margin_db(noisy: np.ndarray, sample_rate_hz: float, band_hz: tuple[
     return float(f), float(20 * np.log10(a / floor))
 
 
+#: The records' length, in the simulator's periods at 25 Hz (2.4 s), and their rate, Hz.
 PERIODS = 20
+RATE_HZ = 10_000.0
 #: The noise seeds every hidden effect, and its absence, is checked on in make test
 #: (tests/evidence).
 SEEDS = (5, 6, 7)
-RATE_HZ = 10_000.0
+#: compare's swarm in the tests and the bench (held-out tries take the command's own).
 FAST = dict(n_particles=10, iterations=8, polish_evaluations=100, polish_starts=2)
-#: The hidden effects these tests check at the rig's 25 Hz, made the simulator's way: those
-#: of bench/independent_truth.py (RESULTS.md section 9). The simulator's backlash is not
+#: The hidden effects the tests check at the rig's 25 Hz, made the simulator's way: the
+#: rows of bench/independent_truth.py (RESULTS.md section 9). The simulator's backlash is not
 #: among them: its teeth separate only with the mesh at its resonance (truth.RESONANCE).
 HIDDEN = {"gear_eccentricity": dict(gear_runout_m=10e-6),
           "gear_tooth_fault": dict(gear_tooth_loss=0.4),
@@ -142,8 +144,6 @@ STRIKES = {"bearing_outer_race": TruthGear().bpfo_hz, "bearing_inner_race": Trut
            "bearing_ball": 2 * TruthGear().ball_spin_hz}
 #: The band whose envelope held-out validation scores the bearings on, at 10 kHz.
 ENVELOPE_BAND = (1575.0, ENVELOPE_TOP * RATE_HZ)
-
-
 #: The combinations the end-to-end tests make (tests/e2e), each effect's magnitudes.
 COMBINED = {"two": TWO_HIDDEN, "tilt": TILT, "runout_ripple": RUNOUT_AND_RIPPLE}
 #: Every record the tests make of the simulator at 25 Hz: none, each hidden effect alone,

@@ -11,7 +11,8 @@ import pytest
 from conftest import ROOT, run_cli
 from truth.gear_sim import TruthGear, pinion_speed_hz, record, simulate_many
 from truth_fits import (BASE_PARAMETERS, BEARING, ENVELOPE_BAND, FAST, HIDDEN, OPERATING_POINT,
-                        PERIODS, RATE_HZ, RESONANCE_RATE_HZ, RESONANCE_TOP_HZ, STRIKES, assert_one_confident_suggestion, line_margin_db, resonance_clean,
+                        PERIODS, RATE_HZ, RESONANCE_RATE_HZ, RESONANCE_TOP_HZ, STRIKES,
+                        assert_one_confident_suggestion, line_margin_db, resonance_clean,
                         resonance_problem, validated)
 
 from pydiag.fit.affine import fit_affine
