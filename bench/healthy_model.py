@@ -135,8 +135,8 @@ def main() -> int:
             elif index == 1 and a.repeat:
                 repeat_rows = found
             changes = {(c.stage, c.effect): c for c in own_changes(
-                args.machine_description, model, values, found, baseline_rows, repeat_rows)
-                } if a.own else {}
+                args.machine_description, model, values, found, baseline_rows,
+                [repeat_rows] if repeat_rows is not None else [])} if a.own else {}
             rows.sort(key=lambda d: -(d.held_out.z - own.get((d.stage, d.effect), 0.0)))
             stages = [s.name for s in args.machine_description.stages]
             for d in rows:

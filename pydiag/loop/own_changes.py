@@ -9,8 +9,8 @@ record's periods from the healthy values and scored on the other half
 record asks for other values. On a real machine two healthy records differ by more than a
 record's halves do (a z of a healthy repeat is not standard normal: bench/CHANGELOG.md), so
 a record's rise of z over the baseline's own is held, as a component's change is
-(:mod:`pydiag.gear.component_judge`), to ``K_SPREAD`` times a healthy repeat's rise of the
-same effect on the same stage, never below a z of 1. The effect's sizing parameter that
+(:mod:`pydiag.gear.component_judge`), to ``K_SPREAD`` times the healthy repeats' rise of
+the same effect on the same stage (their RMS), never below a z of 1. The effect's sizing parameter that
 changed most names the part (:attr:`pydiag.gear.effect.Effect.parts`): a deeper pinion
 modulation is its pinion, larger orders of the pinion shaft are that shaft.
 """
@@ -38,9 +38,9 @@ class OwnChange:
     """One effect of a stage of the healthy model as a record asks for it.
 
     ``z``: its held-out z on the record, ``baseline_z`` on the baseline, against the
-    healthy fit; ``repeat_rise``: a healthy repeat's rise of it over the baseline's (None:
-    no repeat); ``margin``: the record's rise over ``K_SPREAD`` times the repeat's (never
-    below :data:`MIN_RISE`; nan without a repeat); ``values``: each sizing parameter's
+    healthy fit; ``repeat_rise``: the RMS of the healthy repeats' rises of it over the
+    baseline's (None: no repeat); ``margin``: the record's rise over ``K_SPREAD`` times
+    that (never below :data:`MIN_RISE`; nan without a repeat); ``values``: each sizing parameter's
     healthy value and the record's fitted one, named as the model names them; ``part``:
     the part of the stage its largest change sizes, ``components``: the machine's
     components that part is (a mesh: both gears)."""
@@ -63,17 +63,17 @@ class OwnChange:
 
 def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float],
                 record: Sequence[Suggestion], baseline: Sequence[Suggestion],
-                repeat: Sequence[Suggestion] | None = None,
+                repeats: Sequence[Sequence[Suggestion]] = (),
                 k_spread: float = K_SPREAD) -> list[OwnChange]:
     """Every effect tried on ``record`` (rows of
     :func:`~pydiag.loop.machine_discover.refit_own_effects` against the ``healthy`` fit's
     values) as an :class:`OwnChange`, beside the same rows of the ``baseline`` the healthy
-    model was fitted to and of a healthy ``repeat`` of it; the largest margin first. A
-    row not tried (nothing of it to fit) is left out."""
-    def z_of(rows: Sequence[Suggestion] | None) -> dict[tuple[str, str], float]:
-        return {(r.stage, r.effect): r.held_out.z for r in rows or ()
+    model was fitted to and of each healthy repeat of it (``repeats``); the largest margin
+    first. A row not tried (nothing of it to fit) is left out."""
+    def z_of(rows: Sequence[Suggestion]) -> dict[tuple[str, str], float]:
+        return {(r.stage, r.effect): r.held_out.z for r in rows
                 if r.held_out is not None and r.held_out.tried}
-    own, again = z_of(baseline), z_of(repeat)
+    own, again = z_of(baseline), [z_of(rows) for rows in repeats]
     stages = [s.name for s in machine.stages]
     out = []
     for row in record:
@@ -84,7 +84,8 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
         k = stages.index(row.stage)
         effect = model.stage_effects(k)[row.effect]
         base_z = own.get(key, 0.0)
-        repeat_rise = again[key] - base_z if key in again else None
+        rises = [z[key] - base_z for z in again if key in z]
+        repeat_rise = math.sqrt(sum(r * r for r in rises) / len(rises)) if rises else None
         held_to = k_spread * max(abs(repeat_rise), MIN_RISE) if repeat_rise is not None \
             else math.nan
         values = {name: (healthy[name], h.parameters[name]) for name, _ in effect.parts

@@ -42,7 +42,7 @@ def test_a_rise_beyond_four_repeats_names_the_part_that_changed(spur):
                   **{out + "m_p": 0.499, out + "m_g": 0.444, out + "phi_p": 1.25}),
               row("input stage", "pinion_shaft_orders", 30.0,
                   **{inp + "A_s1": 123.0, inp + "A_s2": 23.6})]
-    found = own_changes(machine, model, healthy, record, baseline, repeat)
+    found = own_changes(machine, model, healthy, record, baseline, [repeat])
     modulation, orders = found  # the largest margin first
     assert modulation.effect == "mesh_modulation" and modulation.changed
     assert modulation.margin == pytest.approx(84.0 / (4 * 11.0))
@@ -53,7 +53,7 @@ def test_a_rise_beyond_four_repeats_names_the_part_that_changed(spur):
     assert not orders.changed  # 29.1 over 4 x 10.9
     # the repeat against itself: no rise; without a repeat, no verdict
     assert not any(c.changed for c in own_changes(machine, model, healthy, repeat, baseline,
-                                                  repeat))
+                                                  [repeat]))
     alone = own_changes(machine, model, healthy, record, baseline)
     assert all(math.isnan(c.margin) and not c.changed and c.repeat_rise is None for c in alone)
 
@@ -64,8 +64,13 @@ def test_a_repeat_that_barely_moves_is_held_to_a_z_of_one(spur):
     record = [row("output stage", "mesh_modulation", 4.5)]
     for repeat_z, changed in ((0.2, True), (1.2, False)):
         c, = own_changes(machine, model, {}, record, base,
-                         [row("output stage", "mesh_modulation", repeat_z)])
+                         [[row("output stage", "mesh_modulation", repeat_z)]])
         assert c.changed is changed and c.part is None  # no values: no part
+    # two repeats: held to their RMS rise, sqrt((1^2 + 1.2^2) / 2) = 1.105
+    c, = own_changes(machine, model, {}, record, base,
+                     [[row("output stage", "mesh_modulation", z)] for z in (1.0, -1.2)])
+    assert c.repeat_rise == pytest.approx(1.1045, abs=1e-4)
+    assert c.margin == pytest.approx(4.5 / (4 * 1.1045), abs=1e-3) and c.changed
 
 
 def test_a_part_is_the_machines_components():
