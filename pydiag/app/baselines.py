@@ -11,6 +11,7 @@ from pathlib import Path
 from pydiag.app.formatting import format_kept_baselines
 from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
+from pydiag.core.measurement import Measurement
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
 from pydiag.gear.speed import SpeedSettings
@@ -29,17 +30,7 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
     copy would narrow the healthy spread); the record among its own baselines is said."""
     record = _same_file(getattr(args, "measurement", None))
     asked = list(args.baseline or [])
-    files: dict[str, str] = {}  # one file, one baseline
-    for path in asked:
-        if path == KEPT:
-            continue
-        if _same_file(path) in files:
-            _warn(args, f"--baseline {path} is given twice; it counts once")
-            continue
-        if _same_file(path) == record:
-            _warn(args, f"--baseline {path} is the record itself: it is judged against "
-                  "itself there")
-        files[_same_file(path)] = path
+    files = _files(args, warn=True)
     out = [machine_record(read_input(args, path), machine, speed, args.input_hz)
            for path in files.values()]
     if asked.count(KEPT) > 1:
@@ -47,6 +38,32 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
     if KEPT in asked:
         out += _kept(args, machine, set(files), record)
     return out
+
+
+def healthy_measurements(args) -> list[Measurement]:
+    """The --baseline files' records themselves (not those kept: the history keeps what
+    the indicators need, not the record), each once, in the order given: what the
+    machine's healthy model is fitted to (the first) and held to (the others)."""
+    return [read_input(args, path) for path in _files(args, warn=False).values()]
+
+
+def _files(args, warn: bool) -> dict[str, str]:
+    """The --baseline files but ``kept``, each once (by the file it is), in the order
+    given; ``warn``: say a file given twice, or the record itself."""
+    record = _same_file(getattr(args, "measurement", None))
+    files: dict[str, str] = {}  # one file, one baseline
+    for path in args.baseline or []:
+        if path == KEPT:
+            continue
+        if _same_file(path) in files:
+            if warn:
+                _warn(args, f"--baseline {path} is given twice; it counts once")
+            continue
+        if _same_file(path) == record and warn:
+            _warn(args, f"--baseline {path} is the record itself: it is judged against "
+                  "itself there")
+        files[_same_file(path)] = path
+    return files
 
 
 def _kept(args, machine: Machine, files: set[str], record: str | None) -> list[MachineRecord]:

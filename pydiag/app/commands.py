@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.baselines import baseline_records
+from pydiag.app.baselines import baseline_records, healthy_measurements
 from pydiag.app.models import machine_models
 from pydiag.app.formatting import (format_facts, format_indicators,
                                    format_machine_report,
@@ -215,8 +215,10 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
             result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
                                       estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
+            healthy = healthy_measurements(args) if machine.effects else []
             result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
-                                            args.input_hz, settings, estimator, baselines)
+                                            args.input_hz, settings, estimator, baselines,
+                                            healthy)
     finally:
         close()
     print(format_machine_report(result))

@@ -6,7 +6,7 @@ import math
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.speed import SpeedEstimate
-from pydiag.gear.component import ComponentVerdict
+from pydiag.gear.component import ComponentVerdict, ModelChange
 from pydiag.gear.machine_report import MachineReport
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.diagnose.diagnosis import Diagnosis
@@ -195,6 +195,7 @@ def format_machine_report(report: MachineReport) -> str:
     if report.fitted:
         lines += _fit_rows(report)
     lines += format_components(report.components)
+    lines += format_model_changes(report.model_changes)
     lines += ["", f"severity   : {report.severity_scale}"]
     if report.baselines:
         lines.append(f"baselines  : {', '.join(report.baselines)} (healthy spread "
@@ -277,14 +278,39 @@ def format_components(judged: tuple[ComponentVerdict, ...]) -> list[str]:
     judged by over its threshold, and why."""
     if not judged:
         return []
-    lines = ["", f"{'component':<30}{'kind':<9}{'shaft':<10}{'state':<12}{'x thr':>7}  why"]
+    name = max(30, *(len(v.component.name) + 2 for v in judged))
+    shaft = max(10, *(len(v.component.shaft) + 2 for v in judged))
+    lines = ["", f"{'component':<{name}}{'kind':<9}{'shaft':<{shaft}}{'state':<12}{'x thr':>7}"
+             "  why"]
     for v in judged:
         c = v.component
         margin = "-" if v.margin is None or v.margin != v.margin else f"{v.margin:.2f}"
-        lines.append(f"{c.name:<30}{c.kind:<9}{c.shaft:<10}{v.state:<12}{margin:>7}  {v.reason}")
+        lines.append(f"{c.name:<{name}}{c.kind:<9}{c.shaft:<{shaft}}{v.state:<12}{margin:>7}"
+                     f"  {v.reason}")
     lines.append("x thr      : the largest change of a component's measures over its "
                  f"threshold ({K_SPREAD:g} x how much it varies between healthy records): "
                  "above 1, beyond it")
+    return lines
+
+
+def format_model_changes(changes: tuple[ModelChange, ...]) -> list[str]:
+    """One line an effect of the machine's healthy model, changed ones first: its stage,
+    the part it names, how far its rise of held-out z is over the healthy repeats', and
+    each sizing parameter from its healthy value to the record's."""
+    if not changes:
+        return []
+    stage = max(16, *(len(c.stage) + 2 for c in changes))
+    lines = ["", f"{'the model':<30}{'stage':<{stage}}{'state':<12}{'x thr':>7}"
+             "  what it fitted"]
+    for c in changes:
+        margin = "-" if c.margin != c.margin else f"{c.margin:.2f}"
+        state = "changed" if c.changed else "good"
+        sized = ", ".join(f"{name.split('.', 1)[-1]} {a:.3g} -> {b:.3g}"
+                          for name, (a, b) in c.values.items())
+        named = f": {', '.join(c.components)}" if c.changed and c.components else ""
+        lines.append(f"{c.effect:<30}{c.stage:<{stage}}{state:<12}{margin:>7}  {sized}{named}")
+    lines.append("x thr      : an effect of the healthy model refitted held out, its rise of "
+                 f"z over the baseline's against {K_SPREAD:g} x the healthy repeats' rise")
     return lines
 
 

@@ -44,6 +44,7 @@ from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.diagnose.diagnosis import Diagnosis, classified, diagnose
 from pydiag.loop.machine_fit import fit_machine, machine_problem, stage_view
 from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.own_changes import healthy_changes
 from pydiag.model.adapter import Adapter
 
 #: Without baselines, a shaft is the suspect when its sidebands carry this many times the
@@ -190,13 +191,19 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            machine: Machine, input_hz: float,
                            settings: ProblemSettings = ProblemSettings(),
                            estimator: FaultEstimator | None = None,
-                           baselines: Sequence[MachineRecord] = ()) -> MachineReport:
+                           baselines: Sequence[MachineRecord] = (),
+                           healthy: Sequence[Measurement] = ()) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
     too), each stage classified from its own fault parameters and tested on the lines
     seen from its own shafts (:func:`~pydiag.loop.machine_fit.stage_view`), and judged
-    against ``baselines`` as :func:`diagnose_machine` judges."""
+    against ``baselines`` as :func:`diagnose_machine` judges. With two or more ``healthy``
+    records (the baselines' measurements) and a machine file that gives its stages
+    effects (the healthy model, say from ``pydiag loop`` on the first), the model's own
+    verdict too (:func:`~pydiag.loop.own_changes.healthy_changes`: that model fitted to
+    the first, each of its effects refitted held out on every record, the record's change
+    held to the others')."""
     estimator = estimator or FaultEstimator()
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
@@ -211,7 +218,14 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
         stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
                                                                    prefix),
                                       _verdict(judged, k), prefix))
-    return dataclasses.replace(judged, stages=tuple(stages))
+    changes: list = []
+    if machine.effects and len(healthy) >= 2:
+        first, *others = [machine_problem(fmu_path, model, m, machine,
+                                          machine_speed(m, machine, input_hz,
+                                                        settings.tracking), settings)
+                          for m in healthy]
+        changes = healthy_changes(machine, model, first, others, [problem], estimator)[0]
+    return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes))
 
 
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,

@@ -60,6 +60,44 @@ class ComponentVerdict:
                 "reason": self.reason}
 
 
+@dataclass(frozen=True)
+class ModelChange:
+    """The model's verdict on one effect of a stage of the machine's healthy model: what a
+    record asks of it, held out (:mod:`pydiag.loop.own_changes`).
+
+    ``z``: its held-out z on the record, ``baseline_z`` on the baseline, against the
+    healthy fit; ``repeat_rise``: the RMS of the healthy repeats' rises of it over the
+    baseline's (None: no repeat); ``margin``: the record's rise over the number of times
+    that it is held to (nan without a repeat); ``values``: each sizing parameter's healthy
+    value and the record's fitted one, named as the model names them; ``part``: the part
+    of the stage its largest change sizes, ``components``: the machine's components that
+    part is (a mesh: both gears)."""
+
+    stage: str
+    effect: str
+    z: float
+    baseline_z: float
+    repeat_rise: float | None
+    margin: float
+    values: dict[str, tuple[float, float]]
+    part: str | None
+    components: tuple[str, ...]
+
+    @property
+    def changed(self) -> bool:
+        """Whether the record asks for other values beyond the healthy repeats' spread."""
+        return self.margin > 1.0
+
+    def to_dict(self) -> dict:
+        return {"stage": self.stage, "effect": self.effect, "changed": self.changed,
+                "margin": finite_or_none(self.margin), "z": finite_or_none(self.z),
+                "baseline_z": finite_or_none(self.baseline_z),
+                "repeat_rise": finite_or_none(self.repeat_rise),
+                "values": {k: [finite_or_none(a), finite_or_none(b)]
+                           for k, (a, b) in self.values.items()},
+                "part": self.part, "components": list(self.components)}
+
+
 def components(machine: Machine) -> tuple[Component, ...]:
     """Every gear (stage by stage, pinion then gear), bearing and shaft of ``machine``."""
     gears = []

@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from pydiag.core.measurement import Measurement
-from pydiag.gear.component import ComponentVerdict
+from pydiag.gear.component import ComponentVerdict, ModelChange
 from pydiag.gear.component_judge import judge_components
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, finite_or_none, machine_record
@@ -112,7 +112,9 @@ class MachineReport:
     """A record through its machine: the input ``speed``; with baselines, every shaft's TSA
     (``record``), the healthy spread, every shaft's swing against theirs and every
     component judged (:mod:`pydiag.gear.component_judge`); ``stages``, each judged or
-    fitted (none: neither)."""
+    fitted (none: neither); ``model_changes``: the model's verdict on each effect of the
+    machine's healthy model, fitted to the first baseline and held to the others
+    (:mod:`pydiag.loop.own_changes`), the largest first."""
 
     machine: Machine
     speed: SpeedEstimate
@@ -122,6 +124,7 @@ class MachineReport:
     components: tuple[ComponentVerdict, ...] = ()
     record: MachineRecord | None = None
     swing_change_db: dict[str, float | None] = field(default_factory=dict)
+    model_changes: tuple[ModelChange, ...] = ()
 
     @property
     def fitted(self) -> bool:
@@ -156,6 +159,7 @@ class MachineReport:
         return {"machine": self.machine.name, **self.speed.to_dict(), "shafts": shafts,
                 "stages": [s.to_dict() for s in self.stages],
                 "components": [c.to_dict() for c in self.components],
+                "model_changes": [c.to_dict() for c in self.model_changes],
                 "baselines": list(self.baselines), "healthy_spread_db": self.spread_db,
                 "severity_scale": self.severity_scale}
 

@@ -17,14 +17,20 @@ modulation is its pinion, larger orders of the pinion shaft are that shaft.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
-from pydiag.gear.component import components
+from pydiag.fit.estimator import FaultEstimator
+from pydiag.fit.problem import FitProblem
+from pydiag.gear.component import ModelChange, components
 from pydiag.gear.effect import GEAR, MESH, PINION, PINION_BEARING, PINION_SHAFT, GEAR_SHAFT
 from pydiag.gear.machine import Machine
 from pydiag.gear.stage_judge import K_SPREAD
+from pydiag.loop.compare import compare
+from pydiag.loop.effect_fit import EFFECT_REFIT
+from pydiag.loop.machine_discover import refit_own_effects
+from pydiag.loop.machine_fit import compare_machine
 from pydiag.loop.machine_model import MachineModel
 from pydiag.loop.results import Suggestion
 
@@ -33,41 +39,38 @@ from pydiag.loop.results import Suggestion
 MIN_RISE = 1.0
 
 
-@dataclass(frozen=True)
-class OwnChange:
-    """One effect of a stage of the healthy model as a record asks for it.
+def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
+                    repeats: Sequence[FitProblem], records: Sequence[FitProblem],
+                    estimator: FaultEstimator,
+                    effect_estimator: FaultEstimator | None = None
+                    ) -> list[list[ModelChange]]:
+    """The model's verdict on each of ``records`` (:func:`own_changes`): the machine's
+    model with the effects its file gives (the healthy model) fitted once to the
+    ``baseline`` problem (:func:`~pydiag.loop.machine_fit.compare_machine`, from the file's
+    ``[start]``), then each of its effects refitted held out (``effect_estimator``, default
+    :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`'s) on the baseline, on each healthy
+    repeat and on each record, seen through that fit. Every problem is of the same model
+    (:func:`~pydiag.loop.machine_fit.machine_problem`)."""
+    refit = effect_estimator or FaultEstimator(**EFFECT_REFIT)
+    healthy = compare_machine(baseline, model, estimator, refit,
+                              start=machine.fit_start())
 
-    ``z``: its held-out z on the record, ``baseline_z`` on the baseline, against the
-    healthy fit; ``repeat_rise``: the RMS of the healthy repeats' rises of it over the
-    baseline's (None: no repeat); ``margin``: the record's rise over ``K_SPREAD`` times
-    that (never below :data:`MIN_RISE`; nan without a repeat); ``values``: each sizing parameter's
-    healthy value and the record's fitted one, named as the model names them; ``part``:
-    the part of the stage its largest change sizes, ``components``: the machine's
-    components that part is (a mesh: both gears)."""
-
-    stage: str
-    effect: str
-    z: float
-    baseline_z: float
-    repeat_rise: float | None
-    margin: float
-    values: dict[str, tuple[float, float]]
-    part: str | None
-    components: tuple[str, ...]
-
-    @property
-    def changed(self) -> bool:
-        """Whether the record asks for other values beyond the healthy repeat's spread."""
-        return self.margin > 1.0
+    def rows(problem: FitProblem) -> list[Suggestion]:
+        seen = compare(problem, None, healthy.false_alarm_rate, parameters=healthy.parameters)
+        return refit_own_effects(problem, machine, model,
+                                 dataclasses.replace(seen, fit_error=seen.error), refit)
+    own, again = rows(baseline), [rows(problem) for problem in repeats]
+    return [own_changes(machine, model, healthy.parameters, rows(problem), own, again)
+            for problem in records]
 
 
 def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float],
                 record: Sequence[Suggestion], baseline: Sequence[Suggestion],
                 repeats: Sequence[Sequence[Suggestion]] = (),
-                k_spread: float = K_SPREAD) -> list[OwnChange]:
+                k_spread: float = K_SPREAD) -> list[ModelChange]:
     """Every effect tried on ``record`` (rows of
     :func:`~pydiag.loop.machine_discover.refit_own_effects` against the ``healthy`` fit's
-    values) as an :class:`OwnChange`, beside the same rows of the ``baseline`` the healthy
+    values) as a :class:`~pydiag.gear.component.ModelChange`, beside the same rows of the ``baseline`` the healthy
     model was fitted to and of each healthy repeat of it (``repeats``); the largest margin
     first. A row not tried (nothing of it to fit) is left out."""
     def z_of(rows: Sequence[Suggestion]) -> dict[tuple[str, str], float]:
@@ -91,7 +94,7 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
         values = {name: (healthy[name], h.parameters[name]) for name, _ in effect.parts
                   if name in healthy and name in h.parameters}
         part = effect.part_of({name: after - before for name, (before, after) in values.items()})
-        out.append(OwnChange(row.stage, row.effect, h.z, base_z, repeat_rise,
+        out.append(ModelChange(row.stage, row.effect, h.z, base_z, repeat_rise,
                              (h.z - base_z) / held_to, values, part,
                              part_components(machine, k, part)))
     return sorted(out, key=lambda c: -c.margin if math.isfinite(c.margin) else math.inf)
