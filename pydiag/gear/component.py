@@ -67,11 +67,11 @@ class ModelChange:
 
     ``z``: its held-out z on the record, ``baseline_z`` on the baseline, against the
     healthy fit; ``repeat_rise``: the RMS of the healthy repeats' rises of it over the
-    baseline's (None: no repeat); ``margin``: the record's rise over the number of times
-    that it is held to (nan without a repeat); ``values``: each sizing parameter's healthy
-    value and the record's fitted one, named as the model names them; ``part``: the part
-    of the stage its largest change sizes, ``components``: the machine's components that
-    part is (a mesh: both gears)."""
+    baseline's (None: no repeat); ``margin``: the record's rise over what it is held to
+    (``K_SPREAD`` times ``repeat_rise``, never below a z of 1; nan without a repeat);
+    ``values``: each sizing parameter's healthy value and the record's fitted one, named as
+    the model names them; ``part``: the part of the stage its largest change sizes,
+    ``components``: the machine's components that part is (a mesh: both gears)."""
 
     stage: str
     effect: str
