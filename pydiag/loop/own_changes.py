@@ -1,5 +1,5 @@
 """The model's verdict on what a machine's healthy model already has: which of its effects
-a record asks for at other values, held out, beside a healthy repeat of the baseline, and
+a record asks for at other values, held out, beside healthy repeats of the baseline, and
 the part of the machine that change sizes.
 
 The healthy model is the machine's own model fitted to a healthy baseline (with the
@@ -10,9 +10,9 @@ record asks for other values. On a real machine two healthy records differ by mo
 record's halves do (a z of a healthy repeat is not standard normal: bench/CHANGELOG.md), so
 a record's rise of z over the baseline's own is held, as a component's change is
 (:mod:`pydiag.gear.component_judge`), to ``K_SPREAD`` times the healthy repeats' rise of
-the same effect on the same stage (their RMS), never below a z of 1. The effect's sizing parameter that
-changed most names the part (:attr:`pydiag.gear.effect.Effect.parts`): a deeper pinion
-modulation is its pinion, larger orders of the pinion shaft are that shaft.
+the same effect on the same stage (their RMS), never below a z of 1. The effect's sizing
+parameter that changed most names the part (:attr:`pydiag.gear.effect.Effect.parts`): a
+deeper pinion modulation is its pinion, larger orders of the pinion shaft are that shaft.
 """
 
 from __future__ import annotations
@@ -70,9 +70,10 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
                 k_spread: float = K_SPREAD) -> list[ModelChange]:
     """Every effect tried on ``record`` (rows of
     :func:`~pydiag.loop.machine_discover.refit_own_effects` against the ``healthy`` fit's
-    values) as a :class:`~pydiag.gear.component.ModelChange`, beside the same rows of the ``baseline`` the healthy
-    model was fitted to and of each healthy repeat of it (``repeats``); the largest margin
-    first. A row not tried (nothing of it to fit) is left out."""
+    values) as a :class:`~pydiag.gear.component.ModelChange`, beside the same rows of the
+    ``baseline`` the healthy model was fitted to and of each healthy repeat of it
+    (``repeats``); the largest margin first. A row not tried (nothing of it to fit) is
+    left out."""
     def z_of(rows: Sequence[Suggestion]) -> dict[tuple[str, str], float]:
         return {(r.stage, r.effect): r.held_out.z for r in rows
                 if r.held_out is not None and r.held_out.tried}
@@ -89,14 +90,14 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
         base_z = own.get(key, 0.0)
         rises = [z[key] - base_z for z in again if key in z]
         repeat_rise = math.sqrt(sum(r * r for r in rises) / len(rises)) if rises else None
-        held_to = k_spread * max(abs(repeat_rise), MIN_RISE) if repeat_rise is not None \
+        held_to = k_spread * max(repeat_rise, MIN_RISE) if repeat_rise is not None \
             else math.nan
         values = {name: (healthy[name], h.parameters[name]) for name, _ in effect.parts
                   if name in healthy and name in h.parameters}
         part = effect.part_of({name: after - before for name, (before, after) in values.items()})
         out.append(ModelChange(row.stage, row.effect, h.z, base_z, repeat_rise,
-                             (h.z - base_z) / held_to, values, part,
-                             part_components(machine, k, part)))
+                               (h.z - base_z) / held_to, values, part,
+                               part_components(machine, k, part)))
     return sorted(out, key=lambda c: -c.margin if math.isfinite(c.margin) else math.inf)
 
 
