@@ -182,7 +182,9 @@ def build_parser() -> argparse.ArgumentParser:
     _library_args(p)
     p.add_argument("--baseline", metavar="FILE|kept", action="append",
                    help="with --machine: a record of the machine in a known healthy state, "
-                   "every stage judged against it (repeat for more)" + KEPT_HELP)
+                   "every stage judged against it (repeat for more; with a machine file "
+                   "that has effects, the first is the healthy model's record and the "
+                   "others its repeats)" + KEPT_HELP)
     _history_arg(p)
     p.add_argument("--json", help="write the result as JSON here")
     _force(p)
