@@ -208,6 +208,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     settings = problem_settings(args)
     baselines = baseline_records(args, machine, settings.tracking)
     model = None if args.fmu else machine_models(args)(machine)
+    healthy = healthy_measurements(args) if model is not None and machine.effects else []
     update, close = progress_bar(args.quiet)
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
@@ -215,7 +216,6 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
             result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
                                       estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
-            healthy = healthy_measurements(args) if machine.effects else []
             result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
                                             args.input_hz, settings, estimator, baselines,
                                             healthy)
@@ -224,6 +224,11 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     print(format_machine_report(result))
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
+    if model is not None and machine.effects and args.baseline and len(healthy) < 2:
+        print("pydiag diagnose: warning: the model's verdict on the machine file's effects "
+              "needs two --baseline files (the healthy model's record, then a healthy "
+              f"repeat; kept baselines hold no record): {len(healthy)} given",
+              file=sys.stderr)
     if args.json:
         out = {**result.to_dict(), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
