@@ -25,7 +25,9 @@ def test_the_healthy_models_modulation_names_the_broken_output_gear(tmp_path):
     out = tmp_path / "out.json"
     r = run_cli("-m", "pydiag", "diagnose", "--machine", str(HEALTHY_MODEL), "--measurement",
                 str(broken), *(a for h in healthy for a in ("--baseline", str(h))),
-                "--json", str(out), "--build-dir", str(tmp_path / "build"), "--quiet")
+                "--json", str(out), "--build-dir", str(tmp_path / "build"), "--quiet",
+                # a small swarm: the healthy fit polishes from the file's [start] too
+                "--particles", "8", "--iterations", "4", "--polish", "60")
     assert r.returncode == 0, r.stderr
     changes = json.loads(out.read_text())["model_changes"]
     assert {(c["stage"], c["effect"]) for c in changes} == {
