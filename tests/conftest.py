@@ -111,6 +111,15 @@ def truth_records(tmp_path_factory) -> Mapping:
 
 
 @pytest.fixture(scope="session")
+def hostile_fmu(tmp_path_factory) -> Path:
+    """tests/fmus/hostile.py's FMU (it crashes, hangs, returns NaN and fails its steps by
+    its parameter's range), built once a test session."""
+    pytest.importorskip("pythonfmu")
+    from fmus import hostile
+    return inspected(hostile.build(tmp_path_factory.mktemp("hostile")))
+
+
+@pytest.fixture(scope="session")
 def housing_fmu(effects_dir) -> Path:
     """GearDiag.Effects.HousingSensor's FMU: the housing mode in Modelica, which no fit uses
     (the effect is a transfer path: pydiag.signal.transfer) but tests hold it to."""

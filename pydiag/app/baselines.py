@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from pydiag.app.formatting import format_kept_baselines
@@ -22,17 +23,20 @@ from pydiag.loop import history
 KEPT = "kept"
 
 
-def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[MachineRecord]:
+def baseline_records(args, machine: Machine, speed: SpeedSettings,
+                     read: Mapping[str, Measurement] | None = None) -> list[MachineRecord]:
     """The --baseline records as the machine sees them (their speed and every shaft's TSA),
     read and made once; ``kept``: those kept for the machine in the history at the
     record's operating point (:func:`~pydiag.gear.comparable.at_speed`). Each baseline
     counts once, however often it is given or whether it is given and kept too (a second
-    copy would narrow the healthy spread); the record among its own baselines is said."""
+    copy would narrow the healthy spread); the record among its own baselines is said.
+    ``read``: files already read (:func:`healthy_measurements`), by the path given."""
     record = _same_file(getattr(args, "measurement", None))
     asked = list(args.baseline or [])
     files = _files(args, warn=True)
-    out = [machine_record(read_input(args, path), machine, speed, args.input_hz)
-           for path in files.values()]
+    read = read or {}
+    out = [machine_record(read[path] if path in read else read_input(args, path), machine,
+                          speed, args.input_hz) for path in files.values()]
     if asked.count(KEPT) > 1:
         _warn(args, "--baseline kept is given twice; the kept baselines count once")
     if KEPT in asked:
@@ -40,11 +44,12 @@ def baseline_records(args, machine: Machine, speed: SpeedSettings) -> list[Machi
     return out
 
 
-def healthy_measurements(args) -> list[Measurement]:
+def healthy_measurements(args) -> dict[str, Measurement]:
     """The --baseline files' records themselves (not those kept: the history keeps what
-    the indicators need, not the record), each once, in the order given: what the
-    machine's healthy model is fitted to (the first) and held to (the others)."""
-    return [read_input(args, path) for path in _files(args, warn=False).values()]
+    the indicators need, not the record), each once, by the path given, in the order
+    given: what the machine's healthy model is fitted to (the first) and held to (the
+    others)."""
+    return {path: read_input(args, path) for path in _files(args, warn=False).values()}
 
 
 def _files(args, warn: bool) -> dict[str, str]:

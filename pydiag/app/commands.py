@@ -206,9 +206,10 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     """diagnose --machine stage by stage (:func:`_staged`): every stage fitted, judged
     against the baselines when there are some."""
     settings = problem_settings(args)
-    baselines = baseline_records(args, machine, settings.tracking)
+    # the healthy model's records, read once for it and for the baselines' indicators
+    healthy = healthy_measurements(args) if not args.fmu and machine.effects else {}
+    baselines = baseline_records(args, machine, settings.tracking, healthy)
     model = None if args.fmu else machine_models(args)(machine)
-    healthy = healthy_measurements(args) if model is not None and machine.effects else []
     update, close = progress_bar(args.quiet)
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
@@ -218,7 +219,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
         else:  # the machine's own model, every stage at once
             result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
                                             args.input_hz, settings, estimator, baselines,
-                                            healthy)
+                                            list(healthy.values()))
     finally:
         close()
     print(format_machine_report(result))

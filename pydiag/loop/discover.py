@@ -210,9 +210,9 @@ def _in_worker(function: Callable, args: tuple):
     the executor would otherwise keep the worker for its next task."""
     try:
         return function(*args)
-    except BaseException as err:
-        if isinstance(err, Exception):
-            raise
+    except Exception:
+        raise
+    except BaseException:
         os._exit(143)
 
 

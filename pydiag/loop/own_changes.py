@@ -79,6 +79,7 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
                 if r.held_out is not None and r.held_out.tried}
     own, again = z_of(baseline), [z_of(rows) for rows in repeats]
     stages = [s.name for s in machine.stages]
+    catalogue: dict[int, dict] = {}  # each stage's effects as the model names them
     out = []
     for row in record:
         h = row.held_out
@@ -86,7 +87,9 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
             continue
         key = (row.stage, row.effect)
         k = stages.index(row.stage)
-        effect = model.stage_effects(k)[row.effect]
+        if k not in catalogue:
+            catalogue[k] = model.stage_effects(k)
+        effect = catalogue[k][row.effect]
         base_z = own.get(key, 0.0)
         rises = [z[key] - base_z for z in again if key in z]
         repeat_rise = math.sqrt(sum(r * r for r in rises) / len(rises)) if rises else None

@@ -7,19 +7,12 @@ import tempfile
 
 import numpy as np
 import pytest
-from conftest import children, inspected
-from fmus import hostile
+from conftest import children
 from fmus.hostile import adapter, measurement
 
 from pydiag.fit.build import build_problem
 from pydiag.fit.problem import ProblemObjective
 from pydiag.fmu.isolation import IsolatedPool
-
-
-@pytest.fixture(scope="module")
-def hostile_fmu(tmp_path_factory):
-    pytest.importorskip("pythonfmu")
-    return inspected(hostile.build(tmp_path_factory.mktemp("hostile")))
 
 
 def _open_fds() -> set[str]:

@@ -7,7 +7,6 @@ import time
 import numpy as np
 import pytest
 from conftest import inspected
-from fmus import hostile
 from fmus.hostile import adapter, measurement
 
 from pydiag.core.errors import EstimationError, PlantError
@@ -15,12 +14,6 @@ from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import build_problem
 from pydiag.fmu.isolation import IsolatedPool
 from pydiag.fmu.plant import FmuPlant
-
-
-@pytest.fixture(scope="module")
-def hostile_fmu(tmp_path_factory):
-    pytest.importorskip("pythonfmu")
-    return inspected(hostile.build(tmp_path_factory.mktemp("hostile")))
 
 
 def test_plant_reports_nan_and_failed_step(hostile_fmu):
