@@ -9,6 +9,15 @@ Pipeline (one module each):
 """
 
 from fmu_build.errors import ModelicaBuildError
-from fmu_build.build import build_fmu
 
 __all__ = ["ModelicaBuildError", "build_fmu"]
+
+
+def __getattr__(name: str):
+    """``build_fmu``, imported on first use: CasADi and rumoca load then, not with the
+    error types (every process that runs an FMU imports those, and a forked worker copies
+    what its parent loaded)."""
+    if name == "build_fmu":
+        from fmu_build.build import build_fmu
+        return build_fmu
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -41,8 +41,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Callable
 
+import fmu_build
 from fmu_build import ModelicaBuildError as BuildError
-from fmu_build import build_fmu
 
 from pydiag.core.errors import PydiagError, UsageError
 from pydiag.core.termination import deferred, stop_pool
@@ -96,7 +96,7 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> 
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(f".{out.stem}.{os.getpid()}.fmu")  # renamed when whole
         try:
-            build_fmu(model_file(effect, modelica_root), effect.model, partial)
+            fmu_build.build_fmu(model_file(effect, modelica_root), effect.model, partial)
             os.replace(partial, out)
         finally:
             partial.unlink(missing_ok=True)

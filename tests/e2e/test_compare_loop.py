@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from conftest import GEARPAIR_MO, ROOT, inspected, run_cli
 
+import fmu_build
 from fmu_build import build_fmu
 from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
@@ -216,7 +217,7 @@ def test_discover_makes_a_row_of_an_effect_that_cannot_be_built_trying_once(
         if model.endswith("Backlash"):
             raise ModelicaBuildError("equation is nonlinear in its only unknown z", "Backlash.mo:6")
         return build_fmu(source, model, out)
-    monkeypatch.setattr(d, "build_fmu", build)
+    monkeypatch.setattr(fmu_build, "build_fmu", build)
     problem = problem_of(gear_fmu, record(effect_fmus["gear_eccentricity"], periods=10))
     _, found = d.discover(problem, FaultEstimator(**FAST),
                           effects=["gear_eccentricity", "backlash"], build_dir=tmp_path,
