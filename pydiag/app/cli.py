@@ -185,6 +185,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "every stage judged against it (repeat for more; with a machine file "
                    "that has effects, the first is the healthy model's record and the "
                    "others its repeats)" + KEPT_HELP)
+    p.add_argument("--lacking", type=effect_list, help="with that healthy model: effects it "
+                   "lacks, tried on every stage too (comma-separated keys; minutes each)")
     _history_arg(p)
     p.add_argument("--json", help="write the result as JSON here")
     _force(p)

@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.baselines import baseline_records, healthy_measurements
+from pydiag.app.baselines import KEPT, baseline_records, healthy_measurements
 from pydiag.app.models import machine_models
 from pydiag.app.formatting import (format_facts, format_indicators,
                                    format_machine_report,
@@ -35,6 +35,7 @@ from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop.compose import BuiltModel
+from pydiag.loop.machine_discover import check_effects
 from pydiag.loop.machine_model import SPEED_PARAMETER, MachineModel
 from pydiag.model import regress
 from pydiag.diagnose.diagnosis import Diagnosis, diagnose
@@ -173,6 +174,11 @@ def cmd_diagnose(args) -> int:
     if args.fmu is None and args.adapter:
         raise UsageError("--adapter describes an FMU of your own: give it with --fmu (the "
                          "machine's own model needs none)")
+    if args.lacking and (args.fmu or not machine.effects
+                         or len([b for b in args.baseline or [] if b != KEPT]) < 2):
+        raise UsageError("--lacking tries effects against the machine's healthy model: give "
+                         "--machine a file with effects (no --fmu) and two --baseline files")
+    check_effects(args.lacking)
     m = read_input(args)
     if _staged(args):
         return _diagnose_stages(args, machine, m)
@@ -209,7 +215,8 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     # the healthy model's records, read once for it and for the baselines' indicators
     healthy = healthy_measurements(args) if not args.fmu and machine.effects else {}
     baselines = baseline_records(args, machine, settings.tracking, healthy)
-    model = None if args.fmu else machine_models(args)(machine)
+    machines = None if args.fmu else machine_models(args)
+    model = None if machines is None else machines(machine)
     update, close = progress_bar(args.quiet)
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
@@ -217,9 +224,10 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
             result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
                                       estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
-            result = diagnose_machine_model(str(model[1].fmu), model[0], m, machine,
-                                            args.input_hz, settings, estimator, baselines,
-                                            list(healthy.values()))
+            result = diagnose_machine_model(
+                str(model[1].fmu), model[0], m, machine, args.input_hz, settings, estimator,
+                baselines, list(healthy.values()), args.lacking or (),
+                lambda with_one: str(machines(with_one)[1].fmu))
     finally:
         close()
     print(format_machine_report(result))

@@ -6,7 +6,7 @@ import math
 
 from pydiag.gear.indicators import INDICATORS, IndicatorReport
 from pydiag.gear.speed import SpeedEstimate
-from pydiag.gear.component import ComponentVerdict, ModelChange
+from pydiag.gear.component import BY_INDICATORS, ComponentVerdict, ModelChange
 from pydiag.gear.machine_report import MachineReport
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.diagnose.diagnosis import Diagnosis
@@ -274,22 +274,26 @@ def _fit_rows(report: MachineReport) -> list[str]:
 
 
 def format_components(judged: tuple[ComponentVerdict, ...]) -> list[str]:
-    """One line a component, faulty ones first: what it is, its state, the change it was
-    judged by over its threshold, and why."""
+    """One line a component, faulty ones first: what it is, its state, who judged it (the
+    indicators or the healthy model), the change it was judged by over its threshold, and
+    why."""
     if not judged:
         return []
     name = max(30, *(len(v.component.name) + 2 for v in judged))
     shaft = max(10, *(len(v.component.shaft) + 2 for v in judged))
-    lines = ["", f"{'component':<{name}}{'kind':<9}{'shaft':<{shaft}}{'state':<12}{'x thr':>7}"
-             "  why"]
+    lines = ["", f"{'component':<{name}}{'kind':<9}{'shaft':<{shaft}}{'state':<12}"
+             f"{'judge':<12}{'x thr':>7}  why"]
     for v in judged:
         c = v.component
         margin = "-" if v.margin is None or v.margin != v.margin else f"{v.margin:.2f}"
-        lines.append(f"{c.name:<{name}}{c.kind:<9}{c.shaft:<{shaft}}{v.state:<12}{margin:>7}"
-                     f"  {v.reason}")
-    lines.append("x thr      : the largest change of a component's measures over its "
-                 f"threshold ({K_SPREAD:g} x how much it varies between healthy records): "
-                 "above 1, beyond it")
+        lines.append(f"{c.name:<{name}}{c.kind:<9}{c.shaft:<{shaft}}{v.state:<12}"
+                     f"{v.judge:<12}{margin:>7}  {v.reason}")
+    model = any(v.judge != BY_INDICATORS for v in judged)
+    lines.append("x thr      : " + ("the indicators' " if model else "the ")
+                 + "largest change of a component's measures over its threshold "
+                 f"({K_SPREAD:g} x how much it varies between healthy records)"
+                 + (", or the model's (its effect's rise of held-out z, below)" if model else "")
+                 + ": above 1, beyond it")
     return lines
 
 
@@ -304,10 +308,11 @@ def format_model_changes(changes: tuple[ModelChange, ...]) -> list[str]:
              "  what it fitted"]
     for c in changes:
         margin = "-" if c.margin != c.margin else f"{c.margin:.2f}"
-        state = "changed" if c.changed else "good"
+        state = c.fault if c.changed else "good"
         sized = ", ".join(f"{name.split('.', 1)[-1]} {a:.3g} -> {b:.3g}"
                           for name, (a, b) in c.values.items())
-        named = f": {', '.join(c.components)}" if c.changed and c.components else ""
+        named = (f": {', '.join(c.components)}" if c.changed and c.components else
+                 f" (its lines are {c.beaten_by}'s)" if c.beaten_by else "")
         lines.append(f"{c.effect:<30}{c.stage:<{stage}}{state:<12}{margin:>7}  {sized}{named}")
     lines.append("x thr      : an effect of the healthy model refitted held out, its rise of "
                  f"z over the baseline's against {K_SPREAD:g} x the healthy repeats' rise")

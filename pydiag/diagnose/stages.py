@@ -25,7 +25,7 @@ on every sensor it describes.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -33,6 +33,7 @@ from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.fit.problem import FitProblem
+from pydiag.gear.component import judged_by_model
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
@@ -192,7 +193,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            settings: ProblemSettings = ProblemSettings(),
                            estimator: FaultEstimator | None = None,
                            baselines: Sequence[MachineRecord] = (),
-                           healthy: Sequence[Measurement] = ()) -> MachineReport:
+                           healthy: Sequence[Measurement] = (), lacking: Sequence[str] = (),
+                           effect_model: Callable[[Machine], str] | None = None
+                           ) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
@@ -203,7 +206,10 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     effects (the healthy model, say from ``pydiag loop`` on the first), the model's own
     verdict too (:func:`~pydiag.loop.own_changes.healthy_changes`: that model fitted to
     the first, each of its effects refitted held out on every record, the record's change
-    held to the others')."""
+    held to the others'), which then says the state of every component an effect of that
+    model sizes (:func:`~pydiag.gear.component.judged_by_model`); ``lacking``: catalogue
+    effects the healthy model lacks, tried the same way on every stage, on the models
+    ``effect_model`` builds (the machine with one effect more)."""
     estimator = estimator or FaultEstimator()
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
@@ -224,8 +230,10 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                                           machine_speed(m, machine, input_hz,
                                                         settings.tracking), settings)
                           for m in healthy]
-        changes = healthy_changes(machine, model, first, others, [problem], estimator)[0]
-    return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes))
+        changes = healthy_changes(machine, model, first, others, [problem], estimator,
+                                  lacking=lacking, effect_model=effect_model)[0]
+    return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes),
+                               components=judged_by_model(judged.components, changes))
 
 
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,

@@ -28,8 +28,8 @@ from collections.abc import Sequence
 
 from pydiag.gear.bearing_lines import (COMB_FIRST, DEFECT_LINES, READ_LINES, SLIP_SHARE,
                                        defect_orders)
-from pydiag.gear.component import (GOOD, NOT_JUDGED, ComponentVerdict, components,
-                                   finite_mean, finite_rms)
+from pydiag.gear.component import ComponentVerdict, components, finite_mean, finite_rms
+from pydiag.gear.faults import GOOD, NOT_JUDGED
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.gear.stage_judge import K_SPREAD, healthy_differences

@@ -3,16 +3,21 @@ a judge says of one (:mod:`pydiag.gear.component_judge`, :mod:`pydiag.gear.beari
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from pydiag.gear.faults import CHANGED, GOOD, NOT_JUDGED
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import finite_or_none
 from pydiag.gear.stage_judge import MIN_SPREAD_DB
 
-GOOD, CHANGED, NOT_JUDGED = "good", "changed", "not judged"
+#: Who said a component's state (``ComponentVerdict.judge``): the indicators, the healthy
+#: model, or both, agreeing that it is faulty or that it is good (:func:`judged_by_model`).
+BY_INDICATORS, BY_MODEL, BY_BOTH = "indicators", "model", "both"
 
 
 @dataclass(frozen=True)
@@ -36,7 +41,9 @@ class ComponentVerdict:
     (``evidence``, dB, or FM4 for a gear's impulsiveness, and a size where one is read:
     ``swing_1x_deg``, the input's angle once a turn of a swinging gear's shaft, degrees of
     the input's turn), the threshold they were held
-    to (dB), and how sure: the largest change over that threshold (None: not judged)."""
+    to (dB), and how sure: the largest change over that threshold (None: not judged);
+    ``judge``: who said the state, the record's "indicators" against the baselines', the
+    machine's healthy "model", or "both" (:func:`judged_by_model`)."""
 
     component: Component
     state: str
@@ -44,6 +51,7 @@ class ComponentVerdict:
     threshold_db: float | None = None
     margin: float | None = None
     reason: str = ""
+    judge: str = BY_INDICATORS
 
     @property
     def faulty(self) -> bool:
@@ -57,7 +65,7 @@ class ComponentVerdict:
         return {**out, "state": self.state,
                 "evidence": {k: finite_or_none(v) for k, v in self.evidence.items()},
                 "threshold_db": self.threshold_db, "margin": finite_or_none(self.margin),
-                "reason": self.reason}
+                "reason": self.reason, "judge": self.judge}
 
 
 @dataclass(frozen=True)
@@ -71,7 +79,10 @@ class ModelChange:
     (``K_SPREAD`` times ``repeat_rise``, never below a z of 1; nan without a repeat);
     ``values``: each sizing parameter's healthy value and the record's fitted one, named as
     the model names them; ``part``: the part of the stage its largest change sizes,
-    ``components``: the machine's components that part is (a mesh: both gears)."""
+    ``components``: the machine's components that part is (a mesh: both gears);
+    ``fault``: the state it names them in when changed (``Effect.fault``); ``covers``:
+    every component a change of the effect could name (any of its parts); ``beaten_by``:
+    the larger change that claims its lines too, which names them instead ("" for none)."""
 
     stage: str
     effect: str
@@ -82,11 +93,15 @@ class ModelChange:
     values: dict[str, tuple[float, float]]
     part: str | None
     components: tuple[str, ...]
+    fault: str = CHANGED
+    covers: tuple[str, ...] = ()
+    beaten_by: str = ""
 
     @property
     def changed(self) -> bool:
-        """Whether the record asks for other values beyond the healthy repeats' spread."""
-        return self.margin > 1.0
+        """Whether the record asks for other values beyond the healthy repeats' spread,
+        and no larger change claims its lines (``beaten_by``)."""
+        return self.margin > 1.0 and not self.beaten_by
 
     def to_dict(self) -> dict:
         return {"stage": self.stage, "effect": self.effect, "changed": self.changed,
@@ -95,7 +110,60 @@ class ModelChange:
                 "repeat_rise": finite_or_none(self.repeat_rise),
                 "values": {k: [finite_or_none(a), finite_or_none(b)]
                            for k, (a, b) in self.values.items()},
-                "part": self.part, "components": list(self.components)}
+                "part": self.part, "components": list(self.components), "fault": self.fault,
+                "covers": list(self.covers), "beaten_by": self.beaten_by or None}
+
+
+def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
+                    ) -> tuple[ComponentVerdict, ...]:
+    """``verdicts`` (the indicators') with the healthy model's verdict where it has one.
+
+    A component an effect of the model could name (``ModelChange.covers``; the effect
+    held to healthy repeats) and a change names (the largest margin's) is in that change's
+    fault, or, where the model's word is only "changed", in the indicators' if they name
+    one (an eccentric gear by its shaft's swing). A covered component no change names
+    keeps the indicators' state: an effect of the healthy model covers a part without
+    sizing every fault of it (a shaft's orders with its 1x held off see no imbalance). The
+    judge is "both" where the two agree that it is faulty or that it is good. A component
+    no effect covers keeps the indicators' verdict: what the model lacks, it cannot judge.
+    The indicators' measures stay in the evidence, their word in the reason."""
+    held = [c for c in changes if math.isfinite(c.margin)]
+    out = []
+    for v in verdicts:
+        name = v.component.name
+        covering = [c for c in held if name in c.covers]
+        if not covering:
+            out.append(v)
+            continue
+        named = [c for c in covering if c.changed and name in c.components]
+        said = max(named or covering, key=lambda c: c.margin)
+        evidence = {**v.evidence, f"model {said.stage} {said.effect}": said.margin}
+        indicators = (f"the indicators: {v.state}" + (f" ({v.reason})" if v.reason else "")
+                      if v.state != GOOD else "")
+        if named:
+            sizes = ", ".join(f"{k.rsplit('.', 1)[-1]} {a:.3g} -> {b:.3g}"
+                              for k, (a, b) in said.values.items())
+            model = (f"the healthy model's {said.effect} on {said.stage} asks for other "
+                     f"values ({sizes}), {said.margin:.2f} x what the healthy repeats allow")
+            state = (v.state if said.fault == CHANGED and v.faulty and v.state != CHANGED
+                     else said.fault)
+            out.append(ComponentVerdict(v.component, state, evidence, v.threshold_db,
+                                        said.margin, "; ".join(filter(None, (model, indicators))),
+                                        BY_BOTH if v.faulty else BY_MODEL))
+            continue
+        model = (f"the healthy model's {said.effect} on {said.stage} "
+                 + ((f"names {', '.join(said.components)}" if said.components else
+                     "names no part: no parameter that sizes a fault grew")
+                    if said.changed else f"is within the healthy repeats ({said.margin:.2f} x)"))
+        if v.faulty:
+            out.append(dataclasses.replace(v, evidence=evidence,
+                                           reason=f"{v.reason}; {model}" if v.reason else model))
+        else:
+            out.append(ComponentVerdict(
+                v.component, GOOD, evidence, v.threshold_db,
+                None if said.changed else said.margin, model,
+                BY_BOTH if v.state == GOOD else BY_MODEL))
+    return tuple(sorted(out, key=lambda v: not v.faulty))
 
 
 def components(machine: Machine) -> tuple[Component, ...]:

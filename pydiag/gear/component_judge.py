@@ -43,18 +43,14 @@ from dataclasses import replace
 import numpy as np
 
 from pydiag.gear.bearing_judge import judge_bearings
-from pydiag.gear.component import (CHANGED, GOOD, NOT_JUDGED, ComponentVerdict, components,
-                                   finite_mean, finite_rms)
+from pydiag.gear.component import ComponentVerdict, components, finite_mean, finite_rms
+from pydiag.gear.faults import CHANGED, ECCENTRIC, GOOD, NOT_JUDGED, shaft_state
 from pydiag.gear.gear_sidebands import sideband_change
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import (SHAFT_ORDERS, SWING_ORDERS, MachineRecord,
                                             faster_shafts)
 from pydiag.gear.stage_judge import (K_SPREAD, StageVerdict, healthy_differences, knows_noise,
                                      synchronous_spread)
-
-#: A gear whose shaft swings once a turn (module docstring).
-ECCENTRIC = "eccentric"
-
 
 def _ratio_db(a: float, b: float) -> float:
     return 20 * math.log10(a / b) if a > 0 and b > 0 else math.nan
@@ -198,18 +194,6 @@ def _by_swing(machine: Machine, record: MachineRecord,
     return out
 
 
-def _shaft_state(rises: list[int]) -> str:
-    if not rises:
-        return GOOD
-    if len(rises) >= 3:
-        return "looseness"
-    if 1 in rises and 2 in rises:
-        return "bent"
-    if rises == [1]:
-        return "imbalance"
-    return CHANGED
-
-
 def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[MachineRecord],
             swings: Sequence[dict[int, tuple[float, float]] | None]) -> list[ComponentVerdict]:
     """Every shaft by its own orders (module docstring); ``swings``: each shaft's
@@ -235,7 +219,7 @@ def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[Machine
                            for ch, a in s.orders.items()]
             changes[k] = finite_mean(per_channel)
         rises = sorted(k for k, v in changes.items() if v > threshold)
-        state = _shaft_state(rises)
+        state = shaft_state(rises)
         biggest = max((abs(v) for v in changes.values() if math.isfinite(v)), default=math.nan)
         why = f"orders risen: {', '.join(f'{k}x' for k in rises)}" if rises else ""
         swung = _risen(swings[s.index]) if rises else {}

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Callable
 
 from pydiag.core.parameters import Parameter
+from pydiag.gear.faults import CHANGED
 from pydiag.gear.kinematic_map import KinematicLine
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.peaks import Peak
@@ -79,6 +80,11 @@ class Effect:
             stage (:data:`PARTS`: the pinion, the gear, both through their mesh, a shaft,
             the pinion shaft's bearing); a phase or a frequency sizes none, and an
             effect of the drive or the sensor (a ripple, a housing mode) has none
+        fault: the state (:mod:`pydiag.gear.faults`) of a part whose fault a record sizes
+            beyond the healthy model's: a word, or a rule of the :attr:`parts`'
+            parameters' values, (healthy, on the record) -> the word (a shaft's orders
+            that rose, a tooth's lost stiffness); "changed" where the effect does not
+            tell the fault
     """
 
     key: str
@@ -99,6 +105,7 @@ class Effect:
     transfer: HousingMode | None = None
     ripple: Ripple | None = None
     parts: tuple[tuple[str, str], ...] = ()
+    fault: str | Callable[[tuple[float, ...], tuple[float, ...]], str] = CHANGED
 
     @property
     def own_fmu(self) -> bool:
@@ -131,12 +138,23 @@ class Effect:
 
     def part_of(self, changes: dict[str, float]) -> str | None:
         """The part whose fault the effect's ``changes`` (parameter -> its change) size:
-        that of the sizing parameter that changed most (its :attr:`parts`; amplitudes of
-        one effect share their units); None when none of them changed, or for an effect
-        that sizes no part."""
-        sized = [(abs(changes[name]), part) for name, part in self.parts if name in changes]
+        that of the sizing parameter that grew most (its :attr:`parts`; amplitudes of one
+        effect share their units). Every sizing parameter is an amplitude a fault makes
+        larger (a deeper modulation, a softer tooth, a stronger strike, larger orders), so
+        one that fell names no fault: None when none grew, or for an effect that sizes no
+        part."""
+        sized = [(changes[name], part) for name, part in self.parts if name in changes]
         size, part = max(sized, key=lambda s: s[0], default=(0.0, None))
         return part if size > 0 else None
+
+    def fault_of(self, values: dict[str, tuple[float, float]]) -> str:
+        """The fault the effect names (:attr:`fault`) from ``values``: each sizing
+        parameter (:attr:`parts`) -> (healthy value, value on the record); those missing
+        are left out."""
+        if isinstance(self.fault, str):
+            return self.fault
+        sized = [values[name] for name, _ in self.parts if name in values]
+        return self.fault(tuple(a for a, _ in sized), tuple(b for _, b in sized))
 
     def neutral_values(self) -> dict[str, float]:
         """FMU values that switch the effect off (each parameter's value nearest zero,

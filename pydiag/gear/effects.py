@@ -19,6 +19,7 @@ from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPP
                                     other_shaft_values, pinion_shaft, pinion_shaft_hint,
                                     ripple_hint, second_pinion_tooth, shaft_swing,
                                     stiffness_shape, tooth_hint)
+from pydiag.gear.faults import BALL, ECCENTRIC, INNER, OUTER, model_shaft_state, tooth_state
 from pydiag.gear.kinematic_map import SHAFT_ORDERS
 from pydiag.signal.ripple import LoadRipple, SpeedRipple
 from pydiag.signal.transfer import HousingMode
@@ -35,10 +36,10 @@ EFFECTS = {e.key: e for e in (
            "(a crack, a chip)",
            (Parameter("d_f", 0.0, 0.6), Parameter("eps_c", 1.1, 1.9),
             Parameter("q_c", 1.0, 5.0), Parameter("r_c", 0.02, 0.5)),
-           second_pinion_tooth, in_base=True, parts=(("d_f", PINION),)),
+           second_pinion_tooth, in_base=True, parts=(("d_f", PINION),), fault=tooth_state),
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
            (Parameter("ecc_gear", 0.0, 50e-6),), gear_eccentricity,
-           parts=(("ecc_gear", GEAR),)),
+           parts=(("ecc_gear", GEAR),), fault=ECCENTRIC),
     # an eccentric or tilted gear: the load along the face varies around the turn
     Effect("mesh_modulation", "GearDiag.Effects.MeshModulation",
            "the mesh stiffness modulated once per turn of each shaft (a gear mounted tilted "
@@ -50,7 +51,7 @@ EFFECTS = {e.key: e for e in (
     # bump moving smoothly with it; the hint sets the turn from the wheel's teeth)
     Effect("gear_tooth_fault", "GearDiag.Effects.GearToothFault", "faulty tooth on the driven gear",
            (Parameter("d_g", 0.0, 0.6), Parameter("tooth_g", 0.0, 21.0, periodic=True)),
-           gear_tooth_fault, tooth_hint("tooth_g", "n_gear"), parts=(("d_g", GEAR),)),
+           gear_tooth_fault, tooth_hint("tooth_g", "n_gear"), parts=(("d_g", GEAR),), fault=tooth_state),
     # a second tooth is not tooth 0; its index is a whole tooth (step 1: each tooth is
     # searched by particles of its own; a smooth index stopped between teeth), counted the
     # shorter way from tooth 0 (the hint: tooth k and N - k are one pattern, reversed)
@@ -58,7 +59,7 @@ EFFECTS = {e.key: e for e in (
            "a second faulty pinion tooth",
            (Parameter("d_f2", 0.0, 0.6), Parameter("tooth2", 0.5, 13.5, step=1.0)),
            second_pinion_tooth, tooth_hint("tooth2", "n_pinion", other_than_zero=True),
-           reshapes_base=True, parts=(("d_f2", PINION),)),
+           reshapes_base=True, parts=(("d_f2", PINION),), fault=tooth_state),
     # the teeth separate only where the dynamic deflection outgrows the static one (the mesh
     # at a resonance): the loss then reshapes the lines the base makes, which a base fit
     # without it bends to. Its transition is the teeth's surfaces coming into contact: from
@@ -71,14 +72,14 @@ EFFECTS = {e.key: e for e in (
            "outer-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), family(("bpfo",)), synchronous=False,
            outputs=("acc",), envelope=True, affine=True, machine_values=bearing_values,
-           missing=bearing_missing, parts=(("A_b", PINION_BEARING),)),
+           missing=bearing_missing, parts=(("A_b", PINION_BEARING),), fault=OUTER),
     Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
            "inner-race defect, pinion bearing (strikes ringing a structural mode)",
            (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
             Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
            family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
            machine_values=bearing_values, missing=bearing_missing,
-           parts=(("A_b", PINION_BEARING),)),
+           parts=(("A_b", PINION_BEARING),), fault=INNER),
     # a spalled ball strikes both races once each a turn about its axis (2 x BSF, the
     # kinematic map's even BSF lines), the cage carrying it through the load zone
     Effect("bearing_ball", "GearDiag.Effects.BearingBall",
@@ -88,7 +89,7 @@ EFFECTS = {e.key: e for e in (
             Parameter("phi_cage", -math.pi, math.pi, periodic=True)),
            ball_defect, synchronous=False, outputs=("acc",), envelope=True,
            machine_values=bearing_values, missing=bearing_missing,
-           parts=(("A_b", PINION_BEARING),)),
+           parts=(("A_b", PINION_BEARING),), fault=BALL),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,
            ripple_hint("f_load"), synchronous=False,
@@ -121,7 +122,8 @@ EFFECTS = {e.key: e for e in (
            tuple(Parameter(f"A_s{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
            pinion_shaft, pinion_shaft_hint, outputs=("acc",), affine=True,
-           parts=tuple((f"A_s{k}", PINION_SHAFT) for k in range(1, SHAFT_ORDERS + 1))),
+           parts=tuple((f"A_s{k}", PINION_SHAFT) for k in range(1, SHAFT_ORDERS + 1)),
+           fault=model_shaft_state),
     # the same, of a shaft beyond the pair at a speed ratio the kinematics give: not
     # synchronous with the pair's period in general (a motor shaft at 29/17 of the pinion's)
     Effect("other_shaft_orders", "GearDiag.Effects.OtherShaftOrders",

@@ -12,14 +12,16 @@ a record's rise of z over the baseline's own is held, as a component's change is
 (:mod:`pydiag.gear.component_judge`), to ``K_SPREAD`` times the healthy repeats' rise of
 the same effect on the same stage (their RMS), never below a z of 1. The effect's sizing
 parameter that changed most names the part (:attr:`pydiag.gear.effect.Effect.parts`): a
-deeper pinion modulation is its pinion, larger orders of the pinion shaft are that shaft.
+deeper pinion modulation is its pinion, larger orders of the pinion shaft are that shaft;
+the effect names the fault where it can (``Effect.fault``: a softer tooth chipped or
+broken, a shaft's risen orders an imbalance or a bend), else "changed".
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
@@ -29,7 +31,7 @@ from pydiag.gear.machine import Machine
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.loop.compare import compare
 from pydiag.loop.effect_fit import EFFECT_REFIT
-from pydiag.loop.machine_discover import refit_own_effects
+from pydiag.loop.machine_discover import discover_machine, refit_own_effects
 from pydiag.loop.machine_fit import compare_machine
 from pydiag.loop.machine_model import MachineModel
 from pydiag.loop.results import Suggestion
@@ -42,7 +44,9 @@ MIN_RISE = 1.0
 def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
                     repeats: Sequence[FitProblem], records: Sequence[FitProblem],
                     estimator: FaultEstimator,
-                    effect_estimator: FaultEstimator | None = None
+                    effect_estimator: FaultEstimator | None = None,
+                    lacking: Sequence[str] = (),
+                    effect_model: Callable[[Machine], str] | None = None
                     ) -> list[list[ModelChange]]:
     """The model's verdict on each of ``records`` (:func:`own_changes`): the machine's
     model with the effects its file gives (the healthy model) fitted once to the
@@ -50,15 +54,25 @@ def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
     ``[start]``), then each of its effects refitted held out (``effect_estimator``, default
     :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`'s) on the baseline, on each healthy
     repeat and on each record, seen through that fit. Every problem is of the same model
-    (:func:`~pydiag.loop.machine_fit.machine_problem`)."""
+    (:func:`~pydiag.loop.machine_fit.machine_problem`).
+
+    ``lacking``: catalogue effects the healthy model does not have, each also tried held
+    out on every stage that can have it (the first question,
+    :func:`~pydiag.loop.machine_discover.discover_machine`, on the models ``effect_model``
+    builds: the machine with one effect more), from off, and held to the repeats the same
+    way: a bearing's strikes, a tooth fault where the model has none."""
     refit = effect_estimator or FaultEstimator(**EFFECT_REFIT)
     healthy = compare_machine(baseline, model, estimator, refit,
                               start=machine.fit_start())
+    if lacking and effect_model is None:
+        raise ValueError("trying lacking effects needs effect_model")
 
     def rows(problem: FitProblem) -> list[Suggestion]:
         seen = compare(problem, None, healthy.false_alarm_rate, parameters=healthy.parameters)
-        return refit_own_effects(problem, machine, model,
-                                 dataclasses.replace(seen, fit_error=seen.error), refit)
+        seen = dataclasses.replace(seen, fit_error=seen.error)
+        new = discover_machine(problem, machine, model, seen, effect_model, refit,
+                               list(lacking)) if lacking else []
+        return refit_own_effects(problem, machine, model, seen, refit) + new
     own, again = rows(baseline), [rows(problem) for problem in repeats]
     return [own_changes(machine, model, healthy.parameters, rows(problem), own, again)
             for problem in records]
@@ -81,6 +95,7 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
     stages = [s.name for s in machine.stages]
     catalogue: dict[int, dict] = {}  # each stage's effects as the model names them
     out = []
+    claimed: dict[tuple[str, str], set[str]] = {}
     for row in record:
         h = row.held_out
         if h is None or not h.tried or row.stage not in stages:
@@ -95,13 +110,38 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
         repeat_rise = math.sqrt(sum(r * r for r in rises) / len(rises)) if rises else None
         held_to = k_spread * max(repeat_rise, MIN_RISE) if repeat_rise is not None \
             else math.nan
-        values = {name: (healthy[name], h.parameters[name]) for name, _ in effect.parts
-                  if name in healthy and name in h.parameters}
+        off = {p.name: p.off for p in effect.parameters}  # an effect the model lacks
+        values = {name: (healthy.get(name, off.get(name, math.nan)), h.parameters[name])
+                  for name, _ in effect.parts if name in h.parameters}
         part = effect.part_of({name: after - before for name, (before, after) in values.items()})
+        covers = tuple(dict.fromkeys(name for _, p in effect.parts
+                                     for name in part_components(machine, k, p)))
         out.append(ModelChange(row.stage, row.effect, h.z, base_z, repeat_rise,
                                (h.z - base_z) / held_to, values, part,
-                               part_components(machine, k, part)))
-    return sorted(out, key=lambda c: -c.margin if math.isfinite(c.margin) else math.inf)
+                               part_components(machine, k, part), effect.fault_of(values),
+                               covers))
+        claimed[key] = set(h.claimed)
+    out.sort(key=lambda c: -c.margin if math.isfinite(c.margin) else math.inf)
+    return _settled(out, claimed)
+
+
+def _settled(changes: list[ModelChange], claimed: dict[tuple[str, str], set[str]]
+             ) -> list[ModelChange]:
+    """``changes`` (the largest margin first), each change that claims a line a larger
+    change claims too (``claimed``: the non-synchronous lines each held-out fit claimed,
+    :attr:`~pydiag.loop.results.HeldOut.claimed`) beaten by it: the record's lines are one
+    component's, the one that explains them most (an input bearing's outer race, whose
+    strikes' lines are every other line of the intermediate bearing's at half its
+    speed), as competing effects are settled by their z in the loop
+    (:mod:`pydiag.loop.competition`)."""
+    out: list[ModelChange] = []
+    for c in changes:
+        lines = claimed.get((c.stage, c.effect), set())
+        winner = next((w for w in out if w.changed and lines
+                       & claimed.get((w.stage, w.effect), set())), None)
+        out.append(c if winner is None or not c.changed else dataclasses.replace(
+            c, beaten_by=f"{winner.effect} on {winner.stage}"))
+    return out
 
 
 def part_components(machine: Machine, stage: int, part: str | None) -> tuple[str, ...]:

@@ -3,7 +3,7 @@ baselines): the machine file's effects are those `pydiag loop` gave the gearbox
 simulator's short box on a healthy record (tests/golden/short_box.loop.toml); each is
 refitted held out on a record with a broken output-gear tooth, which the simulator writes
 as a dip of the mesh's amplitude once a turn of the output shaft, not as the model's
-modulation."""
+modulation. The model's verdict then joins the indicators' on every gear its effects size."""
 
 import json
 
@@ -15,21 +15,29 @@ from pydiag.io.measurements import write_measurement
 HEALTHY_MODEL = ROOT / "tests" / "golden" / "short_box.loop.toml"
 
 
-def test_the_healthy_models_modulation_names_the_broken_output_gear(tmp_path):
+def diagnosed(tmp_path, record, *extra: str):
+    """diagnose --machine (the healthy model) of ``record`` against the short box's healthy
+    seeds 1 (the model's own record), 3 and 4 (its repeats): (its stdout, its JSON)."""
     healthy = []
-    for seed in (1, 3, 4):  # the model's own record first, then two healthy repeats
+    for seed in (1, 3, 4):
         healthy.append(tmp_path / f"healthy_{seed}.csv")
         write_measurement(healthy[-1], gearbox_record(seed, box=SHORT_BOX))
-    broken = tmp_path / "broken.csv"
-    write_measurement(broken, gearbox_record(2, faulty_shaft=2, stage=1, box=SHORT_BOX))
+    measured = tmp_path / "record.csv"
+    write_measurement(measured, record)
     out = tmp_path / "out.json"
     r = run_cli("-m", "pydiag", "diagnose", "--machine", str(HEALTHY_MODEL), "--measurement",
-                str(broken), *(a for h in healthy for a in ("--baseline", str(h))),
+                str(measured), *(a for h in healthy for a in ("--baseline", str(h))),
                 "--json", str(out), "--build-dir", str(tmp_path / "build"), "--quiet",
                 # a small swarm: the healthy fit polishes from the file's [start] too
-                "--particles", "8", "--iterations", "4", "--polish", "60")
+                "--particles", "8", "--iterations", "4", "--polish", "60", *extra)
     assert r.returncode == 0, r.stderr
-    changes = json.loads(out.read_text())["model_changes"]
+    return r.stdout, json.loads(out.read_text())
+
+
+def test_the_healthy_models_modulation_names_the_broken_output_gear(tmp_path):
+    stdout, report = diagnosed(tmp_path, gearbox_record(2, faulty_shaft=2, stage=1,
+                                                        box=SHORT_BOX))
+    changes = report["model_changes"]
     assert {(c["stage"], c["effect"]) for c in changes} == {
         ("stage 1", "mesh_stiffness_shape"), ("stage 2", "mesh_modulation"),
         ("stage 2", "mesh_stiffness_shape")}
@@ -39,5 +47,34 @@ def test_the_healthy_models_modulation_names_the_broken_output_gear(tmp_path):
     healthy_m_g, fitted_m_g = changed[0]["values"]["stage_2.m_g"]
     assert fitted_m_g > 1.15 * healthy_m_g  # the gear's modulation deepened
     assert all(c["margin"] < 1 for c in changes if not c["changed"])
-    assert "mesh_modulation               stage 2         changed" in r.stdout
-    assert ": 50T gear of stage 2" in r.stdout
+    assert "mesh_modulation               stage 2         changed" in stdout
+    assert ": 50T gear of stage 2" in stdout
+    # every gear is covered by an effect of the model; the broken one changed by the model
+    # and the indicators both (a modulation does not tell a tooth from a runout), the other
+    # three good by both
+    gears = {c["name"]: (c["state"], c["judge"]) for c in report["components"]
+             if c["kind"] == "gear"}
+    assert gears.pop("50T gear of stage 2") == ("changed", "both"), report["components"]
+    assert set(gears.values()) == {("good", "both")}, gears
+    assert report["components"][0]["name"] == "50T gear of stage 2"  # faulty ones first
+
+
+def test_an_effect_the_healthy_model_lacks_names_the_input_bearings_outer_race(tmp_path):
+    """The first question (--lacking): the outer race, which the healthy model has not,
+    tried on both stages; the input bearing's strikes make every other line of the
+    intermediate bearing's (half its speed), so stage 2's outer race rises too, and the
+    larger change names the lines."""
+    _, report = diagnosed(tmp_path, gearbox_record(2, box=SHORT_BOX,
+                                                   bearing=((0, "outer", 6.0),)),
+                          "--lacking", "bearing_outer_race")
+    races = {c["stage"]: c for c in report["model_changes"]
+             if c["effect"] == "bearing_outer_race"}
+    assert races["stage 1"]["changed"] and races["stage 1"]["fault"] == "outer"
+    assert races["stage 1"]["components"] == ["input bearing"]
+    assert races["stage 1"]["values"]["stage_1.A_b"][0] == 0  # from off: the model lacks it
+    assert not races["stage 2"]["changed"], races
+    assert races["stage 2"]["beaten_by"] == "bearing_outer_race on stage 1"
+    states = {c["name"]: (c["state"], c["judge"]) for c in report["components"]}
+    assert states["input bearing"] == ("outer", "both")  # the envelope's line says so too
+    assert states["intermediate bearing"] == ("good", "both")
+    assert all(s == ("good", "both") for n, s in states.items() if "T " in n), states

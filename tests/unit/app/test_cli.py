@@ -146,3 +146,21 @@ def test_a_one_stage_machine_files_sensor_keeps_its_name_for_the_machines_model(
     args = cli.build_parser().parse_args(common + ["--fmu", "x.fmu"])
     apply_machine(args)
     assert args.channel == ["a1=acc"]
+
+
+@pytest.mark.parametrize("extra", [
+    [],  # the example's machine file has no effects: no healthy model
+    ["--baseline", "a.csv", "--baseline", "kept"],  # kept baselines hold no record
+])
+def test_lacking_effects_need_the_healthy_model_and_its_repeat(capsys, tmp_path, extra):
+    from pathlib import Path
+    machine = Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml"
+    if extra:  # a machine file with an effect
+        machine = tmp_path / "with_effect.toml"
+        machine.write_text(Path(__file__).resolve().parents[3].joinpath(
+            "examples", "phm09_spur.toml").read_text()
+            + '\n[[effects]]\nkey = "mesh_modulation"\nstage = "output stage"\n')
+    code, err = run(["diagnose", "--measurement", "m.csv", "--machine", str(machine),
+                     "--lacking", "bearing_outer_race", *extra], capsys)
+    assert code == 2 and "--lacking tries effects against the machine's healthy model" in err \
+        and len(err.strip().splitlines()) == 1, err

@@ -3,6 +3,7 @@ record's rise of held-out z held to a healthy repeat's, named on the part its ch
 sizes. The rows are written here as refit_own_effects returns them: what is checked is
 the rule and the naming, not a fit."""
 
+import dataclasses
 import math
 import tomllib
 
@@ -49,7 +50,8 @@ def test_a_rise_beyond_four_repeats_names_the_part_that_changed(spur):
     assert modulation.part == "pinion" and modulation.components == ("48T pinion of output stage",)
     assert modulation.values[out + "m_p"] == (0.263, 0.499)
     assert out + "phi_p" not in modulation.values  # a phase sizes nothing
-    assert orders.part == "pinion shaft" and orders.components == ("input",)
+    # the orders fell: the record asks for other values, and names no fault of the shaft
+    assert orders.part is None and orders.components == () and orders.covers == ("input",)
     assert not orders.changed  # 29.1 over 4 x 10.9
     # the repeat against itself: no rise; without a repeat, no verdict
     assert not any(c.changed for c in own_changes(machine, model, healthy, repeat, baseline,
@@ -81,3 +83,63 @@ def test_a_part_is_the_machines_components():
     assert part_components(machine, 1, "gear shaft") == ("output",)
     assert part_components(machine, 1, "pinion bearing") == ("ID:IS", "ID:OS")
     assert part_components(machine, 0, None) == ()
+
+
+def test_a_change_says_the_fault_its_effect_names_and_what_it_covers(spur):
+    """Orders of the input shaft that rose at 1x and 2x are a bend; the output stage's
+    modulation covers both its gears and tells no fault."""
+    machine, model = spur
+    inp, out = (f"{s}." for s in model.stages)
+    healthy = {inp + "A_s1": 100.0, inp + "A_s2": 50.0, inp + "A_s3": 20.0,
+               out + "m_p": 0.2, out + "m_g": 0.1}
+    base = [row("input stage", "pinion_shaft_orders", 0.0),
+            row("output stage", "mesh_modulation", 0.0)]
+    repeat = [row("input stage", "pinion_shaft_orders", 1.0),
+              row("output stage", "mesh_modulation", 1.0)]
+    record = [row("input stage", "pinion_shaft_orders", 40.0,
+                  **{inp + "A_s1": 300.0, inp + "A_s2": 190.0, inp + "A_s3": 25.0}),
+              row("output stage", "mesh_modulation", 40.0, **{out + "m_g": 0.3})]
+    found = {c.effect: c for c in own_changes(machine, model, healthy, record, base, [repeat])}
+    orders, modulation = found["pinion_shaft_orders"], found["mesh_modulation"]
+    assert orders.fault == "bent" and orders.covers == ("input",)
+    assert modulation.fault == "changed" and modulation.components == ("80T gear of output stage",)
+    assert modulation.covers == ("48T pinion of output stage", "80T gear of output stage")
+
+
+def test_an_effect_the_healthy_model_lacks_is_sized_from_off(spur):
+    """The first question's row (discover_machine's): the input stage's outer race, which
+    the healthy model has not, grew from no strike to the record's."""
+    machine, model = spur
+    inp = f"{model.stages[0]}."
+    base = [row("input stage", "bearing_outer_race", 0.5)]
+    repeat = [row("input stage", "bearing_outer_race", 1.5)]
+    record = [row("input stage", "bearing_outer_race", 60.0, **{inp + "A_b": 58.9})]
+    c, = own_changes(machine, model, {}, record, base, [repeat])
+    assert c.changed and c.values == {inp + "A_b": (0.0, 58.9)}
+    assert (c.part, c.fault, c.components) == ("pinion bearing", "outer", ("IS:IS", "IS:OS"))
+
+
+def test_of_two_changes_that_claim_the_same_lines_the_larger_names_them(spur):
+    """An input bearing's outer-race strikes: their lines are every other line of the idler
+    bearing's at a third of its speed, so the output stage's outer race rises too; the
+    larger change explains them."""
+    machine, model = spur
+    inp, out = (f"{s}." for s in model.stages)
+
+    def race(stage, z, a_b, lines):
+        prefix = inp if stage == "input stage" else out
+        r = row(stage, "bearing_outer_race", z, **{prefix + "A_b": a_b})
+        return dataclasses.replace(r, held_out=dataclasses.replace(r.held_out, claimed=lines))
+    base = [race("input stage", 0.5, 0.0, ()), race("output stage", 0.4, 0.0, ())]
+    repeat = [race("input stage", 1.0, 0.0, ()), race("output stage", 1.0, 0.0, ())]
+    both = ("acc envelope 310.00 Hz", "acc envelope 620.00 Hz")
+    record = [race("input stage", 90.0, 58.9, both),
+              race("output stage", 40.0, 13.2, both[1:] + ("acc envelope 103.30 Hz",))]
+    first, second = own_changes(machine, model, {}, record, base, [repeat])
+    assert first.stage == "input stage" and first.changed and first.components == (
+        "IS:IS", "IS:OS")
+    assert second.margin > 1 and not second.changed
+    assert second.beaten_by == "bearing_outer_race on input stage"
+    # lines of their own: both stand
+    record[1] = race("output stage", 40.0, 13.2, ("acc envelope 103.30 Hz",))
+    assert all(c.changed for c in own_changes(machine, model, {}, record, base, [repeat]))

@@ -1,0 +1,110 @@
+"""The words a component's state is said in, and who says it: the rules that name a fault
+from what changed (pydiag.gear.faults) and the healthy model's verdict laid over the
+indicators' (pydiag.gear.component.judged_by_model)."""
+
+import math
+
+import pytest
+
+from pydiag.gear.component import (BY_BOTH, BY_INDICATORS, BY_MODEL, Component, ComponentVerdict,
+                                   ModelChange, judged_by_model)
+from pydiag.gear.effects import EFFECTS
+from pydiag.gear.faults import model_shaft_state, shaft_state, tooth_state
+
+
+@pytest.mark.parametrize("rises, state", [([], "good"), ([1], "imbalance"), ([1, 2], "bent"),
+                                          ([1, 2, 3], "looseness"), ([2], "changed"),
+                                          ([2, 4], "changed")])
+def test_a_shafts_risen_orders_name_its_fault(rises, state):
+    assert shaft_state(rises) == state
+
+
+def test_a_models_shaft_orders_rise_where_they_grew_by_half_the_largest_growth():
+    assert model_shaft_state((100, 50, 20), (300, 60, 20)) == "imbalance"
+    assert model_shaft_state((100, 50, 20), (300, 160, 20)) == "bent"
+    assert model_shaft_state((100, 50, 20), (90, 40, 20)) == "changed"  # none grew
+
+
+def test_a_tooth_is_broken_once_it_lost_half_its_stiffness():
+    assert tooth_state((0.0,), (0.2,)) == "chipped"
+    assert tooth_state((0.1,), (0.55,)) == "broken"
+
+
+def test_each_catalogue_effect_names_its_fault_from_its_own_parameters():
+    assert EFFECTS["gear_tooth_fault"].fault_of({"d_g": (0.0, 0.58)}) == "broken"
+    assert EFFECTS["bearing_inner_race"].fault_of({"A_b": (0.0, 3.0)}) == "inner"
+    assert EFFECTS["gear_eccentricity"].fault_of({"ecc_gear": (0.0, 1e-5)}) == "eccentric"
+    assert EFFECTS["pinion_shaft_orders"].fault_of(
+        {"A_s1": (1.0, 9.0), "A_s2": (1.0, 1.5)}) == "imbalance"
+    assert EFFECTS["mesh_modulation"].fault_of({"m_g": (0.1, 0.3)}) == "changed"
+
+
+GEAR = Component("gear", "80T gear of output", "output", 80, "output", "gear")
+PINION = Component("gear", "48T pinion of output", "idler", 48, "output", "pinion")
+BEARING = Component("bearing", "OS:OS", "output")
+
+
+def change(margin, components, covers, fault="changed", effect="mesh_modulation"):
+    return ModelChange("output", effect, 10.0, 0.0, 1.0, margin, {"m_g": (0.1, 0.3)}, "gear",
+                       components, fault, covers)
+
+
+def test_the_model_names_what_it_covers_and_the_indicators_keep_the_rest():
+    indicators = (ComponentVerdict(PINION, "changed", {"sidebands": 3.0}, 6.0, 1.4, "rose"),
+                  ComponentVerdict(GEAR, "good", {}, 6.0, 0.3),
+                  ComponentVerdict(BEARING, "outer", {"outer": 9.0}, 6.0, 2.0, "its BPFO"))
+    covers = (PINION.name, GEAR.name)
+    judged = {v.component.name: v for v in judged_by_model(
+        indicators, [change(2.5, (GEAR.name,), covers)])}
+    gear, pinion, bearing = judged[GEAR.name], judged[PINION.name], judged[BEARING.name]
+    # named by the model where the indicators saw nothing
+    assert (gear.state, gear.judge, gear.margin) == ("changed", BY_MODEL, 2.5)
+    assert "0.1 -> 0.3" in gear.reason and gear.evidence["model output mesh_modulation"] == 2.5
+    # covered, not named, and faulty by the indicators: theirs stands, the model's word added
+    assert (pinion.state, pinion.judge, pinion.margin) == ("changed", BY_INDICATORS, 1.4)
+    assert pinion.reason == "rose; the healthy model's mesh_modulation on output names " \
+        "80T gear of output" and pinion.evidence["sidebands"] == 3
+    assert bearing == indicators[2]  # not covered
+    assert [v.faulty for v in judged_by_model(indicators, [change(2.5, (GEAR.name,), covers)])
+            ] == [True, True, True]
+
+
+def test_where_both_say_good_the_judge_is_both():
+    indicators = (ComponentVerdict(GEAR, "good", {}, 6.0, 0.3),)
+    v, = judged_by_model(indicators, [change(0.4, (GEAR.name,), (GEAR.name,))])
+    assert (v.state, v.judge, v.margin) == ("good", BY_BOTH, 0.4)
+    assert "within the healthy repeats (0.40 x)" in v.reason
+
+
+def test_a_change_without_healthy_repeats_judges_nothing():
+    indicators = (ComponentVerdict(GEAR, "changed", {}, 6.0, 1.4, "rose"),)
+    assert judged_by_model(indicators, [change(math.nan, (GEAR.name,), (GEAR.name,))]
+                           ) == indicators
+
+
+def test_of_two_changes_that_name_a_component_the_larger_margin_says_its_fault():
+    indicators = (ComponentVerdict(GEAR, "good", {}, 6.0, 0.2),)
+    v, = judged_by_model(indicators, [
+        change(1.5, (GEAR.name,), (GEAR.name,)),
+        change(3.0, (GEAR.name,), (GEAR.name,), "broken", "gear_tooth_fault")])
+    assert (v.state, v.margin, v.judge) == ("broken", 3.0, BY_MODEL)
+    assert "gear_tooth_fault" in v.reason
+
+
+def test_the_indicators_word_is_said_where_the_model_only_says_changed():
+    """The model's modulation says the pinion changed; its shaft's swing says eccentric."""
+    indicators = (ComponentVerdict(PINION, "eccentric", {}, 6.0, 10.2, "its shaft's swing"),)
+    v, = judged_by_model(indicators, [change(3.3, (PINION.name,), (PINION.name, GEAR.name))])
+    assert (v.state, v.judge, v.margin) == ("eccentric", BY_BOTH, 3.3)
+    assert v.reason.endswith("; the indicators: eccentric (its shaft's swing)")
+    # a word of the model's own wins
+    v, = judged_by_model(indicators, [change(3.3, (PINION.name,), (PINION.name,), "chipped")])
+    assert (v.state, v.judge) == ("chipped", BY_BOTH)
+
+
+def test_a_change_that_names_no_part_names_nothing():
+    """A shaft's orders that all fell: the record differs, and no fault grew."""
+    shaft = Component("shaft", "input", "input")
+    indicators = (ComponentVerdict(shaft, "good", {}, 6.0, 0.4),)
+    v, = judged_by_model(indicators, [change(1.5, (), ("input",), effect="pinion_shaft_orders")])
+    assert (v.state, v.judge, v.margin) == ("good", BY_BOTH, None) and "names no part" in v.reason
