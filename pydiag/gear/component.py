@@ -78,7 +78,7 @@ class ModelChange:
     baseline's (None: no repeat); ``margin``: the record's rise over what it is held to
     (``K_SPREAD`` times ``repeat_rise``, never below a z of 1; nan without a repeat);
     ``values``: each sizing parameter's healthy value and the record's fitted one, named as
-    the model names them; ``part``: the part of the stage its largest change sizes,
+    the model names them; ``part``: the part of the stage its largest growth sizes,
     ``components``: the machine's components that part is (a mesh: both gears);
     ``fault``: the state it names them in when changed (``Effect.fault``); ``covers``:
     every component a change of the effect could name (any of its parts); ``beaten_by``:

@@ -52,6 +52,7 @@ from pydiag.gear.machine_indicators import (SHAFT_ORDERS, SWING_ORDERS, MachineR
 from pydiag.gear.stage_judge import (K_SPREAD, StageVerdict, healthy_differences, knows_noise,
                                      synchronous_spread)
 
+
 def _ratio_db(a: float, b: float) -> float:
     return 20 * math.log10(a / b) if a > 0 and b > 0 else math.nan
 
