@@ -1,23 +1,34 @@
 """A machine's healthy state on the command line: the --baseline records, read or found
-among those kept in the history (``kept``), and ``pydiag baseline``, which keeps, lists
-and forgets them (:mod:`pydiag.loop.history`)."""
+among those kept in the history (``kept``), ``pydiag baseline``, which keeps, lists and
+forgets them (:mod:`pydiag.loop.history`), and the machine's healthy model fitted to the
+--baseline files, kept there so that it is fitted once."""
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
+from pydiag import __version__
+
 from pydiag.app.formatting import format_kept_baselines
+from pydiag.app.models import library
 from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
+from pydiag.diagnose.stages import healthy_model
+from pydiag.fit.build import ProblemSettings
+from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
 from pydiag.gear.speed import SpeedSettings
 from pydiag.gear.comparable import BASELINE_SPEED_SHARE, at_speed
 from pydiag.loop import history
+from pydiag.loop.compose import BuiltModel
+from pydiag.loop.machine_model import MachineModel
 
 #: The --baseline value that stands for the baselines kept in the history.
 KEPT = "kept"
@@ -50,6 +61,49 @@ def healthy_measurements(args) -> dict[str, Measurement]:
     given: what the machine's healthy model is fitted to (the first) and held to (the
     others)."""
     return {path: read_input(args, path) for path in _files(args, warn=False).values()}
+
+
+#: Arguments that leave the healthy model as it is: the record judged, where outputs go,
+#: what is said, how the work is spread, where models are built (the model built and its
+#: library count instead), the machine file as parsed (its bytes count instead).
+NOT_FITTED_FROM = {"func", "command", "measurement", "json", "force", "quiet", "history",
+                   "workers", "oversubscribe", "build_dir", "modelica", "baseline",
+                   "eval_timeout", "machine", "machine_description"}
+
+
+def healthy_fingerprint(args, built: BuiltModel, files: list[str]) -> str:
+    """What the healthy model of the --baseline ``files`` (in order) is made from, as a
+    key: pydiag's version, the machine file's bytes, the model built and its Modelica
+    library, each file's bytes, and every other argument but :data:`NOT_FITTED_FROM`."""
+    root, _ = library(args)
+    sources = sorted(root.rglob("*.mo"))
+    facts = {"pydiag": __version__, "machine": history.sha256_of(args.machine),
+             "model": history.sha256_of(built.fmu),
+             "library": [[str(p.relative_to(root)), history.sha256_of(p)] for p in sources],
+             "baselines": [history.sha256_of(f) for f in files],
+             "arguments": {k: v for k, v in sorted(vars(args).items())
+                           if k not in NOT_FITTED_FROM}}
+    return hashlib.sha256(json.dumps(facts, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def kept_healthy_model(args, machine: Machine, model: MachineModel, built: BuiltModel,
+                       read: Mapping[str, Measurement], settings: ProblemSettings,
+                       estimator: FaultEstimator, effect_model: Callable[[Machine], str]
+                       ) -> tuple[history.KeptHealthyModel, bool, str]:
+    """(the machine's healthy model of the --baseline files ``read``, whether it was fitted
+    now, the history): the one kept in the history under the same fingerprint
+    (:func:`healthy_fingerprint`), else fitted
+    (:func:`~pydiag.diagnose.stages.healthy_model`) and kept there."""
+    db = str(history.resolve(args.history))
+    history.check(db)
+    key = healthy_fingerprint(args, built, list(read))
+    kept = history.kept_healthy_model(db, machine, key)
+    if kept is not None:
+        return kept, False, db
+    fitted = healthy_model(str(built.fmu), model, machine, list(read.values()), args.input_hz,
+                           settings, estimator, args.lacking or (), effect_model)
+    return history.keep_healthy_model(db, machine, key,
+                                      [str(Path(p).resolve()) for p in read], fitted), True, db
 
 
 def _files(args, warn: bool) -> dict[str, str]:

@@ -10,9 +10,10 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.baselines import KEPT, baseline_records, healthy_measurements
+from pydiag.app.baselines import (KEPT, baseline_records, healthy_measurements,
+                                  kept_healthy_model)
 from pydiag.app.models import machine_models
-from pydiag.app.formatting import (format_facts, format_indicators,
+from pydiag.app.formatting import (format_facts, format_healthy_model, format_indicators,
                                    format_machine_report,
                                    format_regression, format_result)
 from pydiag.app.reading import channels_to_read, read_input
@@ -218,19 +219,26 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     machines = None if args.fmu else machine_models(args)
     model = None if machines is None else machines(machine)
     update, close = progress_bar(args.quiet)
+    kept = None
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
         if model is None:
             result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
                                       estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
+            def effect_model(with_one: Machine) -> str:
+                return str(machines(with_one)[1].fmu)
+            if len(healthy) >= 2:
+                kept = kept_healthy_model(args, machine, model[0], model[1], healthy,
+                                          settings, estimator, effect_model)
             result = diagnose_machine_model(
                 str(model[1].fmu), model[0], m, machine, args.input_hz, settings, estimator,
-                baselines, list(healthy.values()), args.lacking or (),
-                lambda with_one: str(machines(with_one)[1].fmu))
+                baselines, None if kept is None else kept[0].model, effect_model)
     finally:
         close()
     print(format_machine_report(result))
+    if kept is not None:
+        print(format_healthy_model(*kept))
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
     if model is not None and machine.effects and args.baseline and len(healthy) < 2:

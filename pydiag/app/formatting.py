@@ -10,7 +10,7 @@ from pydiag.gear.component import BY_INDICATORS, ComponentVerdict, ModelChange
 from pydiag.gear.machine_report import MachineReport
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.diagnose.diagnosis import Diagnosis
-from pydiag.loop.history import KeptBaseline
+from pydiag.loop.history import KeptBaseline, KeptHealthyModel
 from pydiag.loop.accumulate import LoopStep
 from pydiag.loop.results import Comparison, Status, Suggestion
 from pydiag.model.regress import RegressionReport
@@ -317,6 +317,15 @@ def format_model_changes(changes: tuple[ModelChange, ...]) -> list[str]:
     lines.append("x thr      : an effect of the healthy model refitted held out, its rise of "
                  f"z over the baseline's against {K_SPREAD:g} x the healthy repeats' rise")
     return lines
+
+
+def format_healthy_model(kept: KeptHealthyModel, fitted: bool, db: str) -> str:
+    """Which healthy model a record was judged by: the files it was fitted and held to, and
+    whether it was fitted now or read as kept in the history ``db``."""
+    return (f"healthy    : the model fitted to {kept.baselines[0]}, held to "
+            f"{', '.join(kept.baselines[1:])}; "
+            + (f"kept in {db} (id {kept.id})" if fitted else
+               f"as kept in {db} on {kept.time_utc} (id {kept.id})"))
 
 
 def format_kept_baselines(name: str, kept: list[KeptBaseline], db: str) -> str:

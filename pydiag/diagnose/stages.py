@@ -45,7 +45,7 @@ from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.diagnose.diagnosis import Diagnosis, classified, diagnose
 from pydiag.loop.machine_fit import fit_machine, machine_problem, stage_view
 from pydiag.loop.machine_model import MachineModel
-from pydiag.loop.own_changes import healthy_changes
+from pydiag.loop.own_changes import HealthyModel, fit_healthy, record_changes
 from pydiag.model.adapter import Adapter
 
 #: Without baselines, a shaft is the suspect when its sidebands carry this many times the
@@ -193,7 +193,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            settings: ProblemSettings = ProblemSettings(),
                            estimator: FaultEstimator | None = None,
                            baselines: Sequence[MachineRecord] = (),
-                           healthy: Sequence[Measurement] = (), lacking: Sequence[str] = (),
+                           healthy: HealthyModel | None = None,
                            effect_model: Callable[[Machine], str] | None = None
                            ) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
@@ -201,15 +201,13 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
     too), each stage classified from its own fault parameters and tested on the lines
     seen from its own shafts (:func:`~pydiag.loop.machine_fit.stage_view`), and judged
-    against ``baselines`` as :func:`diagnose_machine` judges. With two or more ``healthy``
-    records (the baselines' measurements) and a machine file that gives its stages
-    effects (the healthy model, say from ``pydiag loop`` on the first), the model's own
-    verdict too (:func:`~pydiag.loop.own_changes.healthy_changes`: that model fitted to
-    the first, each of its effects refitted held out on every record, the record's change
-    held to the others'), which then says the state of every component an effect of that
-    model sizes (:func:`~pydiag.gear.component.judged_by_model`); ``lacking``: catalogue
-    effects the healthy model lacks, tried the same way on every stage, on the models
-    ``effect_model`` builds (the machine with one effect more)."""
+    against ``baselines`` as :func:`diagnose_machine` judges. With the machine's
+    ``healthy`` model (:func:`healthy_model`), the model's own verdict too
+    (:func:`~pydiag.loop.own_changes.record_changes`: each of its effects, and each it
+    lacks that it was fitted with, refitted held out on the record, the change held to
+    its repeats'), which joins the indicators' on every component an effect of that model
+    sizes (:func:`~pydiag.gear.component.judged_by_model`); ``effect_model``: the FMU of
+    the machine with one effect more (for the effects it lacks)."""
     estimator = estimator or FaultEstimator()
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
@@ -224,16 +222,29 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
         stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
                                                                    prefix),
                                       _verdict(judged, k), prefix))
-    changes: list = []
-    if machine.effects and len(healthy) >= 2:
-        first, *others = [machine_problem(fmu_path, model, m, machine,
-                                          machine_speed(m, machine, input_hz,
-                                                        settings.tracking), settings)
-                          for m in healthy]
-        changes = healthy_changes(machine, model, first, others, [problem], estimator,
-                                  lacking=lacking, effect_model=effect_model)[0]
+    changes = [] if healthy is None else record_changes(healthy, machine, model, problem,
+                                                        effect_model=effect_model)
     return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes),
                                components=judged_by_model(judged.components, changes))
+
+
+def healthy_model(fmu_path: str, model: MachineModel, machine: Machine,
+                  healthy: Sequence[Measurement], input_hz: float,
+                  settings: ProblemSettings = ProblemSettings(),
+                  estimator: FaultEstimator | None = None, lacking: Sequence[str] = (),
+                  effect_model: Callable[[Machine], str] | None = None) -> HealthyModel:
+    """The machine's healthy model (:func:`~pydiag.loop.own_changes.fit_healthy`): its
+    own model (``model``, built at ``fmu_path``, with the effects the machine file gives
+    its stages, say from ``pydiag loop`` on the first record) fitted to the first of the
+    ``healthy`` records and held to the others (two or more); ``lacking``: catalogue
+    effects it lacks, tried too, on the models ``effect_model`` builds."""
+    if len(healthy) < 2:
+        raise ValueError("a healthy model needs its record and a healthy repeat")
+    first, *others = [machine_problem(fmu_path, model, m, machine,
+                                      machine_speed(m, machine, input_hz, settings.tracking),
+                                      settings) for m in healthy]
+    return fit_healthy(machine, model, first, others, estimator or FaultEstimator(),
+                       lacking=lacking, effect_model=effect_model)
 
 
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,

@@ -1,12 +1,16 @@
 """A local record of every compare run (which model, which FMU, what error, which peaks),
-and of the baselines kept for each machine (records of it in a known healthy state).
+of the baselines kept for each machine (records of it in a known healthy state), and of
+each machine's healthy model fitted to them.
 
-SQLite, two tables. ``pydiag history`` lists the runs and can plot the error across
+SQLite, three tables. ``pydiag history`` lists the runs and can plot the error across
 model revisions, so the effect of adding physics to the Modelica model stays visible.
 ``pydiag baseline`` keeps a record as seen through its machine (the speed found, every
 shaft's TSA facts: :class:`~pydiag.gear.machine_indicators.MachineRecord`), found again
 by the machine's identity (:attr:`~pydiag.gear.machine.Machine.identity`); ``--baseline
-kept`` judges a record against those of its operating point.
+kept`` judges a record against those of its operating point. ``diagnose --machine`` keeps
+the healthy model it fits to its --baseline files (:class:`~pydiag.loop.own_changes.
+HealthyModel`), found again by a fingerprint of all it was made from, so that it is
+fitted once.
 
 The history is an input as much as an output: :func:`check` refuses, before any work, a
 file that is not SQLite, an SQLite file of another application (a table that is not
@@ -32,6 +36,7 @@ from pydiag.core.errors import OutputError, UsageError
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.io.outputs import atomic_output, check_output
+from pydiag.loop.own_changes import HealthyModel
 
 #: The formats ``history --plot`` writes, by the file's suffix.
 PLOT_FORMATS = (".png", ".svg", ".pdf")
@@ -76,6 +81,15 @@ CREATE TABLE IF NOT EXISTS baselines (
     measurement TEXT NOT NULL,
     speed_hz REAL NOT NULL,
     record TEXT NOT NULL
+)""", "healthy_models": """
+CREATE TABLE IF NOT EXISTS healthy_models (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    time_utc TEXT NOT NULL,
+    machine TEXT NOT NULL,
+    machine_identity TEXT NOT NULL,
+    fingerprint TEXT NOT NULL,
+    baselines TEXT NOT NULL,
+    model TEXT NOT NULL
 )"""}
 
 
@@ -93,7 +107,9 @@ COLUMNS = ("id", "time_utc", "measurement", "fmu", "fmu_sha256", "model_name",
 #: Our tables and their columns.
 TABLES = {"runs": COLUMNS,
           "baselines": ("id", "time_utc", "machine", "machine_identity", "measurement",
-                        "speed_hz", "record")}
+                        "speed_hz", "record"),
+          "healthy_models": ("id", "time_utc", "machine", "machine_identity", "fingerprint",
+                             "baselines", "model")}
 
 
 def _tables(con: sqlite3.Connection) -> set[str]:
@@ -271,6 +287,62 @@ def forget_baseline(db: str | Path, machine: Machine, baseline_id: int) -> KeptB
     finally:
         con.close()
     return kept[baseline_id]
+
+
+@dataclass(frozen=True)
+class KeptHealthyModel:
+    """A machine's healthy model kept in the history: its id there, when it was kept
+    (UTC), the baseline files it was fitted to and held to, and the model."""
+
+    id: int
+    time_utc: str
+    baselines: tuple[str, ...]
+    model: HealthyModel
+
+
+def keep_healthy_model(db: str | Path, machine: Machine, fingerprint: str,
+                       baselines: list[str], model: HealthyModel) -> KeptHealthyModel:
+    """Keep ``model`` (of ``machine``, fitted to the first of ``baselines`` and held to
+    the others) in the history ``db`` under ``fingerprint``: what it is found again by
+    (everything it was made from, the caller's to say)."""
+    when = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    con = _connect(db, "healthy_models")
+    try:
+        with con:
+            cur = con.execute(
+                "INSERT INTO healthy_models (time_utc, machine, machine_identity, fingerprint, "
+                "baselines, model) VALUES (?,?,?,?,?,?)",
+                (when, machine.name, machine.identity, fingerprint, json.dumps(baselines),
+                 json.dumps(model.to_dict())))
+    except sqlite3.Error as err:
+        raise OutputError(f"cannot keep the healthy model in {db}: {err}") from err
+    finally:
+        con.close()
+    return KeptHealthyModel(int(cur.lastrowid), when, tuple(baselines), model)
+
+
+def kept_healthy_model(db: str | Path, machine: Machine, fingerprint: str
+                       ) -> KeptHealthyModel | None:
+    """The healthy model of ``machine`` last kept in the history ``db`` under
+    ``fingerprint``, or None."""
+    if not Path(db).exists():
+        return None
+    con = _connect(db)
+    try:
+        if "healthy_models" not in _tables(con):
+            return None
+        row = con.execute("SELECT id, time_utc, baselines, model FROM healthy_models WHERE "
+                          "machine_identity = ? AND fingerprint = ? ORDER BY id DESC LIMIT 1",
+                          (machine.identity, fingerprint)).fetchone()
+        if row is None:
+            return None
+        i, when, files, model = row
+        return KeptHealthyModel(i, when, tuple(json.loads(files)),
+                                HealthyModel.from_dict(json.loads(model)))
+    except (sqlite3.Error, ValueError, KeyError, TypeError) as err:
+        raise OutputError(f"cannot read the healthy models kept in {db}: {err}") from err
+    finally:
+        con.close()
 
 
 def check_plot(out: str | Path) -> None:

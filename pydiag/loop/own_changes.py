@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
@@ -42,20 +43,47 @@ from pydiag.loop.results import Suggestion
 MIN_RISE = 1.0
 
 
-def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
-                    repeats: Sequence[FitProblem], records: Sequence[FitProblem],
-                    estimator: FaultEstimator,
-                    effect_estimator: FaultEstimator | None = None,
-                    lacking: Sequence[str] = (),
-                    effect_model: Callable[[Machine], str] | None = None
-                    ) -> list[list[ModelChange]]:
-    """The model's verdict on each of ``records`` (:func:`own_changes`): the machine's
-    model with the effects its file gives (the healthy model) fitted once to the
-    ``baseline`` problem (:func:`~pydiag.loop.machine_fit.compare_machine`, from the file's
-    ``[start]``), then each of its effects refitted held out (``effect_estimator``, default
-    :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`'s) on the baseline, on each healthy
-    repeat and on each record, seen through that fit. Every problem is of the same model
-    (:func:`~pydiag.loop.machine_fit.machine_problem`).
+@dataclass(frozen=True)
+class HealthyModel:
+    """The machine's healthy model as its verdict uses it: its fit to the baseline
+    (``parameters``, ``false_alarm_rate``), and the held-out z of each (stage, effect) on
+    the baseline (``baseline_z``) and on each healthy repeat (``repeat_z``), seen through
+    that fit, what a record's are held to; ``lacking``: the effects it lacks that were
+    tried too. Plain data, so that it is fitted once and kept (the run history)."""
+
+    parameters: dict[str, float]
+    false_alarm_rate: float
+    baseline_z: dict[tuple[str, str], float]
+    repeat_z: tuple[dict[tuple[str, str], float], ...]
+    lacking: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict:
+        def rows(z: dict[tuple[str, str], float]) -> list:
+            return [[stage, effect, value] for (stage, effect), value in z.items()]
+        return {"parameters": self.parameters, "false_alarm_rate": self.false_alarm_rate,
+                "baseline_z": rows(self.baseline_z),
+                "repeat_z": [rows(z) for z in self.repeat_z], "lacking": list(self.lacking)}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "HealthyModel":
+        def z(rows: list) -> dict[tuple[str, str], float]:
+            return {(str(stage), str(effect)): float(value) for stage, effect, value in rows}
+        return cls({str(k): float(v) for k, v in data["parameters"].items()},
+                   float(data["false_alarm_rate"]), z(data["baseline_z"]),
+                   tuple(z(rows) for rows in data["repeat_z"]),
+                   tuple(str(k) for k in data["lacking"]))
+
+
+def fit_healthy(machine: Machine, model: MachineModel, baseline: FitProblem,
+                repeats: Sequence[FitProblem], estimator: FaultEstimator,
+                effect_estimator: FaultEstimator | None = None, lacking: Sequence[str] = (),
+                effect_model: Callable[[Machine], str] | None = None) -> HealthyModel:
+    """The machine's model with the effects its file gives (the healthy model) fitted once
+    to the ``baseline`` problem (:func:`~pydiag.loop.machine_fit.compare_machine`, from the
+    file's ``[start]``), and the rows a record's are held to: each of its effects refitted
+    held out (``effect_estimator``, default :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`'s)
+    on the baseline and on each healthy repeat, seen through that fit. Every problem is of
+    the same model (:func:`~pydiag.loop.machine_fit.machine_problem`).
 
     ``lacking``: catalogue effects the healthy model does not have, each also tried held
     out on every stage that can have it (the first question,
@@ -63,20 +91,62 @@ def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
     builds: the machine with one effect more), from off, and held to the repeats the same
     way: a bearing's strikes, a tooth fault where the model has none."""
     refit = effect_estimator or FaultEstimator(**EFFECT_REFIT)
-    healthy = compare_machine(baseline, model, estimator, refit,
-                              start=machine.fit_start())
-    if lacking and effect_model is None:
-        raise ValueError("trying lacking effects needs effect_model")
+    fitted = compare_machine(baseline, model, estimator, refit, start=machine.fit_start())
+    healthy = HealthyModel(dict(fitted.parameters), fitted.false_alarm_rate, {}, (),
+                           tuple(lacking))
+    own = _rows(healthy, machine, model, baseline, refit, effect_model)
+    again = [_rows(healthy, machine, model, problem, refit, effect_model)
+             for problem in repeats]
+    return dataclasses.replace(healthy, baseline_z=_z_of(own),
+                               repeat_z=tuple(_z_of(rows) for rows in again))
 
-    def rows(problem: FitProblem) -> list[Suggestion]:
-        seen = compare(problem, None, healthy.false_alarm_rate, parameters=healthy.parameters)
-        seen = dataclasses.replace(seen, fit_error=seen.error)
-        new = discover_machine(problem, machine, model, seen, effect_model, refit,
-                               list(lacking)) if lacking else []
-        return refit_own_effects(problem, machine, model, seen, refit) + new
-    own, again = rows(baseline), [rows(problem) for problem in repeats]
-    return [own_changes(machine, model, healthy.parameters, rows(problem), own, again)
+
+def record_changes(healthy: HealthyModel, machine: Machine, model: MachineModel,
+                   problem: FitProblem, effect_estimator: FaultEstimator | None = None,
+                   effect_model: Callable[[Machine], str] | None = None
+                   ) -> list[ModelChange]:
+    """The model's verdict on the record of ``problem`` (:func:`own_changes`): each effect
+    of the ``healthy`` model, and each it lacks that it was fitted with, tried held out on
+    the record as on its baseline and repeats (:func:`fit_healthy`)."""
+    rows = _rows(healthy, machine, model, problem,
+                 effect_estimator or FaultEstimator(**EFFECT_REFIT), effect_model)
+    return _changes(machine, model, healthy.parameters, rows, healthy.baseline_z,
+                    list(healthy.repeat_z))
+
+
+def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
+                    repeats: Sequence[FitProblem], records: Sequence[FitProblem],
+                    estimator: FaultEstimator,
+                    effect_estimator: FaultEstimator | None = None,
+                    lacking: Sequence[str] = (),
+                    effect_model: Callable[[Machine], str] | None = None
+                    ) -> list[list[ModelChange]]:
+    """The model's verdict on each of ``records``: :func:`fit_healthy`, then
+    :func:`record_changes` of each."""
+    healthy = fit_healthy(machine, model, baseline, repeats, estimator, effect_estimator,
+                          lacking, effect_model)
+    return [record_changes(healthy, machine, model, problem, effect_estimator, effect_model)
             for problem in records]
+
+
+def _rows(healthy: HealthyModel, machine: Machine, model: MachineModel, problem: FitProblem,
+          refit: FaultEstimator, effect_model: Callable[[Machine], str] | None
+          ) -> list[Suggestion]:
+    """Every effect of the healthy model, and every one of ``healthy.lacking``, tried held
+    out on ``problem`` seen through the healthy fit."""
+    if healthy.lacking and effect_model is None:
+        raise ValueError("trying lacking effects needs effect_model")
+    seen = compare(problem, None, healthy.false_alarm_rate, parameters=healthy.parameters)
+    seen = dataclasses.replace(seen, fit_error=seen.error)
+    new = discover_machine(problem, machine, model, seen, effect_model, refit,
+                           list(healthy.lacking)) if healthy.lacking else []
+    return refit_own_effects(problem, machine, model, seen, refit) + new
+
+
+def _z_of(rows: Sequence[Suggestion]) -> dict[tuple[str, str], float]:
+    """Each tried row's held-out z, by (stage, effect)."""
+    return {(r.stage, r.effect): r.held_out.z for r in rows
+            if r.held_out is not None and r.held_out.tried}
 
 
 def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float],
@@ -89,10 +159,15 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
     ``baseline`` the healthy model was fitted to and of each healthy repeat of it
     (``repeats``); the largest margin first. A row not tried (nothing of it to fit) is
     left out."""
-    def z_of(rows: Sequence[Suggestion]) -> dict[tuple[str, str], float]:
-        return {(r.stage, r.effect): r.held_out.z for r in rows
-                if r.held_out is not None and r.held_out.tried}
-    own, again = z_of(baseline), [z_of(rows) for rows in repeats]
+    return _changes(machine, model, healthy, record, _z_of(baseline),
+                    [_z_of(rows) for rows in repeats], k_spread)
+
+
+def _changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float],
+             record: Sequence[Suggestion], own: Mapping[tuple[str, str], float],
+             again: Sequence[Mapping[tuple[str, str], float]], k_spread: float = K_SPREAD
+             ) -> list[ModelChange]:
+    """:func:`own_changes` with the baseline's and the repeats' rows as their z."""
     stages = [s.name for s in machine.stages]
     catalogue: dict[int, dict] = {}  # each stage's effects as the model names them
     out = []

@@ -1,5 +1,7 @@
 """The run history: an unusable file is refused before any work, never after it."""
 
+import dataclasses
+
 import pytest
 
 from pydiag.core.errors import OutputError
@@ -87,3 +89,36 @@ def test_plot_formats_are_checked_by_suffix(tmp_path):
     with pytest.raises(OutputError, match="written as .png"):
         history.check_plot(tmp_path / "p.txt")
     history.check_plot(tmp_path / "p.PDF")
+
+
+def test_a_healthy_model_is_found_again_by_its_machine_and_fingerprint(tmp_path):
+    """Kept as plain data (JSON in SQLite) and read back whole; another fingerprint (say
+    other baselines) or another machine finds none."""
+    import tomllib
+    from pathlib import Path
+
+    from pydiag.gear.machine_file import machine_from_dict
+    from pydiag.loop.own_changes import HealthyModel
+
+    text = (Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml").read_text()
+    spur = machine_from_dict(tomllib.loads(text))
+    other = machine_from_dict(tomllib.loads(text.replace('name = "PHM09 spur gearbox"',
+                                                         'name = "another spur box"', 1)))
+    assert other.identity != spur.identity
+    model = HealthyModel({"input_stage.A_s1": 247.0, "acc_gain": 1.5}, 0.01,
+                         {("input stage", "pinion_shaft_orders"): 0.9},
+                         ({("input stage", "pinion_shaft_orders"): 11.8},
+                          {("input stage", "pinion_shaft_orders"): -2.0}),
+                         ("bearing_outer_race",))
+    db = tmp_path / "h.sqlite"
+    assert history.kept_healthy_model(db, spur, "abc") is None  # no history yet
+    kept = history.keep_healthy_model(db, spur, "abc", ["/b/run2.zip", "/b/run1.zip"], model)
+    again = history.kept_healthy_model(db, spur, "abc")
+    assert again == kept and again.model == model
+    assert again.baselines == ("/b/run2.zip", "/b/run1.zip")
+    assert history.kept_healthy_model(db, spur, "abd") is None
+    assert history.kept_healthy_model(db, other, "abc") is None
+    # the newest of one fingerprint is the one found
+    newer = history.keep_healthy_model(db, spur, "abc", ["/b/run2.zip", "/b/run1.zip"],
+                                       dataclasses.replace(model, false_alarm_rate=0.02))
+    assert history.kept_healthy_model(db, spur, "abc").id == newer.id > kept.id

@@ -1,0 +1,39 @@
+"""The key a machine's healthy model is kept under (pydiag.app.baselines.healthy_fingerprint):
+anything it is fitted from changes it, nothing else does."""
+
+from pathlib import Path
+
+from pydiag.app.baselines import healthy_fingerprint
+from pydiag.app.cli import build_parser
+from pydiag.loop.compose import BuiltModel
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def test_the_healthy_models_key_follows_what_it_is_fitted_from(tmp_path):
+    first, repeat, fmu = (tmp_path / name for name in ("run2.csv", "run1.csv", "m.fmu"))
+    first.write_text("t,acc\n0,1\n")
+    repeat.write_text("t,acc\n0,2\n")
+    fmu.write_bytes(b"an FMU")
+    built = BuiltModel(fmu, tmp_path / "m.mo")
+
+    def key(*extra: str) -> str:
+        args = build_parser().parse_args([
+            "diagnose", "--machine", str(ROOT / "examples" / "phm09_spur.toml"),
+            "--measurement", "record.csv", "--baseline", str(first), "--baseline",
+            str(repeat), *extra])
+        return healthy_fingerprint(args, built, [str(first), str(repeat)])
+
+    plain = key()
+    assert key() == plain
+    # outputs, what is said, how the work is spread and the record judged: the same model
+    assert key("--json", "out.json", "--quiet", "--workers", "1", "--force") == plain
+    # the fit's settings, the effects tried, the reading of the records: another model
+    assert key("--particles", "8") != plain
+    assert key("--lacking", "bearing_outer_race") != plain
+    assert key("--sample-rate", "66666.67") != plain
+    repeat.write_text("t,acc\n0,3\n")  # the repeat's bytes
+    assert key() != plain
+    repeat.write_text("t,acc\n0,2\n")
+    fmu.write_bytes(b"another FMU")  # the model built
+    assert key() != plain
