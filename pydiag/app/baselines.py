@@ -63,12 +63,14 @@ def healthy_measurements(args) -> dict[str, Measurement]:
     return {path: read_input(args, path) for path in _files(args, warn=False).values()}
 
 
-#: Arguments that leave the healthy model as it is: the record judged, where outputs go,
+#: Arguments that leave the healthy model as it is: the records judged, where outputs go,
 #: what is said, how the work is spread, where models are built (the model built and its
-#: library count instead), the machine file as parsed (its bytes count instead).
-NOT_FITTED_FROM = {"func", "command", "measurement", "json", "force", "quiet", "history",
-                   "workers", "oversubscribe", "build_dir", "modelica", "baseline",
-                   "eval_timeout", "machine", "machine_description"}
+#: library count instead), the machine file as parsed (its bytes count instead), and
+#: --lacking, which counts as a set (batch has none).
+NOT_FITTED_FROM = {"func", "command", "measurement", "measurements", "json", "out", "force",
+                   "quiet", "history", "workers", "oversubscribe", "scheduler", "indicators",
+                   "build_dir", "modelica", "baseline", "eval_timeout", "machine",
+                   "machine_description", "lacking"}
 
 
 def healthy_fingerprint(args, built: BuiltModel, files: list[str]) -> str:
@@ -81,6 +83,7 @@ def healthy_fingerprint(args, built: BuiltModel, files: list[str]) -> str:
              "model": history.sha256_of(built.fmu),
              "library": [[str(p.relative_to(root)), history.sha256_of(p)] for p in sources],
              "baselines": [history.sha256_of(f) for f in files],
+             "lacking": sorted(getattr(args, "lacking", None) or []),
              "arguments": {k: v for k, v in sorted(vars(args).items())
                            if k not in NOT_FITTED_FROM}}
     return hashlib.sha256(json.dumps(facts, sort_keys=True, default=str).encode()).hexdigest()
@@ -101,7 +104,8 @@ def kept_healthy_model(args, machine: Machine, model: MachineModel, built: Built
     if kept is not None:
         return kept, False, db
     fitted = healthy_model(str(built.fmu), model, machine, list(read.values()), args.input_hz,
-                           settings, estimator, args.lacking or (), effect_model)
+                           settings, estimator, getattr(args, "lacking", None) or (),
+                           effect_model)
     return history.keep_healthy_model(db, machine, key,
                                       [str(Path(p).resolve()) for p in read], fitted), True, db
 

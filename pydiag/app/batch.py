@@ -8,7 +8,10 @@ With a machine file of several stages (``batch --machine``), every stage of ever
 is diagnosed (:mod:`pydiag.diagnose.stages`), against the ``--baseline`` records when given:
 a column group a stage, and with baselines every component's state (``<component>:state``)
 and the faulty ones in one column (``faulty``). Without an FMU of one's own, by the machine's own model, built
-once before the tasks (a task carries it and the FMU's path).
+once before the tasks (a task carries it and the FMU's path); with a machine file that
+gives its stages effects and two or more --baseline files, its healthy model too, fitted
+(or found kept) once before the tasks, whose changes are a column (``model``) and join
+the components' states.
 
 Every measurement is one task; inside a task the estimator runs in a single process
 (the parallelism is across measurements). A measurement that fails becomes a row with
@@ -40,6 +43,7 @@ from pydiag.gear.machine_indicators import MachineRecord
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
 from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.own_changes import HealthyModel
 from pydiag.diagnose.diagnosis import diagnose
 from pydiag.diagnose.stages import diagnose_machine, diagnose_machine_model
 from pydiag.model.adapter import load_adapter
@@ -66,6 +70,7 @@ class BatchTask:
     baselines: tuple[MachineRecord, ...] = ()  # its healthy records, seen through it
     input_hz: float | None = None  # its nominal input speed
     model: MachineModel | None = None  # the machine's own model, built at ``fmu``
+    healthy: HealthyModel | None = None  # that model fitted to the first baseline
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -131,7 +136,7 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     machine = load_machine(task.machine)
     if task.model is not None:  # every stage at once, by the machine's own model
         result = diagnose_machine_model(task.fmu, task.model, m, machine, task.input_hz,
-                                        task.problem, estimator, task.baselines)
+                                        task.problem, estimator, task.baselines, task.healthy)
     else:
         result = diagnose_machine(task.fmu, m, machine, task.input_hz, task.problem,
                                   estimator, task.baselines, adapter)
@@ -150,6 +155,10 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
         if st.verdict is not None:
             row[f"{st.name}:change_db"] = max(abs(st.verdict.pinion.change_db),
                                               abs(st.verdict.gear.change_db))
+    if task.healthy is not None:  # the healthy model's changes, the largest first
+        row["model"] = "; ".join(f"{c.effect} on {c.stage}: {c.fault} ({c.margin:.2f} x)"
+                                 + (f", {', '.join(c.components)}" if c.components else "")
+                                 for c in result.model_changes if c.changed)
     if result.components:  # judged against baselines: every gear, bearing and shaft
         row["faulty"] = "; ".join(f"{v.component.name}: {v.state}"
                                   for v in result.components if v.faulty)

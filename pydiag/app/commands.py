@@ -308,14 +308,25 @@ def cmd_batch(args) -> int:
         raise UsageError("give --fmu, or --machine FILE to diagnose by the machine's own model")
     staged = _staged(args)
     problem = problem_settings(args)
-    baselines = tuple(baseline_records(args, machine, problem.tracking))
+    # the healthy model's records, read once for it and for the baselines' indicators
+    healthy = healthy_measurements(args) if not args.fmu and machine.effects else {}
+    baselines = tuple(baseline_records(args, machine, problem.tracking, healthy))
     # the machine's own model, built once here for every record (a worker only runs it)
-    model, fmu = (None, args.fmu) if args.fmu else _built(machine_models(args)(machine))
+    machines = None if args.fmu else machine_models(args)
+    built = None if machines is None else machines(machine)
+    model, fmu = (None, args.fmu) if built is None else _built(built)
+    kept = None
+    if len(healthy) >= 2:  # its healthy model, fitted once here too (or found kept)
+        kept = kept_healthy_model(args, machine, model, built[1], healthy,
+                                  problem, FaultEstimator(**settings),
+                                  lambda with_one: str(machines(with_one)[1].fmu))
+        print(format_healthy_model(*kept))
     tasks = [batch.BatchTask(p, fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,
                              tuple(args.sensitivity or ()), args.machine if staged else None,
-                             baselines, args.input_hz if staged else None, model)
+                             baselines, args.input_hz if staged else None, model,
+                             None if kept is None else kept[0].model)
              for p in paths]
     bar = None
     if not args.quiet:

@@ -5,8 +5,10 @@ refitted held out on a record with a broken output-gear tooth, which the simulat
 as a dip of the mesh's amplitude once a turn of the output shaft, not as the model's
 modulation. The model's verdict then joins the indicators' on every gear its effects size."""
 
+import csv
 import json
 import time
+from pathlib import Path
 
 from conftest import ROOT, run_cli
 from truth.gearbox import SHORT_BOX, gearbox_record
@@ -94,3 +96,31 @@ def test_an_effect_the_healthy_model_lacks_names_the_input_bearings_outer_race(t
     assert states["input bearing"] == ("outer", "both")  # the envelope's line says so too
     assert states["intermediate bearing"] == ("good", "both")
     assert all(s == ("good", "both") for n, s in states.items() if "T " in n), states
+
+
+def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
+    """batch --machine with the healthy model: fitted (or found kept) once before the
+    records, each record's changes a column and its components' states the joined ones."""
+    folder, records = tmp_path / "baselines", tmp_path / "records"
+    folder.mkdir()
+    records.mkdir()
+    healthy = []
+    for seed in (1, 3, 4):
+        healthy.append(folder / f"healthy_{seed}.csv")
+        write_measurement(healthy[-1], gearbox_record(seed, box=SHORT_BOX))
+    write_measurement(records / "broken.csv", gearbox_record(2, faulty_shaft=2, stage=1,
+                                                             box=SHORT_BOX))
+    write_measurement(records / "healthy_5.csv", gearbox_record(5, box=SHORT_BOX))
+    out = tmp_path / "rows.csv"
+    r = run_cli("-m", "pydiag", "batch", "--machine", str(HEALTHY_MODEL), "--measurements",
+                str(records), "--out", str(out), "--build-dir", str(tmp_path / "build"),
+                *(a for h in healthy for a in ("--baseline", str(h))), "--quiet",
+                "--particles", "8", "--iterations", "4", "--polish", "60")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.count("healthy    : the model fitted to ") == 1, r.stdout
+    rows = {Path(row["measurement"]).name: row for row in csv.DictReader(out.open())}
+    assert rows["broken.csv"]["model"].startswith(
+        "mesh_modulation on stage 2: changed"), rows["broken.csv"]["model"]
+    assert rows["broken.csv"]["50T gear of stage 2:state"] == "changed"
+    assert rows["healthy_5.csv"]["model"] == "", rows["healthy_5.csv"]["model"]
+    assert rows["healthy_5.csv"]["faulty"] == ""
