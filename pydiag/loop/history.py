@@ -236,20 +236,30 @@ def keep_baseline(db: str | Path, machine: Machine, record: MachineRecord,
                   measurement_path: str) -> KeptBaseline:
     """Keep ``record`` (of ``machine``, read from ``measurement_path``) as one of the
     machine's baselines in the history ``db``."""
+    i, when = _kept_row(db, "baselines", machine, "the baseline", {
+        "measurement": str(measurement_path), "speed_hz": record.speed.speed_hz,
+        "record": json.dumps(record.to_dict())})
+    return KeptBaseline(i, when, machine.name, str(measurement_path), record)
+
+
+def _kept_row(db: str | Path, table: str, machine: Machine, what: str, values: dict
+              ) -> tuple[int, str]:
+    """(its id, when, UTC): a row of ``values`` kept for ``machine`` in ``table`` of the
+    history ``db``, with the time and the machine's name and identity; ``what`` it is,
+    for the error that says it could not be kept."""
     when = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    con = _connect(db, "baselines")
+    row = {"time_utc": when, "machine": machine.name, "machine_identity": machine.identity,
+           **values}
+    con = _connect(db, table)
     try:
         with con:
-            cur = con.execute(
-                "INSERT INTO baselines (time_utc, machine, machine_identity, measurement, "
-                "speed_hz, record) VALUES (?,?,?,?,?,?)",
-                (when, machine.name, machine.identity, str(measurement_path),
-                 record.speed.speed_hz, json.dumps(record.to_dict())))
+            cur = con.execute(f"INSERT INTO {table} ({', '.join(row)}) VALUES "
+                              f"({','.join('?' * len(row))})", tuple(row.values()))
     except sqlite3.Error as err:
-        raise OutputError(f"cannot keep the baseline in {db}: {err}") from err
+        raise OutputError(f"cannot keep {what} in {db}: {err}") from err
     finally:
         con.close()
-    return KeptBaseline(int(cur.lastrowid), when, machine.name, str(measurement_path), record)
+    return int(cur.lastrowid), when
 
 
 def kept_baselines(db: str | Path, machine: Machine) -> list[KeptBaseline]:
@@ -305,20 +315,10 @@ def keep_healthy_model(db: str | Path, machine: Machine, fingerprint: str,
     """Keep ``model`` (of ``machine``, fitted to the first of ``baselines`` and held to
     the others) in the history ``db`` under ``fingerprint``: what it is found again by
     (everything it was made from, the caller's to say)."""
-    when = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    con = _connect(db, "healthy_models")
-    try:
-        with con:
-            cur = con.execute(
-                "INSERT INTO healthy_models (time_utc, machine, machine_identity, fingerprint, "
-                "baselines, model) VALUES (?,?,?,?,?,?)",
-                (when, machine.name, machine.identity, fingerprint, json.dumps(baselines),
-                 json.dumps(model.to_dict())))
-    except sqlite3.Error as err:
-        raise OutputError(f"cannot keep the healthy model in {db}: {err}") from err
-    finally:
-        con.close()
-    return KeptHealthyModel(int(cur.lastrowid), when, tuple(baselines), model)
+    i, when = _kept_row(db, "healthy_models", machine, "the healthy model", {
+        "fingerprint": fingerprint, "baselines": json.dumps(baselines),
+        "model": json.dumps(model.to_dict())})
+    return KeptHealthyModel(i, when, tuple(baselines), model)
 
 
 def kept_healthy_model(db: str | Path, machine: Machine, fingerprint: str
