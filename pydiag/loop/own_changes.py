@@ -114,21 +114,6 @@ def record_changes(healthy: HealthyModel, machine: Machine, model: MachineModel,
                     list(healthy.repeat_z))
 
 
-def healthy_changes(machine: Machine, model: MachineModel, baseline: FitProblem,
-                    repeats: Sequence[FitProblem], records: Sequence[FitProblem],
-                    estimator: FaultEstimator,
-                    effect_estimator: FaultEstimator | None = None,
-                    lacking: Sequence[str] = (),
-                    effect_model: Callable[[Machine], str] | None = None
-                    ) -> list[list[ModelChange]]:
-    """The model's verdict on each of ``records``: :func:`fit_healthy`, then
-    :func:`record_changes` of each."""
-    healthy = fit_healthy(machine, model, baseline, repeats, estimator, effect_estimator,
-                          lacking, effect_model)
-    return [record_changes(healthy, machine, model, problem, effect_estimator, effect_model)
-            for problem in records]
-
-
 def _rows(healthy: HealthyModel, machine: Machine, model: MachineModel, problem: FitProblem,
           refit: FaultEstimator, effect_model: Callable[[Machine], str] | None
           ) -> list[Suggestion]:
