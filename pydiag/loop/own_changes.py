@@ -1,6 +1,9 @@
-"""The model's verdict on what a machine's healthy model already has: which of its effects
-a record asks for at other values, held out, beside healthy repeats of the baseline, and
-the part of the machine that change sizes.
+"""The model's verdict on a record against the machine's healthy model: which of its
+effects the record asks for at other values, and which effects it lacks the record needs
+(those asked of), held out, beside healthy repeats of the baseline, and the part of the
+machine each change sizes. :func:`fit_healthy` makes the healthy model once (plain data,
+:class:`HealthyModel`, kept by the caller); :func:`record_changes` tries a record against
+it.
 
 The healthy model is the machine's own model fitted to a healthy baseline (with the
 effects the loop gave it there). Each effect a stage of it has is polished on half of a
@@ -14,8 +17,10 @@ the same effect on the same stage (their RMS), never below a z of 1. The effect'
 parameter that grew most names the part (:attr:`pydiag.gear.effect.Effect.parts`): a
 deeper pinion modulation is its pinion, larger orders of the pinion shaft are that shaft;
 the effect names the fault where it can (``Effect.fault``: a softer tooth chipped or
-broken, a shaft's risen orders an imbalance or a bend), else "changed". Of two changes
-whose held-out fits claim one line, the larger names it (:func:`_settled`).
+broken, a shaft's risen orders an imbalance or a bend), else "changed". An effect the
+healthy model lacks is tried the same way, from off
+(:func:`~pydiag.loop.machine_discover.discover_machine`). Of two changes whose held-out
+fits claim one line, the larger names it (:func:`_settled`).
 """
 
 from __future__ import annotations
