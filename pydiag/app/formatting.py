@@ -312,7 +312,8 @@ def format_model_changes(changes: tuple[ModelChange, ...]) -> list[str]:
         sized = ", ".join(f"{name.split('.', 1)[-1]} {a:.3g} -> {b:.3g}"
                           for name, (a, b) in c.values.items())
         named = (f": {', '.join(c.components)}" if c.changed and c.components else
-                 f" (its lines are {c.beaten_by}'s)" if c.beaten_by else "")
+                 f" (its lines are {c.beaten_by}'s)" if c.beaten_by else
+                 " (its lines' residual not lower)" if c.margin > 1 and not c.changed else "")
         lines.append(f"{c.effect:<30}{c.stage:<{stage}}{state:<12}{margin:>7}  {sized}{named}")
     lines.append("x thr      : an effect of the healthy model refitted held out, its rise of "
                  f"z over the baseline's against {K_SPREAD:g} x the healthy repeats' rise")

@@ -82,7 +82,9 @@ class ModelChange:
     ``components``: the machine's components that part is (a mesh: both gears);
     ``fault``: the state it names them in when changed (``Effect.fault``); ``covers``:
     every component a change of the effect could name (any of its parts); ``beaten_by``:
-    the larger change that claims its lines too, which names them instead ("" for none)."""
+    the larger change that claims its lines too, which names them instead ("" for none);
+    ``explained``: the share of the residual on its lines of the held-out half its fit
+    removes (:attr:`pydiag.loop.results.HeldOut.explained`)."""
 
     stage: str
     effect: str
@@ -96,12 +98,16 @@ class ModelChange:
     fault: str = CHANGED
     covers: tuple[str, ...] = ()
     beaten_by: str = ""
+    explained: float = math.nan
 
     @property
     def changed(self) -> bool:
         """Whether the record asks for other values beyond the healthy repeats' spread,
-        and no larger change claims its lines (``beaten_by``)."""
-        return self.margin > 1.0 and not self.beaten_by
+        no larger change claims its lines (``beaten_by``), and the record's own lines are
+        better predicted with them: a fit that leaves more residual on its lines of the
+        held-out half than the healthy values (``explained`` at most 0; nan: not known)
+        took its z from other lines, which are another effect's."""
+        return self.margin > 1.0 and not self.beaten_by and not self.explained <= 0
 
     def to_dict(self) -> dict:
         return {"stage": self.stage, "effect": self.effect, "changed": self.changed,
@@ -111,7 +117,8 @@ class ModelChange:
                 "values": {k: [finite_or_none(a), finite_or_none(b)]
                            for k, (a, b) in self.values.items()},
                 "part": self.part, "components": list(self.components), "fault": self.fault,
-                "covers": list(self.covers), "beaten_by": self.beaten_by or None}
+                "covers": list(self.covers), "beaten_by": self.beaten_by or None,
+                "explained": finite_or_none(self.explained)}
 
 
 def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]

@@ -185,7 +185,7 @@ def _changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float]
         out.append(ModelChange(row.stage, row.effect, h.z, base_z, repeat_rise,
                                (h.z - base_z) / held_to, values, part,
                                part_components(machine, k, part), effect.fault_of(values),
-                               covers))
+                               covers, explained=h.explained))
         claimed[key] = set(h.claimed)
     out.sort(key=lambda c: -c.margin if math.isfinite(c.margin) else math.inf)
     return _settled(out, claimed)

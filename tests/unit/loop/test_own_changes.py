@@ -143,3 +143,20 @@ def test_of_two_changes_that_claim_the_same_lines_the_larger_names_them(spur):
     # lines of their own: both stand
     record[1] = race("output stage", 40.0, 13.2, ("acc envelope 103.30 Hz",))
     assert all(c.changed for c in own_changes(machine, model, {}, record, base, [repeat]))
+
+
+def test_a_rise_whose_fit_leaves_its_own_lines_worse_names_nothing(spur):
+    """The short box's input outer race: the intermediate bearing's ball effect rose 7 in
+    z beside it, its fit leaving 2.6 times more residual on its own lines of the held-out
+    half (explained -2.6): its z came from the outer race's lines."""
+    machine, model = spur
+    inp = f"{model.stages[0]}."
+    base = [row("input stage", "bearing_ball", 0.6)]
+    repeat = [row("input stage", "bearing_ball", 1.6)]
+    ball = row("input stage", "bearing_ball", 8.9, **{inp + "A_b": 7.5})
+    worse = dataclasses.replace(ball, held_out=dataclasses.replace(ball.held_out,
+                                                                   explained=-2.6))
+    c, = own_changes(machine, model, {}, [worse], base, [repeat])
+    assert c.margin > 1 and not c.changed and c.explained == -2.6
+    c, = own_changes(machine, model, {}, [ball], base, [repeat])  # explained 0.5
+    assert c.changed and c.components == ("IS:IS", "IS:OS")
