@@ -13,7 +13,6 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from pydiag import __version__
-
 from pydiag.app.formatting import format_kept_baselines
 from pydiag.app.models import library
 from pydiag.app.reading import read_input
