@@ -8,8 +8,8 @@ from __future__ import annotations
 import math
 
 from pydiag.core.parameters import Parameter
-from pydiag.gear.effect import (GEAR, MESH, PINION, PINION_BEARING, PINION_SHAFT, GEAR_SHAFT,
-                               Effect)
+from pydiag.gear.effect import (GEAR, MESH, OTHER_SHAFT, PINION, PINION_BEARING, PINION_SHAFT,
+                               GEAR_SHAFT, Effect)
 from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPPLE_HZ,
                                     MAX_SHAFT_ORDER_M_S2, MAX_STRIKE_M_S2, MAX_SWING,
                                     backlash, ball_defect, bearing_missing, bearing_values,
@@ -131,7 +131,9 @@ EFFECTS = {e.key: e for e in (
            tuple(Parameter(f"A_o{k}", 0.0, MAX_SHAFT_ORDER_M_S2)
                  for k in range(1, SHAFT_ORDERS + 1)),
            other_shaft, other_shaft_hint, synchronous=False, outputs=("acc",), affine=True,
-           machine_values=other_shaft_values, missing=other_shaft_missing),
+           machine_values=other_shaft_values, missing=other_shaft_missing,
+           parts=tuple((f"A_o{k}", OTHER_SHAFT) for k in range(1, SHAFT_ORDERS + 1)),
+           fault=model_shaft_state),
     # the mode reweights every line the gear pair makes on its way to the sensor (its
     # signature: all of them); its frequency is fitted in the band where the residual of
     # those lines bunches (the hint), or above the band, where it shows only as a tilt

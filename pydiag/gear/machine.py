@@ -167,7 +167,7 @@ class Machine:
             return float(self.shaft_ratio(shaft) / base)
 
         others = [k for k in range(len(self.shafts)) if k not in (stage, stage + 1)]
-        neighbour = stage + 2 if stage + 2 < len(self.shafts) else stage - 1
+        neighbour = self.other_shaft(stage)
         context = Surroundings(
             tuple(OtherStage(o.name, o.pinion_teeth, o.gear_teeth, ratio(j), self.shafts[j],
                              self.shafts[j + 1])
@@ -176,10 +176,18 @@ class Machine:
             tuple(b for b in self.bearings if own is None or b.name != own.name),
             pair_shafts=(self.shafts[stage], self.shafts[stage + 1]))
         return GearKinematics(s.pinion_teeth, s.gear_teeth, float(input_hz * base),
-                              other_shaft_ratio=ratio(neighbour) if others else None,
+                              other_shaft_ratio=None if neighbour is None else ratio(neighbour),
                               bearing=own,
                               surroundings=context if len(self.stages) > 1 or context.bearings
                               else None)
+
+    def other_shaft(self, stage: int) -> int | None:
+        """The index of the shaft stage ``stage``'s other-shaft effect models: the next
+        downstream of its gear, else the one upstream of its pinion (None: the machine has
+        no shaft beyond the pair's)."""
+        if len(self.shafts) <= 2:
+            return None
+        return stage + 2 if stage + 2 < len(self.shafts) else stage - 1
 
     def pair_bearing(self, stage: int) -> Bearing | None:
         """Stage ``stage``'s bearing as its gear pair sees it: the first on its pinion

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.component import ModelChange, components
-from pydiag.gear.effect import GEAR, MESH, PINION, PINION_BEARING, PINION_SHAFT, GEAR_SHAFT
+from pydiag.gear.effect import (GEAR, GEAR_SHAFT, MESH, OTHER_SHAFT, PINION, PINION_BEARING,
+                               PINION_SHAFT)
 from pydiag.gear.machine import Machine
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.loop.compare import compare
@@ -212,12 +213,13 @@ def _settled(changes: list[ModelChange], claimed: dict[tuple[str, str], set[str]
 
 def part_components(machine: Machine, stage: int, part: str | None) -> tuple[str, ...]:
     """The names of ``machine``'s components that ``part`` of stage ``stage`` is: its
-    pinion, its gear, both (the mesh), the shaft of either, the bearings of the pinion's
-    shaft; none for no part."""
+    pinion, its gear, both (the mesh), the shaft of either or the other shaft its
+    other-shaft effect models, the bearings of the pinion's shaft; none for no part."""
     name = machine.stages[stage].name
     roles = {PINION: ("pinion",), GEAR: ("gear",), MESH: ("pinion", "gear")}.get(part, ())
-    shaft = {PINION_SHAFT: machine.shafts[stage],
-             GEAR_SHAFT: machine.shafts[stage + 1]}.get(part)
+    other = machine.other_shaft(stage)
+    shaft = {PINION_SHAFT: machine.shafts[stage], GEAR_SHAFT: machine.shafts[stage + 1],
+             OTHER_SHAFT: None if other is None else machine.shafts[other]}.get(part)
     every = components(machine)
     return tuple(c.name for c in every
                  if (c.kind == "gear" and c.stage == name and c.role in roles)

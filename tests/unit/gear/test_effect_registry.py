@@ -73,15 +73,15 @@ def test_each_range_searched_lies_where_the_model_holds(key):
 
 def test_every_fault_of_a_part_is_sized_by_its_own_amplitudes():
     """An effect that is a fault of a part of its stage names the parameters that size it
-    (its own, none a phase); a ripple, a housing mode and another shaft's orders size no
-    part of the stage (the drive, the sensor's path, a shaft beyond the pair)."""
+    (its own, none a phase); a ripple and a housing mode size no part of the stage (the
+    drive, the sensor's path). Another shaft's orders size the other shaft (in a machine,
+    the shaft no pinion of the stage's sits on: the output shaft's only judge)."""
     for key, effect in EFFECTS.items():
         names = {p.name: p for p in effect.parameters}
         assert all(name in names and not names[name].periodic and part in PARTS
                    for name, part in effect.parts), key
     without = {k for k, e in EFFECTS.items() if not e.parts}
-    assert without == {"load_fluctuation", "speed_fluctuation", "other_shaft_orders",
-                       "housing_sensor"}
+    assert without == {"load_fluctuation", "speed_fluctuation", "housing_sensor"}
 
 
 def test_the_part_is_that_of_the_sizing_parameter_that_grew_most():

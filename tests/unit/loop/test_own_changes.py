@@ -83,6 +83,25 @@ def test_a_part_is_the_machines_components():
     assert part_components(machine, 1, "gear shaft") == ("output",)
     assert part_components(machine, 1, "pinion bearing") == ("ID:IS", "ID:OS")
     assert part_components(machine, 0, None) == ()
+    # the other shaft: the next downstream of the gear, else the one upstream of the pinion
+    assert part_components(machine, 0, "other shaft") == ("output",)
+    assert part_components(machine, 1, "other shaft") == ("input",)
+
+
+def test_the_shaft_no_pinion_sits_on_is_judged_through_the_other_shaft(spur):
+    """The output shaft carries no stage's pinion: its orders are the input stage's other
+    shaft's. A sheared key that lets it slip makes its first three orders rise: looseness,
+    on the output shaft."""
+    machine, model = spur
+    inp = f"{model.stages[0]}."
+    base = [row("input stage", "other_shaft_orders", 0.3)]
+    repeat = [row("input stage", "other_shaft_orders", 1.4)]
+    record = [row("input stage", "other_shaft_orders", 30.0,
+                  **{inp + "A_o1": 40.0, inp + "A_o2": 35.0, inp + "A_o3": 30.0,
+                     inp + "A_o4": 2.0})]
+    c, = own_changes(machine, model, {}, record, base, [repeat])
+    assert c.changed and (c.part, c.fault) == ("other shaft", "looseness")
+    assert c.components == c.covers == ("output",)
 
 
 def test_a_change_says_the_fault_its_effect_names_and_what_it_covers(spur):
