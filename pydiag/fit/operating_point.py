@@ -93,4 +93,5 @@ def at_model_speed(measurement: Measurement, kin: GearKinematics,
             * model_kinematics.f_pinion_hz / kin.f_pinion_hz)
     return measurement, dataclasses.replace(model_kinematics,
                                             other_shaft_ratio=kin.other_shaft_ratio,
-                                            bearing=kin.bearing, surroundings=kin.surroundings)
+                                            bearing=kin.bearing, surroundings=kin.surroundings,
+                                            gear_bearing=kin.gear_bearing)

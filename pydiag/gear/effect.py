@@ -21,9 +21,11 @@ from pydiag.signal.transfer import HousingMode
 #: The parts of a stage an effect's parameters can size a fault of (``Effect.parts``).
 #: The other shaft is the one the other-shaft effect models: in a machine, the shaft
 #: :meth:`~pydiag.gear.machine.Machine.other_shaft` names.
-PINION, GEAR, MESH, PINION_SHAFT, GEAR_SHAFT, PINION_BEARING, OTHER_SHAFT = (
-    "pinion", "gear", "mesh", "pinion shaft", "gear shaft", "pinion bearing", "other shaft")
-PARTS = (PINION, GEAR, MESH, PINION_SHAFT, GEAR_SHAFT, PINION_BEARING, OTHER_SHAFT)
+PINION, GEAR, MESH, PINION_SHAFT, GEAR_SHAFT, PINION_BEARING, GEAR_BEARING, OTHER_SHAFT = (
+    "pinion", "gear", "mesh", "pinion shaft", "gear shaft", "pinion bearing", "gear bearing",
+    "other shaft")
+PARTS = (PINION, GEAR, MESH, PINION_SHAFT, GEAR_SHAFT, PINION_BEARING, GEAR_BEARING,
+         OTHER_SHAFT)
 
 
 @dataclass(frozen=True)
@@ -80,7 +82,7 @@ class Effect:
             test holds it to)
         parts: (parameter, part) of each parameter that sizes a fault of one part of its
             stage (:data:`PARTS`: the pinion, the gear, both through their mesh, a shaft
-            of the pair or the other shaft, the pinion shaft's bearing); a phase or a frequency sizes none, and an
+            of the pair or the other shaft, the bearing on either shaft); a phase or a frequency sizes none, and an
             effect of the drive or the sensor (a ripple, a housing mode) has none
         fault: the state (:mod:`pydiag.gear.faults`) of a part whose fault a record sizes
             beyond the healthy model's: a word, or a rule of the :attr:`parts`'

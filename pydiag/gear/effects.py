@@ -5,15 +5,18 @@ from :mod:`pydiag.gear.signatures`; docs/effects.md tells how to add one.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from pydiag.core.parameters import Parameter
-from pydiag.gear.effect import (GEAR, MESH, OTHER_SHAFT, PINION, PINION_BEARING, PINION_SHAFT,
-                               GEAR_SHAFT, Effect)
+from pydiag.gear.effect import (GEAR, GEAR_BEARING, GEAR_SHAFT, MESH, OTHER_SHAFT, PINION,
+                               PINION_BEARING, PINION_SHAFT, Effect)
 from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPPLE_HZ,
                                     MAX_SHAFT_ORDER_M_S2, MAX_STRIKE_M_S2, MAX_SWING,
                                     backlash, ball_defect, bearing_missing, bearing_values,
-                                    family, gear_eccentricity, gear_tooth_fault, housing_hint,
+                                    family, gear_ball_defect, gear_bearing_missing,
+                                    gear_bearing_values, gear_eccentricity, gear_tooth_fault,
+                                    housing_hint,
                                     housing_start, load_fluctuation, mesh_modulation,
                                     other_shaft, other_shaft_hint, other_shaft_missing,
                                     other_shaft_values, pinion_shaft, pinion_shaft_hint,
@@ -23,6 +26,44 @@ from pydiag.gear.faults import BALL, ECCENTRIC, INNER, OUTER, model_shaft_state,
 from pydiag.gear.kinematic_map import SHAFT_ORDERS
 from pydiag.signal.ripple import LoadRipple, SpeedRipple
 from pydiag.signal.transfer import HousingMode
+
+
+_OUTER = Effect(
+    "bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
+    "outer-race defect, pinion bearing (strikes ringing a structural mode)",
+    (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), family(("bpfo",)), synchronous=False,
+    outputs=("acc",), envelope=True, affine=True, machine_values=bearing_values,
+    missing=bearing_missing, parts=(("A_b", PINION_BEARING),), fault=OUTER)
+_INNER = Effect(
+    "bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
+    "inner-race defect, pinion bearing (strikes ringing a structural mode)",
+    (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
+     Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
+    family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
+    machine_values=bearing_values, missing=bearing_missing,
+    parts=(("A_b", PINION_BEARING),), fault=INNER)
+# a spalled ball strikes both races once each a turn about its axis (2 x BSF, the
+# kinematic map's even BSF lines), the cage carrying it through the load zone
+_BALL = Effect(
+    "bearing_ball", "GearDiag.Effects.BearingBall",
+    "rolling-element defect, pinion bearing (strikes twice a ball turn ringing a "
+    "structural mode)",
+    (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
+     Parameter("phi_cage", -math.pi, math.pi, periodic=True)),
+    ball_defect, synchronous=False, outputs=("acc",), envelope=True,
+    machine_values=bearing_values, missing=bearing_missing,
+    parts=(("A_b", PINION_BEARING),), fault=BALL)
+
+def _on_gear_shaft(effect: Effect, weight) -> Effect:
+    """A bearing effect of the bearing on the gear's shaft (``GearKinematics.gear_bearing``,
+    the kinematic map's ``gear_`` families): the same model, its strikes at that shaft's
+    speed (``r_shaft``). In a machine only the shaft no stage's pinion turns has one: every
+    other shaft's bearings are a pinion's."""
+    return dataclasses.replace(
+        effect, key=f"gear_{effect.key}",
+        description=effect.description.replace("pinion bearing", "gear bearing"),
+        weight=weight, machine_values=gear_bearing_values, missing=gear_bearing_missing,
+        parts=(("A_b", GEAR_BEARING),))
 
 
 EFFECTS = {e.key: e for e in (
@@ -68,28 +109,10 @@ EFFECTS = {e.key: e for e in (
     Effect("backlash", "GearDiag.Effects.Backlash", "contact loss between the teeth",
            (Parameter("delta_c", 0.01e-6, 0.3e-6),), backlash, reshapes_base=True,
            parts=(("delta_c", MESH),)),
-    Effect("bearing_outer_race", "GearDiag.Effects.BearingOuterRace",
-           "outer-race defect, pinion bearing (strikes ringing a structural mode)",
-           (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),), family(("bpfo",)), synchronous=False,
-           outputs=("acc",), envelope=True, affine=True, machine_values=bearing_values,
-           missing=bearing_missing, parts=(("A_b", PINION_BEARING),), fault=OUTER),
-    Effect("bearing_inner_race", "GearDiag.Effects.BearingInnerRace",
-           "inner-race defect, pinion bearing (strikes ringing a structural mode)",
-           (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
-            Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
-           family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
-           machine_values=bearing_values, missing=bearing_missing,
-           parts=(("A_b", PINION_BEARING),), fault=INNER),
-    # a spalled ball strikes both races once each a turn about its axis (2 x BSF, the
-    # kinematic map's even BSF lines), the cage carrying it through the load zone
-    Effect("bearing_ball", "GearDiag.Effects.BearingBall",
-           "rolling-element defect, pinion bearing (strikes twice a ball turn ringing a "
-           "structural mode)",
-           (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
-            Parameter("phi_cage", -math.pi, math.pi, periodic=True)),
-           ball_defect, synchronous=False, outputs=("acc",), envelope=True,
-           machine_values=bearing_values, missing=bearing_missing,
-           parts=(("A_b", PINION_BEARING),), fault=BALL),
+    _OUTER, _INNER, _BALL,
+    *(_on_gear_shaft(e, weight) for e, weight in (
+        (_OUTER, family(("gear_bpfo",))), (_INNER, family(("gear_bpfi", "gear_bpfi_sb"))),
+        (_BALL, gear_ball_defect))),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,
            ripple_hint("f_load"), synchronous=False,

@@ -9,6 +9,9 @@ Families (each line carries its family and order):
   that belong to no family above
 - ``bpfo``, ``bpfi``, ``bsf``, ``ftf``: bearing defect frequencies and harmonics (when a
   bearing geometry is given), ``bpfi_sb``: BPFI +- shaft speed sidebands
+- ``gear_bpfo``, ``gear_bpfi``, ``gear_bpfi_sb``, ``gear_bsf``, ``gear_ftf``: the same of
+  the bearing on the gear's shaft that the pair's gear-bearing effects model
+  (``GearKinematics.gear_bearing``)
 - ``other_shaft``: k*f_other, the orders of another shaft of the machine (when its speed
   ratio is given: ``GearKinematics.other_shaft_ratio``), up to :data:`SHAFT_ORDERS`
 
@@ -35,7 +38,8 @@ from dataclasses import dataclass, replace
 from pydiag.gear.kinematics import GearKinematics
 
 PRIORITY = ("mesh", "stage_mesh", "mesh_sb_pinion", "mesh_sb_gear", "stage_mesh_sb", "pinion",
-            "gear", "assembly", "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "machine_bearing",
+            "gear", "assembly", "bpfo", "bpfi", "bpfi_sb", "bsf", "ftf", "gear_bpfo",
+            "gear_bpfi", "gear_bpfi_sb", "gear_bsf", "gear_ftf", "machine_bearing",
             "other_shaft", "machine_shaft", "stage_assembly", "hunting")
 #: The shaft orders a shaft's own vibration is modelled at (GearDiag.Components.ShaftOrders):
 #: an unbalance at 1x, a misalignment at 1x-2x, a coupling or a looseness up to about 10x.
@@ -88,16 +92,18 @@ def kinematic_map(kin: GearKinematics, max_freq_hz: float,
     if f_other is not None:
         for k in range(1, min(SHAFT_ORDERS, int(max_freq_hz / f_other)) + 1):
             add(k * f_other, "other_shaft", k, f"{k}x other shaft")
-    bearing = kin.bearing
-    if bearing is not None:
+    for bearing, prefix, whose in ((kin.bearing, "", ""),
+                                   (kin.gear_bearing, GEAR_BEARING_PREFIX, " (gear's bearing)")):
+        if bearing is None:
+            continue
         f_shaft = kin.shaft_hz(bearing.shaft)
         for family, f in bearing.frequencies(f_shaft).items():
             for k in range(1, int(max_freq_hz / f) + 1):
-                add(k * f, family, k, f"{k}x {family.upper()}")
+                add(k * f, prefix + family, k, f"{k}x {family.upper()}{whose}")
                 if family == "bpfi":
                     for sign in (-1, 1):
-                        add(k * f + sign * f_shaft, "bpfi_sb", sign * k,
-                            f"{k}x BPFI {'+' if sign > 0 else '-'} shaft")
+                        add(k * f + sign * f_shaft, prefix + "bpfi_sb", sign * k,
+                            f"{k}x BPFI {'+' if sign > 0 else '-'} shaft{whose}")
     if kin.surroundings is not None:
         _machine_lines(kin, max_freq_hz, n_sidebands, add)
     return coinciding(lines)
@@ -133,8 +139,12 @@ def _machine_lines(kin: GearKinematics, max_freq_hz: float, n_sidebands: int, ad
                 add(k * f, "machine_bearing", k, f"{k}x {family.upper()} {b.name} ({b.shaft})")
 
 
-#: The families of a rolling bearing's lines.
-BEARING_FAMILIES = ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf")
+#: What the families of the gear's bearing's lines begin with.
+GEAR_BEARING_PREFIX = "gear_"
+#: The families of a rolling bearing's lines: the pair's bearing's, then the gear's
+#: bearing's.
+BEARING_FAMILIES = ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf") + tuple(
+    GEAR_BEARING_PREFIX + f for f in ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf"))
 
 
 def coinciding(lines: list[KinematicLine], tolerance_hz: float = 0.0) -> list[KinematicLine]:

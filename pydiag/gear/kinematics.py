@@ -113,6 +113,9 @@ class GearKinematics:
             a second stage whose z3 teeth on the gear's shaft drive z4: Np/Ng * z3/z4
         bearing: a rolling bearing's geometry (its lines are kinematic, and a bearing
             effect's model takes it), or None: none known
+        gear_bearing: a bearing on the gear's shaft that the pair's gear-bearing effects
+            model (in a machine, one on the shaft no stage's pinion turns: the output's),
+            or None
         surroundings: the other stages, shafts and bearings of the pair's gearbox (their lines
             are kinematic; no effect of the pair models them), or None: a pair alone
     """
@@ -123,6 +126,7 @@ class GearKinematics:
     other_shaft_ratio: float | None = None
     bearing: Bearing | None = None
     surroundings: Surroundings | None = None
+    gear_bearing: Bearing | None = None
 
     def __post_init__(self) -> None:
         if self.n_pinion < 1 or self.n_gear < 1:

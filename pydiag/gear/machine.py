@@ -155,12 +155,15 @@ class Machine:
 
     def stage_kinematics(self, stage: int, input_hz: float) -> GearKinematics:
         """Stage ``stage`` as a gear pair at ``input_hz`` on the input shaft, in its
-        machine: the pair's bearing is the first on its pinion shaft; its other shaft (the
+        machine: the pair's bearing is the first on its pinion shaft (and its gear's
+        bearing, the first on its gear's shaft if no stage's pinion turns it); its other shaft (the
         one the other-shaft effect models) the next shaft downstream of its gear, else the
         one upstream of its pinion; every other stage, shaft and bearing is its
         :class:`~pydiag.gear.kinematics.Surroundings`."""
         s = self.stages[stage]
         own = self.pair_bearing(stage)
+        gear_own = self.gear_bearing(stage)
+        mine = {b.name for b in (own, gear_own) if b is not None}
         base = self.shaft_ratio(stage)
 
         def ratio(shaft: int) -> float:
@@ -173,13 +176,23 @@ class Machine:
                              self.shafts[j + 1])
                   for j, o in enumerate(self.stages) if j != stage),
             tuple(OtherShaft(self.shafts[k], ratio(k)) for k in others),
-            tuple(b for b in self.bearings if own is None or b.name != own.name),
+            tuple(b for b in self.bearings if b.name not in mine),
             pair_shafts=(self.shafts[stage], self.shafts[stage + 1]))
         return GearKinematics(s.pinion_teeth, s.gear_teeth, float(input_hz * base),
                               other_shaft_ratio=None if neighbour is None else ratio(neighbour),
-                              bearing=own,
+                              bearing=own, gear_bearing=gear_own,
                               surroundings=context if len(self.stages) > 1 or context.bearings
                               else None)
+
+    def gear_bearing(self, stage: int) -> Bearing | None:
+        """Stage ``stage``'s gear's bearing as its gear pair sees it: the first on its gear's
+        shaft, on the "gear", if no stage's pinion turns that shaft (the last stage's
+        output shaft; every other shaft's bearings are a pinion's) (None: none)."""
+        shaft = self.shafts[stage + 1]
+        if stage + 1 < len(self.stages):
+            return None
+        own = next((b for b in self.bearings if b.shaft == shaft), None)
+        return None if own is None else dataclasses.replace(own, shaft="gear")
 
     def other_shaft(self, stage: int) -> int | None:
         """The index of the shaft stage ``stage``'s other-shaft effect models: the next

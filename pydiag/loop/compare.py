@@ -118,7 +118,8 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     # the plots' cursors: every stage's mesh harmonics, low shaft orders and their mesh
     # sidebands, bearings
     orders = {"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3, "bpfo": 5,
-              "bpfi": 5, "bsf": 5, "ftf": 5, "other_shaft": 3, "stage_mesh_sb": 1,
+              "bpfi": 5, "bsf": 5, "ftf": 5, "gear_bpfo": 5, "gear_bpfi": 5, "gear_bsf": 5,
+              "gear_ftf": 5, "other_shaft": 3, "stage_mesh_sb": 1,
               "machine_shaft": 3, "machine_bearing": 3}
     markers = [{"freq_hz": ln.freq_hz, "family": ln.family, "label": ln.label} for ln in lines
                if ln.family in ("mesh", "stage_mesh")

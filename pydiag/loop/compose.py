@@ -197,6 +197,11 @@ def compose(keys: tuple[str, ...], modelica_root: Path, base: Base = PAIR) -> Co
     if len(keys) < (2 if base == PAIR else 1):
         raise CompositionError(f"a composed model of {base.model} takes "
                                f"{'two effects' if base == PAIR else 'an effect'} or more")
+    models: dict[str, str] = {}
+    for k in keys:  # a gear bearing's effect is its pinion bearing's model at another speed
+        if (other := models.setdefault(EFFECTS[k].model, k)) != k:
+            raise CompositionError(f"{other} and {k} are one model ({EFFECTS[k].model}) at "
+                                   "two shafts' speeds: one model cannot have both yet")
     sources = [read_effect(k, modelica_root) for k in keys]
     for src in sources:
         if src.hook not in base.hooks:

@@ -33,8 +33,8 @@ from dataclasses import dataclass
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.component import ModelChange, components
-from pydiag.gear.effect import (GEAR, GEAR_SHAFT, MESH, OTHER_SHAFT, PINION, PINION_BEARING,
-                               PINION_SHAFT)
+from pydiag.gear.effect import (GEAR, GEAR_BEARING, GEAR_SHAFT, MESH, OTHER_SHAFT, PINION,
+                               PINION_BEARING, PINION_SHAFT)
 from pydiag.gear.machine import Machine
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.loop.compare import compare
@@ -214,7 +214,8 @@ def _settled(changes: list[ModelChange], claimed: dict[tuple[str, str], set[str]
 def part_components(machine: Machine, stage: int, part: str | None) -> tuple[str, ...]:
     """The names of ``machine``'s components that ``part`` of stage ``stage`` is: its
     pinion, its gear, both (the mesh), the shaft of either or the other shaft its
-    other-shaft effect models, the bearings of the pinion's shaft; none for no part."""
+    other-shaft effect models, the bearings of the pinion's or the gear's shaft; none for
+    no part."""
     name = machine.stages[stage].name
     roles = {PINION: ("pinion",), GEAR: ("gear",), MESH: ("pinion", "gear")}.get(part, ())
     other = machine.other_shaft(stage)
@@ -224,5 +225,6 @@ def part_components(machine: Machine, stage: int, part: str | None) -> tuple[str
     return tuple(c.name for c in every
                  if (c.kind == "gear" and c.stage == name and c.role in roles)
                  or (c.kind == "shaft" and c.name == shaft)
-                 or (part == PINION_BEARING and c.kind == "bearing"
-                     and c.shaft == machine.shafts[stage]))
+                 or (c.kind == "bearing" and c.shaft == {
+                     PINION_BEARING: machine.shafts[stage],
+                     GEAR_BEARING: machine.shafts[stage + 1]}.get(part)))

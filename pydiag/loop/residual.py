@@ -43,6 +43,8 @@ FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
                 "pinion": "pinion_orders", "mesh_sb_gear": "gear_orders", "gear": "gear_orders",
                 "assembly": "assembly_hunting", "hunting": "assembly_hunting", "bpfo": "bearing",
                 "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing",
+                "gear_bpfo": "bearing", "gear_bpfi": "bearing", "gear_bpfi_sb": "bearing",
+                "gear_bsf": "bearing", "gear_ftf": "bearing",
                 "other_shaft": "other_shaft_orders", "machine_shaft": "other_shaft_orders",
                 "machine_bearing": "bearing", "stage_mesh": "other_stages",
                 "stage_mesh_sb": "other_stages", "stage_assembly": "other_stages"}

@@ -53,6 +53,9 @@ def test_a_composed_model_adds_what_each_effect_adds(gear_fmu, effects_dir, tmp_
 def test_effects_that_cannot_share_a_model_are_refused_by_name(modelica_copy):
     with pytest.raises(CompositionError, match="both declare A_b, differently"):
         compose(("bearing_outer_race", "bearing_inner_race"), MODELICA)
+    with pytest.raises(CompositionError, match="bearing_ball and gear_bearing_ball are one "
+                                               "model .* at two shafts' speeds"):
+        compose(("gear_bearing_ball", "bearing_ball"), MODELICA)
     with pytest.raises(CompositionError, match="housing_sensor has no model of its own"):
         compose(("housing_sensor", "gear_eccentricity"), MODELICA)
     runout = modelica_copy / "GearDiag" / "Effects" / "GearEccentricity.mo"
