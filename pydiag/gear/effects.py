@@ -11,12 +11,13 @@ import math
 from pydiag.core.parameters import Parameter
 from pydiag.gear.effect import (GEAR, GEAR_BEARING, GEAR_SHAFT, MESH, OTHER_SHAFT, PINION,
                                PINION_BEARING, PINION_SHAFT, Effect)
+from pydiag.gear.bearing_signatures import (MAX_STRIKE_M_S2, ball_defect, bearing_missing,
+                                            bearing_values, family, gear_ball_defect,
+                                            gear_bearing_missing, gear_bearing_values,
+                                            shared_family)
 from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPPLE_HZ,
-                                    MAX_SHAFT_ORDER_M_S2, MAX_STRIKE_M_S2, MAX_SWING,
-                                    backlash, ball_defect, bearing_missing, bearing_values,
-                                    family, gear_ball_defect, gear_bearing_missing,
-                                    gear_bearing_values, gear_eccentricity, gear_tooth_fault,
-                                    housing_hint,
+                                    MAX_SHAFT_ORDER_M_S2, MAX_SWING, backlash,
+                                    gear_eccentricity, gear_tooth_fault, housing_hint,
                                     housing_start, load_fluctuation, mesh_modulation,
                                     other_shaft, other_shaft_hint, other_shaft_missing,
                                     other_shaft_values, pinion_shaft, pinion_shaft_hint,
@@ -111,7 +112,8 @@ EFFECTS = {e.key: e for e in (
            parts=(("delta_c", MESH),)),
     _OUTER, _INNER, _BALL,
     *(_on_gear_shaft(e, weight) for e, weight in (
-        (_OUTER, family(("gear_bpfo",))), (_INNER, family(("gear_bpfi", "gear_bpfi_sb"))),
+        (_OUTER, shared_family(("gear_bpfo",))),
+        (_INNER, shared_family(("gear_bpfi", "gear_bpfi_sb"))),
         (_BALL, gear_ball_defect))),
     Effect("load_fluctuation", "GearDiag.Effects.LoadFluctuation", "torque ripple",
            (Parameter("dT", 0.0, 20.0), Parameter("f_load", 0.5, MAX_RIPPLE_HZ)), load_fluctuation,

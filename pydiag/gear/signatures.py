@@ -1,6 +1,7 @@
 """What points to each effect of the catalogue: its signature (the weight of a residual
 line, by its kinematic family and order) and its hint (the bounds the residual's peaks
-narrow its parameters to), one function each, as :mod:`pydiag.gear.effects` names them.
+narrow its parameters to), one function each, as :mod:`pydiag.gear.effects` names them
+(the bearing effects' in :mod:`pydiag.gear.bearing_signatures`).
 
 A signature weighs unexplained residual peaks by their kinematic family and order:
 1 for the effect's defining lines, 0.5 for lines it also produces, 0 otherwise. An
@@ -17,8 +18,8 @@ from __future__ import annotations
 import math
 
 from pydiag.gear.features import max_band_freq_hz
-from pydiag.gear.kinematic_map import (BEARING_FAMILIES, GEAR_BEARING_PREFIX, SHAFT_ORDERS,
-                                      coinciding, kinematic_map, match)
+from pydiag.gear.kinematic_map import (BEARING_FAMILIES, SHAFT_ORDERS, coinciding,
+                                      kinematic_map, match)
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.peaks import Peak
 
@@ -218,31 +219,6 @@ def other_shaft_missing(kin) -> str:
     return "the other shaft's speed ratio" if kin is None or kin.other_shaft_ratio is None else ""
 
 
-def family(name):
-    def weight(line, freq, kin):
-        return 1.0 if line is not None and line.family in name else 0.0
-    return weight
-
-
-def _ball_defect(prefix: str):
-    # a spalled ball strikes both races once each a turn about its axis: 2 x BSF and its
-    # harmonics (the BSF lines of even order); the two strikes differ (the races' curvature
-    # and load), which makes the odd ones, and the cage's turn through the load zone
-    # modulates them (FTF)
-    bsf, ftf = prefix + "bsf", prefix + "ftf"
-
-    def weight(line, freq, kin):
-        if line is None or line.family not in (bsf, ftf):
-            return 0.0
-        return 1.0 if line.family == bsf and line.order % 2 == 0 else 0.5
-    return weight
-
-
-ball_defect = _ball_defect("")
-#: The same of the bearing on the gear's shaft (``GearKinematics.gear_bearing``).
-gear_ball_defect = _ball_defect(GEAR_BEARING_PREFIX)
-
-
 def stiffness_shape(line, freq, kin):
     # an even harmonic of the healthy mesh's stiffness: the mesh harmonics, 2x above all
     if line is None or line.family != "mesh":
@@ -298,37 +274,6 @@ def housing_hint(peaks: list[Peak], bin_hz: float, kin: GearKinematics | None) -
     return {"f_housing": band}
 
 
-def _values(kin, bearing) -> dict[str, float]:
-    """A bearing's geometry and its shaft's speed over the pinion's, as the bearing effects'
-    models name them."""
-    return {} if bearing is None else {
-        "n_balls": float(bearing.n_balls), "d_ball": bearing.ball_diameter_m,
-        "d_pitch": bearing.pitch_diameter_m, "alpha_contact": bearing.contact_angle_rad,
-        "r_shaft": kin.shaft_hz(bearing.shaft) / kin.f_pinion_hz}
-
-
-def bearing_values(kin) -> dict[str, float]:  # the pair's bearing (GearKinematics.bearing)
-    return _values(kin, None if kin is None else kin.bearing)
-
-
-def bearing_missing(kin) -> str:
-    return ("the bearing's geometry (--bearing, or a machine file's [[bearings]] on the pinion's "
-            "shaft)" if kin is None or kin.bearing is None else "")
-
-
-def gear_bearing_values(kin) -> dict[str, float]:  # GearKinematics.gear_bearing
-    return _values(kin, None if kin is None else kin.gear_bearing)
-
-
-def gear_bearing_missing(kin) -> str:
-    return ("a bearing on the gear's shaft that no stage's pinion turns (a machine file's "
-            "[[bearings]] on its output shaft)" if kin is None or kin.gear_bearing is None else "")
-
-
-#: The largest bearing strike the bearing effects fit, m/s2 at the model's sensor (500 g):
-#: a fitted channel gain scales it to the measurement's, and real records fit gains down
-#: to about 0.01.
-MAX_STRIKE_M_S2 = 5000.0
 #: The largest swing of a shaft's speed once a turn the shaft-swing effect fits, relative
 #: to its mean speed: a drive train's torsional swing is a few per cent of it.
 MAX_SWING = 0.05

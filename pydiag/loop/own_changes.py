@@ -148,8 +148,10 @@ def own_changes(machine: Machine, model: MachineModel, healthy: Mapping[str, flo
     :func:`~pydiag.loop.machine_discover.refit_own_effects` against the ``healthy`` fit's
     values) as a :class:`~pydiag.gear.component.ModelChange`, beside the same rows of the
     ``baseline`` the healthy model was fitted to and of each healthy repeat of it
-    (``repeats``); the largest margin first. A row not tried (nothing of it to fit) is
-    left out."""
+    (``repeats``); the largest margin first. A row not tried on the record (nothing of it
+    to fit) is left out; one not tried on the baseline or a repeat (no line of it stood
+    out there) counts as a z of 0 there: an output bearing's strikes, which no healthy
+    record shows."""
     return _changes(machine, model, healthy, record, _z_of(baseline),
                     [_z_of(rows) for rows in repeats], k_spread)
 
@@ -173,7 +175,7 @@ def _changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float]
             catalogue[k] = model.stage_effects(k)
         effect = catalogue[k][row.effect]
         base_z = own.get(key, 0.0)
-        rises = [z[key] - base_z for z in again if key in z]
+        rises = [z.get(key, 0.0) - base_z for z in again]  # not tried there: nothing stood out
         repeat_rise = math.sqrt(sum(r * r for r in rises) / len(rises)) if rises else None
         held_to = k_spread * max(repeat_rise, MIN_RISE) if repeat_rise is not None \
             else math.nan

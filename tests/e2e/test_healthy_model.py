@@ -98,6 +98,27 @@ def test_an_effect_the_healthy_model_lacks_names_the_input_bearings_outer_race(t
     assert all(s == ("good", "both") for n, s in states.items() if "T " in n), states
 
 
+def test_the_output_shafts_bearing_is_named_by_the_last_stages_gear_bearing(tmp_path):
+    """The output shaft carries no stage's pinion: its bearing is the last stage's gear
+    bearing. Its outer race's strikes (a fifth of the input's rate on the box's one
+    geometry: every fifth line is the input bearing's, every other fifth the intermediate
+    one's) are tried with the pinion bearings' races; no healthy record shows them, so
+    they were not tried there (a z of 0), and the output bearing's change, the largest,
+    claims the shared lines."""
+    _, report = diagnosed(tmp_path, gearbox_record(2, box=SHORT_BOX,
+                                                   bearing=((2, "outer", 6.0),)),
+                          "--lacking", "bearing_outer_race,gear_bearing_outer_race")
+    changed = [c for c in report["model_changes"] if c["changed"]]
+    assert [(c["stage"], c["effect"], c["fault"], c["components"]) for c in changed] == [
+        ("stage 2", "gear_bearing_outer_race", "outer", ["output bearing"])], changed
+    races = {c["stage"]: c for c in report["model_changes"]
+             if c["effect"] == "bearing_outer_race"}
+    assert races["stage 1"]["beaten_by"] == "gear_bearing_outer_race on stage 2"
+    states = {c["name"]: (c["state"], c["judge"]) for c in report["components"]}
+    assert states["output bearing"] == ("outer", "both")
+    assert all(s[0] == "good" for n, s in states.items() if n != "output bearing"), states
+
+
 def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
     """batch --machine with the healthy model: fitted (or found kept) once before the
     records, each record's changes a column and its components' states the joined ones."""

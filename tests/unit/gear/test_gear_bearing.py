@@ -43,6 +43,11 @@ def test_the_last_stage_models_the_output_shafts_bearing(spur):
     assert gear_outer.values_from(last)["r_shaft"] == pytest.approx(48 / 80)
     assert gear_outer.unknown_lines(first) and not gear_outer.unknown_lines(last)
     assert gear_outer.weight(line, bpfo, last) == 1.0 and outer.weight(line, bpfo, last) == 0.0
+    # the idler turns 5/3 as fast as the output: the idler bearing's 3rd BPFO is the
+    # output's 5th, named for the idler's (the pair's own), claimed by both bearings' races
+    shared = match(5 * bpfo, kinematic_map(last, 2000.0), 1e-6)
+    assert (shared.family, shared.order) == ("bpfo", 3) and "gear_bpfo" in shared.also
+    assert gear_outer.weight(shared, 5 * bpfo, last) == outer.weight(shared, 5 * bpfo, last) == 1
     assert part_components(spur, 1, "gear bearing") == ("OS:IS", "OS:OS")
     assert gear_outer.fault == outer.fault == "outer"
 

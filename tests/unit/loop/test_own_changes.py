@@ -75,6 +75,18 @@ def test_a_repeat_that_barely_moves_is_held_to_a_z_of_one(spur):
     assert c.margin == pytest.approx(4.5 / (4 * 1.1045), abs=1e-3) and c.changed
 
 
+def test_an_effect_not_tried_on_the_healthy_records_is_held_to_no_rise_there(spur):
+    """A lacking effect whose lines stood out of no healthy record (an output bearing's
+    strikes) was not tried there: a z of 0 on the baseline and the repeats, so the record's
+    change is held to the floor of a z of 1, not left without a verdict."""
+    machine, model = spur
+    out = f"{model.stages[1]}."
+    record = [row("output stage", "gear_bearing_outer_race", 30.0, **{out + "A_b": 9.4})]
+    c, = own_changes(machine, model, {}, record, [], [[], []])
+    assert (c.baseline_z, c.repeat_rise) == (0.0, 0.0) and c.margin == pytest.approx(30.0 / 4)
+    assert c.changed and c.fault == "outer" and c.components == ("OS:IS", "OS:OS")
+
+
 def test_a_part_is_the_machines_components():
     machine = machine_from_dict(tomllib.loads(
         (ROOT / "examples" / "phm09_spur.toml").read_text()))
