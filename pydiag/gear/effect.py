@@ -82,8 +82,9 @@ class Effect:
             test holds it to)
         parts: (parameter, part) of each parameter that sizes a fault of one part of its
             stage (:data:`PARTS`: the pinion, the gear, both through their mesh, a shaft
-            of the pair or the other shaft, the bearing on either shaft); a phase or a frequency sizes none, and an
-            effect of the drive or the sensor (a ripple, a housing mode) has none
+            of the pair or the other shaft, the bearing on either shaft); a phase or a
+            frequency sizes none, and an effect of the drive or the sensor (a ripple, a
+            housing mode) has none
         fault: the state (:mod:`pydiag.gear.faults`) of a part whose fault a record sizes
             beyond the healthy model's: a word, or a rule of the :attr:`parts`'
             parameters' values, (healthy, on the record) -> the word (a shaft's orders

@@ -55,6 +55,7 @@ _BALL = Effect(
     machine_values=bearing_values, missing=bearing_missing,
     parts=(("A_b", PINION_BEARING),), fault=BALL)
 
+
 def _on_gear_shaft(effect: Effect, weight) -> Effect:
     """A bearing effect of the bearing on the gear's shaft (``GearKinematics.gear_bearing``,
     the kinematic map's ``gear_`` families): the same model, its strikes at that shaft's

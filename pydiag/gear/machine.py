@@ -156,9 +156,10 @@ class Machine:
     def stage_kinematics(self, stage: int, input_hz: float) -> GearKinematics:
         """Stage ``stage`` as a gear pair at ``input_hz`` on the input shaft, in its
         machine: the pair's bearing is the first on its pinion shaft (and its gear's
-        bearing, the first on its gear's shaft if no stage's pinion turns it); its other shaft (the
-        one the other-shaft effect models) the next shaft downstream of its gear, else the
-        one upstream of its pinion; every other stage, shaft and bearing is its
+        bearing the first on its gear's shaft, if no stage's pinion turns it); its other
+        shaft (the one the other-shaft effect models, :meth:`other_shaft`) the next shaft
+        downstream of its gear, else the one upstream of its pinion; every other stage,
+        shaft and bearing is its
         :class:`~pydiag.gear.kinematics.Surroundings`."""
         s = self.stages[stage]
         own = self.pair_bearing(stage)
