@@ -327,11 +327,15 @@ def test_each_stage_sees_the_machines_lines_from_its_own_shafts():
     effects = model.stage_effects(1)
     assert "housing_sensor" not in effects  # a sensor's path, not a stage's
     # a bearing's effect on a stage is the first bearing on its pinion's shaft (the idler's
-    # ID:IS, an ER-10K): its geometry from the machine file, named for the stage
+    # ID:IS, an ER-10K): its geometry from the machine file, named for the stage; the last
+    # stage's gear bearing the output's, at the output's speed (48/80 of the idler's)
     outer = effects["bearing_outer_race"]
     assert outer.values_from(views[1]) == {
         "output_stage.n_balls": 8.0, "output_stage.d_ball": pytest.approx(7.9375e-3),
-        "output_stage.d_pitch": pytest.approx(33.5026e-3), "output_stage.alpha_contact": 0.0}
+        "output_stage.d_pitch": pytest.approx(33.5026e-3), "output_stage.alpha_contact": 0.0,
+        "output_stage.r_shaft": 1.0}
+    gear_outer = effects["gear_bearing_outer_race"].values_from(views[1])
+    assert gear_outer["output_stage.r_shaft"] == pytest.approx(48 / 80)
     tooth = effects["gear_tooth_fault"]
     assert [p.name for p in tooth.parameters] == ["output_stage.d_g", "output_stage.tooth_g"]
     assert tooth.hint([], 0.0, views[1]) == {"output_stage.tooth_g": (0.0, 80.0)}
