@@ -6,12 +6,10 @@ the bearing on the gear's shaft (``GearKinematics.gear_bearing``) the ``gear_`` 
 
 from __future__ import annotations
 
-from pydiag.gear.kinematic_map import BEARING_FAMILIES, GEAR_BEARING_PREFIX
-
+from pydiag.gear.kinematic_map import GEAR_BEARING_PREFIX, PAIR_BEARING_FAMILIES
 
 #: The families of another bearing's lines than the gear's.
-OTHER_BEARINGS = tuple(f for f in BEARING_FAMILIES if not f.startswith(GEAR_BEARING_PREFIX)) \
-    + ("machine_bearing",)
+OTHER_BEARINGS = PAIR_BEARING_FAMILIES + ("machine_bearing",)
 
 
 def family(name):

@@ -141,10 +141,19 @@ def _machine_lines(kin: GearKinematics, max_freq_hz: float, n_sidebands: int, ad
 
 #: What the families of the gear's bearing's lines begin with.
 GEAR_BEARING_PREFIX = "gear_"
+#: The families of the pair's bearing's lines.
+PAIR_BEARING_FAMILIES = ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf")
 #: The families of a rolling bearing's lines: the pair's bearing's, then the gear's
 #: bearing's.
-BEARING_FAMILIES = ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf") + tuple(
-    GEAR_BEARING_PREFIX + f for f in ("bpfo", "bpfi", "bpfi_sb", "bsf", "ftf"))
+BEARING_FAMILIES = PAIR_BEARING_FAMILIES + tuple(GEAR_BEARING_PREFIX + f
+                                                 for f in PAIR_BEARING_FAMILIES)
+
+
+def with_gear_bearing(table: dict) -> dict:
+    """``table`` (by family) with each entry of a pair's bearing family given to the same
+    family of the gear's bearing as well."""
+    return {**table, **{GEAR_BEARING_PREFIX + f: v for f, v in table.items()
+                        if f in PAIR_BEARING_FAMILIES}}
 
 
 def coinciding(lines: list[KinematicLine], tolerance_hz: float = 0.0) -> list[KinematicLine]:

@@ -189,11 +189,8 @@ class Machine:
         """Stage ``stage``'s gear's bearing as its gear pair sees it: the first on its gear's
         shaft, on the "gear", if no stage's pinion turns that shaft (the last stage's
         output shaft; every other shaft's bearings are a pinion's) (None: none)."""
-        shaft = self.shafts[stage + 1]
-        if stage + 1 < len(self.stages):
-            return None
-        own = next((b for b in self.bearings if b.shaft == shaft), None)
-        return None if own is None else dataclasses.replace(own, shaft="gear")
+        return None if stage + 1 < len(self.stages) else \
+            self._first_bearing(self.shafts[stage + 1], "gear")
 
     def other_shaft(self, stage: int) -> int | None:
         """The index of the shaft stage ``stage``'s other-shaft effect models: the next
@@ -206,8 +203,13 @@ class Machine:
     def pair_bearing(self, stage: int) -> Bearing | None:
         """Stage ``stage``'s bearing as its gear pair sees it: the first on its pinion
         shaft, on the "pinion" (None: none there)."""
-        own = next((b for b in self.bearings if b.shaft == self.shafts[stage]), None)
-        return None if own is None else dataclasses.replace(own, shaft="pinion")
+        return self._first_bearing(self.shafts[stage], "pinion")
+
+    def _first_bearing(self, shaft: str, side: str) -> Bearing | None:
+        """The first bearing on ``shaft``, on the pair's ``side`` ("pinion", "gear"), or
+        None: none there."""
+        own = next((b for b in self.bearings if b.shaft == shaft), None)
+        return None if own is None else dataclasses.replace(own, shaft=side)
 
     def fundamental_order(self) -> Fraction:
         """The machine's fundamental frequency in input-shaft orders: the largest of which

@@ -36,7 +36,7 @@ from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effect import Effect
 from pydiag.gear.effects import EFFECTS
-from pydiag.gear.kinematic_map import kinematic_map, match
+from pydiag.gear.kinematic_map import kinematic_map, match, with_gear_bearing
 from pydiag.gear.peaks import Peak
 from pydiag.loop.effect_fit import evidence_channels, fit_effect
 from pydiag.loop.residual import (NOT_KINEMATIC, MeasuredSpectra, bin_groups,
@@ -117,10 +117,9 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
     suggestions.sort(key=lambda s: -s.score)
     # the plots' cursors: every stage's mesh harmonics, low shaft orders and their mesh
     # sidebands, bearings
-    orders = {"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3, "bpfo": 5,
-              "bpfi": 5, "bsf": 5, "ftf": 5, "gear_bpfo": 5, "gear_bpfi": 5, "gear_bsf": 5,
-              "gear_ftf": 5, "other_shaft": 3, "stage_mesh_sb": 1,
-              "machine_shaft": 3, "machine_bearing": 3}
+    orders = with_gear_bearing({"pinion": 3, "gear": 3, "mesh_sb_pinion": 3, "mesh_sb_gear": 3,
+                                "bpfo": 5, "bpfi": 5, "bsf": 5, "ftf": 5, "other_shaft": 3,
+                                "stage_mesh_sb": 1, "machine_shaft": 3, "machine_bearing": 3})
     markers = [{"freq_hz": ln.freq_hz, "family": ln.family, "label": ln.label} for ln in lines
                if ln.family in ("mesh", "stage_mesh")
                or 0 < abs(ln.order) <= orders.get(ln.family, 0)]

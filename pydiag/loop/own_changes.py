@@ -223,10 +223,10 @@ def part_components(machine: Machine, stage: int, part: str | None) -> tuple[str
     other = machine.other_shaft(stage)
     shaft = {PINION_SHAFT: machine.shafts[stage], GEAR_SHAFT: machine.shafts[stage + 1],
              OTHER_SHAFT: None if other is None else machine.shafts[other]}.get(part)
+    bearing_shaft = {PINION_BEARING: machine.shafts[stage],
+                     GEAR_BEARING: machine.shafts[stage + 1]}.get(part)
     every = components(machine)
     return tuple(c.name for c in every
                  if (c.kind == "gear" and c.stage == name and c.role in roles)
                  or (c.kind == "shaft" and c.name == shaft)
-                 or (c.kind == "bearing" and c.shaft == {
-                     PINION_BEARING: machine.shafts[stage],
-                     GEAR_BEARING: machine.shafts[stage + 1]}.get(part)))
+                 or (c.kind == "bearing" and c.shaft == bearing_shaft))

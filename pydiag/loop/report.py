@@ -15,16 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
+from pydiag.gear.kinematic_map import with_gear_bearing
 from pydiag.io.outputs import write_text
 from pydiag.loop.residual import RESIDUAL_GROUPS
 from pydiag.loop.results import Comparison
 from pydiag.signal.spectra import Spectrum
 
-FAMILY_COLOURS = {"mesh": "#c0392b", "pinion": "#2e86c1", "mesh_sb_pinion": "#5dade2",
-                  "gear": "#27ae60", "mesh_sb_gear": "#82e0aa", "bpfo": "#8e44ad",
-                  "bpfi": "#d35400", "bsf": "#7f8c8d", "ftf": "#7f8c8d",
-                  "gear_bpfo": "#8e44ad", "gear_bpfi": "#d35400", "gear_bsf": "#7f8c8d",
-                  "gear_ftf": "#7f8c8d", "other_shaft": "#b7950b"}
+FAMILY_COLOURS = with_gear_bearing({
+    "mesh": "#c0392b", "pinion": "#2e86c1", "mesh_sb_pinion": "#5dade2", "gear": "#27ae60",
+    "mesh_sb_gear": "#82e0aa", "bpfo": "#8e44ad", "bpfi": "#d35400", "bsf": "#7f8c8d",
+    "ftf": "#7f8c8d", "other_shaft": "#b7950b"})
 CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
 h1 { font-size: 1.5em; } h2 { font-size: 1.15em; margin-top: 1.6em; }

@@ -30,7 +30,7 @@ from pydiag.core.errors import EstimationError
 from pydiag.fit.objective import spectral_residuals
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.features import FullSpectrumFeaturizer, other_stages_lines
-from pydiag.gear.kinematic_map import PRIORITY
+from pydiag.gear.kinematic_map import PRIORITY, with_gear_bearing
 from pydiag.signal.spectra import Spectrum, local_maxima, whole_periods
 
 #: Groups of the residual by family, and the kinematic families each gathers.
@@ -39,15 +39,13 @@ RESIDUAL_GROUPS = ("mesh_harmonics", "pinion_orders", "gear_orders", "assembly_h
                    "broadband")
 #: The indices of the groups of bins no kinematic line is on.
 NOT_KINEMATIC = (RESIDUAL_GROUPS.index("non_kinematic"), RESIDUAL_GROUPS.index("broadband"))
-FAMILY_GROUP = {"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
+FAMILY_GROUP = with_gear_bearing({"mesh": "mesh_harmonics", "mesh_sb_pinion": "pinion_orders",
                 "pinion": "pinion_orders", "mesh_sb_gear": "gear_orders", "gear": "gear_orders",
                 "assembly": "assembly_hunting", "hunting": "assembly_hunting", "bpfo": "bearing",
                 "bpfi": "bearing", "bpfi_sb": "bearing", "bsf": "bearing", "ftf": "bearing",
-                "gear_bpfo": "bearing", "gear_bpfi": "bearing", "gear_bpfi_sb": "bearing",
-                "gear_bsf": "bearing", "gear_ftf": "bearing",
                 "other_shaft": "other_shaft_orders", "machine_shaft": "other_shaft_orders",
                 "machine_bearing": "bearing", "stage_mesh": "other_stages",
-                "stage_mesh_sb": "other_stages", "stage_assembly": "other_stages"}
+                "stage_mesh_sb": "other_stages", "stage_assembly": "other_stages"})
 #: Mains frequencies a non-kinematic line is checked against, Hz.
 MAINS_HZ = (50.0, 60.0)
 
