@@ -43,7 +43,7 @@ from pydiag.gear.speed import SpeedEstimate, SpeedSettings, estimate_speed
 from pydiag.gear.stage_judge import StageVerdict
 from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.diagnose.diagnosis import Diagnosis, classified, diagnose
-from pydiag.loop.machine_fit import fit_machine, machine_problem, stage_view
+from pydiag.loop.machine_fit import fit_machine, machine_problem, refit_machine, stage_view
 from pydiag.loop.machine_model import MachineModel
 from pydiag.loop.own_changes import HealthyModel, fit_healthy, record_changes
 from pydiag.model.adapter import Adapter
@@ -199,7 +199,8 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
-    too), each stage classified from its own fault parameters and tested on the lines
+    too; with a ``healthy`` model, its fit polished on the record:
+    :func:`~pydiag.loop.machine_fit.refit_machine`), each stage classified from its own fault parameters and tested on the lines
     seen from its own shafts (:func:`~pydiag.loop.machine_fit.stage_view`), and judged
     against ``baselines`` as :func:`diagnose_machine` judges. With the machine's
     ``healthy`` model (:func:`healthy_model`), the model's own verdict too
@@ -212,7 +213,8 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
     problem = machine_problem(fmu_path, model, measurement, machine, found, settings)
-    fit = fit_machine(problem, model, estimator, start=machine.fit_start())
+    fit = (fit_machine(problem, model, estimator, start=machine.fit_start()) if healthy is None
+           else refit_machine(problem, model, estimator, healthy.parameters))
     facts = problem.facts(fit.parameters)
     stages = []
     for k, stage in enumerate(machine.stages):

@@ -32,7 +32,9 @@ line lists the other families with a line at the very same frequency (``also``).
 
 from __future__ import annotations
 
+import bisect
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from pydiag.gear.kinematics import GearKinematics
@@ -185,3 +187,17 @@ def match(freq_hz: float, lines: list[KinematicLine], tolerance_hz: float) -> Ki
         return None
     return min(near, key=lambda ln: (round(abs(ln.freq_hz - freq_hz) / max(tolerance_hz, 1e-12), 1),
                                     rank[ln.family]))
+
+
+def match_each(freqs_hz: Sequence[float], lines: list[KinematicLine], tolerance_hz: float
+               ) -> list[KinematicLine | None]:
+    """:func:`match` of each of ``freqs_hz``, the same answers, each looking only at the
+    lines within the tolerance (found by bisection of the lines sorted by frequency): a
+    spectrum's thousands of bins against a gearbox's thousands of lines."""
+    order = sorted(range(len(lines)), key=lambda i: lines[i].freq_hz)
+    at = [lines[i].freq_hz for i in order]
+    def near(f: float) -> list[KinematicLine]:  # in their order in ``lines``: ties as match's
+        window = order[bisect.bisect_left(at, f - tolerance_hz):
+                       bisect.bisect_right(at, f + tolerance_hz)]
+        return [lines[i] for i in sorted(window)]
+    return [match(f, near(f), tolerance_hz) for f in freqs_hz]

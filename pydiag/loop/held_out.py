@@ -65,7 +65,7 @@ from pydiag.fit.objective import noise_corrected_error, rician_mean, spectral_er
 from pydiag.fit.problem import FitProblem, ProblemObjective
 from pydiag.gear.effect import Effect
 from pydiag.gear.features import FullSpectrumFeaturizer
-from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
+from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match_each
 from pydiag.loop.effect_fit import (EFFECT_REFIT, effect_parameters, evidence_channels,
                                     fit_effect, free_polish, refit_own)
 from pydiag.loop.residual import MeasuredSpectra, measured_spectra
@@ -252,8 +252,9 @@ def held_out(problem: FitProblem, base: Comparison, effect: Effect,
     changed = evidence_channels(problem, effect)  # on the others, none of its evidence
     all_freqs = next(iter(measured_a.spectra.values())).freq_hz
     def claim(mask: np.ndarray) -> np.ndarray:  # whether its signature claims each bin
-        return np.array([effect.weight(match(fk, lines, bin_hz), fk, kin) > 0
-                         for fk in all_freqs[mask]], dtype=bool)
+        chosen = all_freqs[mask]
+        return np.array([effect.weight(line, fk, kin) > 0 for line, fk
+                         in zip(match_each(chosen, lines, bin_hz), chosen)], dtype=bool)
     freqs = all_freqs[bins]
     claims = claim(bins)
     # the non-synchronous bins it claims: where effects that compare could not name from

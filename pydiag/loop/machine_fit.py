@@ -122,6 +122,32 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
                                evaluations=sum(f.evaluations for f in fits))
 
 
+def refit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstimator,
+                  start: dict[str, float], false_alarm_rate: float = 0.01) -> FitResult:
+    """The machine's model polished on ``problem`` from ``start`` (the values, by name, of
+    a fit of the same machine before: its healthy model's), no swarm: on the bins
+    :func:`fit_machine` polishes on, an affine effect parameter those bins do not see held
+    off. A record of a machine whose healthy fit is known is that fit moved by what
+    changed: a search from nothing costs ten times the simulations and may settle in
+    another basin than the healthy fit's, so that the record's values and the healthy
+    ones would differ by the search, not by the machine."""
+    names = {p.name for p in model.effect_parameters}
+    added = tuple(p for p in problem.parameters if p.name in names)
+    at = {p.name: start.get(p.name, p.off) for p in problem.parameters}
+    if not added:
+        return estimator.refine(problem, at)
+    scored = problem.derive(featurizer=measured_spectra(problem,
+                                                        false_alarm_rate).featurizer)
+    affine = {p.name for p in added if p.name in model.affine_parameters}
+    pinned: dict[str, float] = {}
+    if affine:  # n + 1 simulations: which of them the bins see
+        seen = fit_affine(_held(scored, {n: v for n, v in at.items() if n not in affine}))
+        pinned = {p.name: p.off for p in added if p.name in seen.unseen}
+    free = _held(scored, pinned)
+    fit = estimator.refine(free, {p.name: at[p.name] for p in free.parameters})
+    return dataclasses.replace(fit, parameters={**fit.parameters, **pinned})
+
+
 def _effects_fit(scored: FitProblem, model: MachineModel, added: tuple,
                  estimator: FaultEstimator, stages: dict[str, float]
                  ) -> tuple[dict[str, float], dict[str, float], float]:

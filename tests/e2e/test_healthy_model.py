@@ -145,3 +145,29 @@ def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
     assert rows["broken.csv"]["50T gear of stage 2:state"] == "changed"
     assert rows["healthy_5.csv"]["model"] == "", rows["healthy_5.csv"]["model"]
     assert rows["healthy_5.csv"]["faulty"] == ""
+
+
+def test_a_record_is_fitted_from_the_healthy_fit_without_a_swarm(tmp_path):
+    """refit_machine: the short box's model with the loop's effects, its fit on healthy
+    seed 1 (the file's [start]) polished on a record with a broken output-gear tooth, no
+    swarm: one simulation at the start, at most the polish's budget more, the error below
+    the start's, and every parameter of the model given a value."""
+    from pydiag.diagnose.stages import machine_speed
+    from pydiag.fit.estimator import FaultEstimator
+    from pydiag.gear.machine_file import load_machine
+    from pydiag.gear.speed import SpeedSettings
+    from pydiag.loop.machine_fit import machine_problem, refit_machine
+    from pydiag.loop.machine_model import machine_fmu
+    from truth.gearbox import INPUT_HZ
+
+    machine = load_machine(HEALTHY_MODEL)
+    model, built = machine_fmu(machine, ROOT / "modelica", tmp_path)
+    record = gearbox_record(2, faulty_shaft=2, stage=1, box=SHORT_BOX)
+    problem = machine_problem(built.fmu, model, record, machine,
+                              machine_speed(record, machine, INPUT_HZ, SpeedSettings("mesh")))
+    start = machine.fit_start()
+    at_start = refit_machine(problem, model, FaultEstimator(polish_evaluations=0), start)
+    fit = refit_machine(problem, model, FaultEstimator(polish_evaluations=100), start)
+    assert at_start.evaluations == 1 and 1 < fit.evaluations <= 101
+    assert fit.error < at_start.error
+    assert set(fit.parameters) == {p.name for p in problem.parameters}

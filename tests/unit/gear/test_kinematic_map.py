@@ -1,8 +1,12 @@
 """The kinematic map names every line of a gear pair and its bearing."""
 
+import random
+
+import numpy as np
 import pytest
 
-from pydiag.gear.kinematic_map import KinematicLine, coinciding, kinematic_map, match
+from pydiag.gear.kinematic_map import (KinematicLine, coinciding, kinematic_map, match,
+                                       match_each)
 from pydiag.gear.kinematics import Bearing, GearKinematics
 
 BASE = dict(a_f=0.3, f_f=0.6, f_ate=0.1, f_dte=0.1)
@@ -29,6 +33,21 @@ def test_kinematic_map_names_the_lines():
     assert "pinion" in match(350.0, lines, 0.5).also  # the mesh is a pinion and a gear order
     freqs = BEARING.frequencies(25.0)
     assert freqs["ftf"] < 25 < freqs["bpfo"] < freqs["bpfi"]
+
+
+def test_each_bin_of_a_spectrum_is_matched_as_one_frequency_is():
+    """match_each answers what match does for every frequency, ties too: on lines in no
+    order (a map joined from stages), at bins on the lines, beside them and between."""
+    lines = kinematic_map(GearKinematics(14, 21, 25.0, bearing=BEARING), 2000.0)
+    random.Random(1).shuffle(lines)
+    on = np.array([ln.freq_hz for ln in lines])
+    freqs = np.concatenate([np.random.default_rng(1).uniform(0, 2000, 2000), on, on + 0.25])
+    for tolerance_hz in (0.05, 0.25, 0.5, 2.0):
+        each = match_each(freqs, lines, tolerance_hz)
+        assert each == [match(f, lines, tolerance_hz) for f in freqs]
+        assert sum(m is not None for m in each) > len(lines)
+    tie = [KinematicLine(101.0, "pinion", 5, "5x pinion"), KinematicLine(100.0, "pinion", 4, "4x pinion")]
+    assert match_each([100.5], tie, 1.0) == [match(100.5, tie, 1.0)] == [tie[0]]
 
 
 def test_lines_within_the_tolerance_are_told_of_each_other():
