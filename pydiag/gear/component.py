@@ -131,7 +131,12 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
     one (an eccentric gear by its shaft's swing). A covered component no change names
     keeps the indicators' state: an effect of the healthy model covers a part without
     sizing every fault of it (a shaft's orders with its 1x held off see no imbalance). The
-    judge is "both" where the two agree that it is faulty or that it is good. A component
+    judge is "both" where the two agree that it is faulty or that it is good. Where the
+    indicators name a bearing's fault (its race or ball, read from its defect lines in the
+    envelope, which another bearing's comb may share) and the covering effect of that very
+    fault, tried held out on the record, does not name it (within the repeats, or its
+    lines another change's), the model's "good" stands: it tested that fault on the
+    record. A component
     no effect covers keeps the indicators' verdict: what the model lacks, it cannot judge.
     The indicators' measures stay in the evidence, their word in the reason."""
     held = [c for c in changes if math.isfinite(c.margin)]
@@ -158,10 +163,22 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
                                         said.margin, "; ".join(filter(None, (model, indicators))),
                                         BY_BOTH if v.faulty else BY_MODEL))
             continue
+        tested = [c for c in covering if v.component.kind == "bearing" and v.faulty
+                  and c.fault == v.state]
+        if tested:  # the model tried the indicators' very fault on it, and it is not there
+            said = max(tested, key=lambda c: c.margin)
+            model = (f"the healthy model's {said.effect} on {said.stage}, the fault the "
+                     f"indicators name, " + (f"names {', '.join(said.components)}"
+                                             if said.changed else _not_named(said)))
+            out.append(ComponentVerdict(v.component, GOOD, evidence, v.threshold_db,
+                                        None if said.changed else said.margin,
+                                        f"{model}; the indicators: {v.state}"
+                                        + (f" ({v.reason})" if v.reason else ""), BY_MODEL))
+            continue
         model = (f"the healthy model's {said.effect} on {said.stage} "
                  + ((f"names {', '.join(said.components)}" if said.components else
                      "names no part: no parameter that sizes a fault grew")
-                    if said.changed else f"is within the healthy repeats ({said.margin:.2f} x)"))
+                    if said.changed else _not_named(said)))
         if v.faulty:
             out.append(dataclasses.replace(v, evidence=evidence,
                                            reason=f"{v.reason}; {model}" if v.reason else model))
@@ -171,6 +188,16 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
                 None if said.changed else said.margin, model,
                 BY_BOTH if v.state == GOOD else BY_MODEL))
     return tuple(sorted(out, key=lambda v: not v.faulty))
+
+
+def _not_named(change: ModelChange) -> str:
+    """Why a change that is not a fault (:attr:`ModelChange.changed`) names nothing."""
+    if change.beaten_by:
+        return f"has its lines claimed by {change.beaten_by} ({change.margin:.2f} x)"
+    if change.margin > 1:
+        return (f"does not predict its own lines better on the held-out half "
+                f"({change.margin:.2f} x)")
+    return f"is within the healthy repeats ({change.margin:.2f} x)"
 
 
 def components(machine: Machine) -> tuple[Component, ...]:

@@ -108,3 +108,25 @@ def test_a_change_that_names_no_part_names_nothing():
     indicators = (ComponentVerdict(shaft, "good", {}, 6.0, 0.4),)
     v, = judged_by_model(indicators, [change(1.5, (), ("input",), effect="pinion_shaft_orders")])
     assert (v.state, v.judge, v.margin) == ("good", BY_BOTH, None) and "names no part" in v.reason
+
+
+def test_a_bearing_fault_the_model_tried_and_did_not_find_is_good():
+    """The indicators read the input bearing's ball from lines the output ball's comb
+    shares; the model's ball effect on the input bearing, held out, does not name it (its
+    lines the output's): the model's good stands. Where it is not that fault's effect (the
+    outer race's), or the component is a gear, the indicators' word stands."""
+    inner = Component("bearing", "IS:IS", "input")
+    indicators = (ComponentVerdict(inner, "ball", {"ball_db": 6.0}, 6.0, 1.9, "its 2xBSF"),)
+    ball = ModelChange("input", "bearing_ball", 12.0, 0.0, 2.0, 1.5, {"A_b": (0.0, 9.0)},
+                       "pinion bearing", (inner.name,), "ball", (inner.name,),
+                       beaten_by="gear_bearing_ball on output")
+    v, = judged_by_model(indicators, [ball])
+    assert (v.state, v.judge, v.margin) == ("good", BY_MODEL, 1.5)
+    assert "has its lines claimed by gear_bearing_ball on output" in v.reason
+    assert v.reason.endswith("; the indicators: ball (its 2xBSF)") and v.evidence["ball_db"] == 6
+    outer = ModelChange("input", "bearing_outer_race", 1.0, 0.0, 2.0, 0.3, {"A_b": (0.0, 1.0)},
+                        "pinion bearing", (), "outer", (inner.name,))
+    assert judged_by_model(indicators, [outer])[0].state == "ball"
+    eccentric = (ComponentVerdict(PINION, "eccentric", {}, 6.0, 10.2, "its shaft's swing"),)
+    assert judged_by_model(eccentric, [change(0.2, (), (PINION.name,), "eccentric",
+                                              "gear_eccentricity")])[0].state == "eccentric"
