@@ -5,6 +5,7 @@ signature that points to it and what it needs of the machine; the catalogue itse
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -154,11 +155,12 @@ class Effect:
 
     def fault_of(self, values: dict[str, tuple[float, float]]) -> str:
         """The fault the effect names (:attr:`fault`) from ``values``: each sizing
-        parameter (:attr:`parts`) -> (healthy value, value on the record); those missing
-        are left out."""
+        parameter (:attr:`parts`) -> (healthy value, value on the record); one missing (a
+        shaft's order held off) is given to the rule as not a number in its place, so that
+        the orders after it keep theirs."""
         if isinstance(self.fault, str):
             return self.fault
-        sized = [values[name] for name, _ in self.parts if name in values]
+        sized = [values.get(name, (math.nan, math.nan)) for name, _ in self.parts]
         return self.fault(tuple(a for a, _ in sized), tuple(b for _, b in sized))
 
     def neutral_values(self) -> dict[str, float]:

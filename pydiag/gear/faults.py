@@ -5,6 +5,8 @@ healthy model did (:mod:`pydiag.loop.own_changes`, ``Effect.fault``)."""
 
 from __future__ import annotations
 
+import math
+
 from collections.abc import Sequence
 
 GOOD, CHANGED, NOT_JUDGED = "good", "changed", "not judged"
@@ -40,9 +42,10 @@ def shaft_state(rises: Sequence[int]) -> str:
 def model_shaft_state(healthy: Sequence[float], fitted: Sequence[float]) -> str:
     """:func:`shaft_state` of a shaft's orders 1, 2, ... as a model sized them, healthy and
     on the record: an order rose when its amplitude grew by at least :data:`RISEN_SHARE`
-    of the largest growth; changed when none grew."""
+    of the largest growth; changed when none grew. An order not sized (not a number: held
+    off) did not rise."""
     growth = [b - a for a, b in zip(healthy, fitted)]
-    top = max(growth, default=0.0)
+    top = max((g for g in growth if math.isfinite(g)), default=0.0)
     if top <= 0:
         return CHANGED
     return shaft_state([k + 1 for k, g in enumerate(growth) if g >= RISEN_SHARE * top])
@@ -50,6 +53,7 @@ def model_shaft_state(healthy: Sequence[float], fitted: Sequence[float]) -> str:
 
 def tooth_state(healthy: Sequence[float], fitted: Sequence[float]) -> str:
     """A faulty tooth's state from the share of its mesh stiffness it lost as a model sized
-    it on the record (the largest of ``fitted``): :data:`BROKEN` from
+    it on the record (the largest of ``fitted`` that is a number): :data:`BROKEN` from
     :data:`BROKEN_LOSS` on, else :data:`CHIPPED`."""
-    return BROKEN if max(fitted, default=0.0) >= BROKEN_LOSS else CHIPPED
+    loss = max((f for f in fitted if math.isfinite(f)), default=0.0)
+    return BROKEN if loss >= BROKEN_LOSS else CHIPPED

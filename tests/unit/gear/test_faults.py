@@ -37,6 +37,11 @@ def test_each_catalogue_effect_names_its_fault_from_its_own_parameters():
     assert EFFECTS["pinion_shaft_orders"].fault_of(
         {"A_s1": (1.0, 9.0), "A_s2": (1.0, 1.5)}) == "imbalance"
     assert EFFECTS["mesh_modulation"].fault_of({"m_g": (0.1, 0.3)}) == "changed"
+    # an order held off keeps its place: a risen 2x with the 1x held off is no imbalance
+    assert EFFECTS["pinion_shaft_orders"].fault_of({"A_s2": (1.0, 9.0),
+                                                    "A_s3": (1.0, 1.2)}) == "changed"
+    assert EFFECTS["pinion_shaft_orders"].fault_of({"A_s2": (1.0, 9.0), "A_s3": (1.0, 8.0),
+                                                    "A_s4": (1.0, 7.0)}) == "looseness"
 
 
 GEAR = Component("gear", "80T gear of output", "output", 80, "output", "gear")
