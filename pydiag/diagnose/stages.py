@@ -200,9 +200,10 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
     (:func:`~pydiag.loop.machine_fit.fit_machine`, from the machine file's ``[start]``
     too; with a ``healthy`` model, its fit polished on the record:
-    :func:`~pydiag.loop.machine_fit.refit_machine`), each stage classified from its own fault parameters and tested on the lines
-    seen from its own shafts (:func:`~pydiag.loop.machine_fit.stage_view`), and judged
-    against ``baselines`` as :func:`diagnose_machine` judges. With the machine's
+    :func:`~pydiag.loop.machine_fit.refit_machine`), each stage classified from its own
+    fault parameters and tested on the lines seen from its own shafts
+    (:func:`~pydiag.loop.machine_fit.stage_view`), and judged against ``baselines`` as
+    :func:`diagnose_machine` judges. With the machine's
     ``healthy`` model (:func:`healthy_model`), the model's own verdict too
     (:func:`~pydiag.loop.own_changes.record_changes`: each of its effects, and each it
     lacks that it was fitted with, refitted held out on the record, the change held to

@@ -136,8 +136,8 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
     envelope, which another bearing's comb may share) and the covering effect of that very
     fault, tried held out on the record, does not name it (within the repeats, or its
     lines another change's), the model's "good" stands: it tested that fault on the
-    record. A component
-    no effect covers keeps the indicators' verdict: what the model lacks, it cannot judge.
+    record. A component no effect covers keeps the indicators' verdict: what the model
+    lacks, it cannot judge.
     The indicators' measures stay in the evidence, their word in the reason."""
     held = [c for c in changes if math.isfinite(c.margin)]
     out = []

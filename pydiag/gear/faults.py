@@ -6,7 +6,6 @@ healthy model did (:mod:`pydiag.loop.own_changes`, ``Effect.fault``)."""
 from __future__ import annotations
 
 import math
-
 from collections.abc import Sequence
 
 GOOD, CHANGED, NOT_JUDGED = "good", "changed", "not judged"
