@@ -167,6 +167,7 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
                   and c.fault == v.state]
         if tested:  # the model tried the indicators' very fault on it, and it is not there
             said = max(tested, key=lambda c: c.margin)
+            evidence = {**v.evidence, f"model {said.stage} {said.effect}": said.margin}
             model = (f"the healthy model's {said.effect} on {said.stage}, the fault the "
                      f"indicators name, " + (f"names {', '.join(said.components)}"
                                              if said.changed else _not_named(said)))

@@ -92,8 +92,7 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
     bins do not see (a shaft's order above them:
     :attr:`~pydiag.fit.affine.AffineFit.unseen`) stays off through the polishes, which
     would otherwise leave it wherever their steps wander."""
-    names = {p.name for p in model.effect_parameters}
-    added = tuple(p for p in problem.parameters if p.name in names)
+    added = _effect_parameters(problem, model)
     later = effect_estimator or estimator
     if not added:
         best = estimator.fit(problem)
@@ -103,8 +102,7 @@ def fit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEstima
             best = again if again.error < best.error else best
         return best
     off = {p.name: p.off for p in added}
-    scored = problem.derive(featurizer=measured_spectra(problem,
-                                                        false_alarm_rate).featurizer)
+    scored = _scored(problem, false_alarm_rate)
     base = estimator.fit(_held(problem, off))
     at_base = {**base.parameters, **off}
     with ProblemObjective(scored) as objective:
@@ -128,16 +126,14 @@ def refit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEsti
     a fit of the same machine before: its healthy model's), no swarm: on the bins
     :func:`fit_machine` polishes on, an affine effect parameter those bins do not see held
     off. A record of a machine whose healthy fit is known is that fit moved by what
-    changed: a search from nothing costs ten times the simulations and may settle in
+    changed: a search from nothing costs many times the simulations and may settle in
     another basin than the healthy fit's, so that the record's values and the healthy
     ones would differ by the search, not by the machine."""
-    names = {p.name for p in model.effect_parameters}
-    added = tuple(p for p in problem.parameters if p.name in names)
+    added = _effect_parameters(problem, model)
     at = {p.name: start.get(p.name, p.off) for p in problem.parameters}
     if not added:
         return estimator.refine(problem, at)
-    scored = problem.derive(featurizer=measured_spectra(problem,
-                                                        false_alarm_rate).featurizer)
+    scored = _scored(problem, false_alarm_rate)
     affine = {p.name for p in added if p.name in model.affine_parameters}
     pinned: dict[str, float] = {}
     if affine:  # n + 1 simulations: which of them the bins see
@@ -146,6 +142,18 @@ def refit_machine(problem: FitProblem, model: MachineModel, estimator: FaultEsti
     free = _held(scored, pinned)
     fit = estimator.refine(free, {p.name: at[p.name] for p in free.parameters})
     return dataclasses.replace(fit, parameters={**fit.parameters, **pinned})
+
+
+def _effect_parameters(problem: FitProblem, model: MachineModel) -> tuple:
+    """The parameters of ``problem`` that are its machine's effects' (not its stages')."""
+    names = {p.name for p in model.effect_parameters}
+    return tuple(p for p in problem.parameters if p.name in names)
+
+
+def _scored(problem: FitProblem, false_alarm_rate: float) -> FitProblem:
+    """``problem`` on the bins a comparison scores
+    (:func:`~pydiag.loop.residual.measured_spectra` at ``false_alarm_rate``)."""
+    return problem.derive(featurizer=measured_spectra(problem, false_alarm_rate).featurizer)
 
 
 def _effects_fit(scored: FitProblem, model: MachineModel, added: tuple,

@@ -151,7 +151,8 @@ def test_a_record_is_fitted_from_the_healthy_fit_without_a_swarm(tmp_path):
     """refit_machine: the short box's model with the loop's effects, its fit on healthy
     seed 1 (the file's [start]) polished on a record with a broken output-gear tooth, no
     swarm: one simulation at the start, at most the polish's budget more, the error below
-    the start's, and every parameter of the model given a value."""
+    the start's, every parameter of the model given a value, and the output gear's
+    modulation deeper than the healthy fit's."""
     from pydiag.diagnose.stages import machine_speed
     from pydiag.fit.estimator import FaultEstimator
     from pydiag.gear.machine_file import load_machine
@@ -171,3 +172,4 @@ def test_a_record_is_fitted_from_the_healthy_fit_without_a_swarm(tmp_path):
     assert at_start.evaluations == 1 and 1 < fit.evaluations <= 101
     assert fit.error < at_start.error
     assert set(fit.parameters) == {p.name for p in problem.parameters}
+    assert fit.parameters["stage_2.m_g"] > start["stage_2.m_g"]  # the gear's modulation deepens

@@ -2,6 +2,7 @@
 from what changed (pydiag.gear.faults) and the healthy model's verdict laid over the
 indicators' (pydiag.gear.component.judged_by_model)."""
 
+import dataclasses
 import math
 
 import pytest
@@ -132,6 +133,10 @@ def test_a_bearing_fault_the_model_tried_and_did_not_find_is_good():
     outer = ModelChange("input", "bearing_outer_race", 1.0, 0.0, 2.0, 0.3, {"A_b": (0.0, 1.0)},
                         "pinion bearing", (), "outer", (inner.name,))
     assert judged_by_model(indicators, [outer])[0].state == "ball"
+    # beside a larger change of another fault, the evidence is the tested fault's
+    v, = judged_by_model(indicators, [dataclasses.replace(outer, margin=4.0), ball])
+    assert v.state == "good" and v.evidence["model input bearing_ball"] == 1.5
+    assert "model input bearing_outer_race" not in v.evidence
     eccentric = (ComponentVerdict(PINION, "eccentric", {}, 6.0, 10.2, "its shaft's swing"),)
     assert judged_by_model(eccentric, [change(0.2, (), (PINION.name,), "eccentric",
                                               "gear_eccentricity")])[0].state == "eccentric"
