@@ -33,7 +33,7 @@ from pydiag.core.measurement import Measurement
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.build import ProblemSettings, build_problem
 from pydiag.fit.problem import FitProblem
-from pydiag.gear.component import judged_by_model
+from pydiag.gear.component import asked_of_model, judged_by_model
 from pydiag.gear.features import KinematicFeaturizer, max_band_freq_hz
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord, machine_record
@@ -203,13 +203,15 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     :func:`~pydiag.loop.machine_fit.refit_machine`), each stage classified from its own
     fault parameters and tested on the lines seen from its own shafts
     (:func:`~pydiag.loop.machine_fit.stage_view`), and judged against ``baselines`` as
-    :func:`diagnose_machine` judges. With the machine's
-    ``healthy`` model (:func:`healthy_model`), the model's own verdict too
+    :func:`diagnose_machine` judges. With the machine's ``healthy`` model
+    (:func:`healthy_model`), the model's own verdict too
     (:func:`~pydiag.loop.own_changes.record_changes`: each of its effects, and each it
-    lacks that it was fitted with, refitted held out on the record, the change held to
-    its repeats'), which joins the indicators' on every component an effect of that model
-    sizes (:func:`~pydiag.gear.component.judged_by_model`); ``effect_model``: the FMU of
-    the machine with one effect more (for the effects it lacks)."""
+    lacks that it was fitted with where it could name a component the indicators ask
+    about, :func:`~pydiag.gear.component.asked_of_model`, refitted held out on the
+    record, the change held to its repeats'), which joins the indicators' on every
+    component an effect of that model sizes
+    (:func:`~pydiag.gear.component.judged_by_model`); ``effect_model``: the FMU of the
+    machine with one effect more (for the effects it lacks)."""
     estimator = estimator or FaultEstimator()
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
@@ -225,8 +227,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
         stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
                                                                    prefix),
                                       _verdict(judged, k), prefix))
-    changes = [] if healthy is None else record_changes(healthy, machine, model, problem,
-                                                        effect_model=effect_model)
+    changes = [] if healthy is None else record_changes(
+        healthy, machine, model, problem, effect_model=effect_model,
+        asked=asked_of_model(judged.components))
     return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes),
                                components=judged_by_model(judged.components, changes))
 

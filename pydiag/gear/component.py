@@ -121,6 +121,19 @@ class ModelChange:
                 "explained": finite_or_none(self.explained)}
 
 
+#: A component the indicators call good with a change of at least this share of its
+#: threshold is asked of the model too (:func:`asked_of_model`): a fault the model's
+#: held-out fit may see before the indicators' thresholds do.
+ASK_MODEL = 0.5
+
+
+def asked_of_model(verdicts: Sequence[ComponentVerdict]) -> set[str]:
+    """The names of the components whose verdict the model is asked for: those the
+    indicators find faulty, or good with a margin of at least :data:`ASK_MODEL`."""
+    return {v.component.name for v in verdicts
+            if v.faulty or (v.margin is not None and v.margin >= ASK_MODEL)}
+
+
 def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
                     ) -> tuple[ComponentVerdict, ...]:
     """``verdicts`` (the indicators') with the healthy model's verdict where it has one.

@@ -87,13 +87,15 @@ def check_effects(effects: list[str] | None) -> None:
 def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                      base: Comparison, effect_model: Callable[[Machine], str],
                      estimator: FaultEstimator | None = None, effects: list[str] | None = None,
-                     progress: Callable[[Suggestion], None] | None = None) -> list[Suggestion]:
+                     progress: Callable[[Suggestion], None] | None = None,
+                     where: Callable[[int, str], bool] | None = None) -> list[Suggestion]:
     """Every effect of ``effects`` (default: the catalogue) that a stage can have and lacks,
     tried on every stage of ``machine``'s model (``problem``, fitted as ``base``), ranked by
     held-out z (module docstring). ``effect_model``: the FMU of a machine (the machine with
     one more effect); ``estimator``: each effect's fit (default
     :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`), its ``n_workers`` the cores the fits
-    share; ``progress`` gets each row as it is done."""
+    share; ``progress`` gets each row as it is done; ``where(stage, key)``: whether to try
+    the effect ``key`` on that stage (default: every one; one left out has no row)."""
     check_effects(effects)
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
     catalogues = [lacking(machine, model, k) for k in range(len(machine.stages))]
@@ -101,7 +103,7 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
              for k in range(len(machine.stages))]
     tasks = [(k, key) for k, catalogue in enumerate(catalogues) for key, effect in
              catalogue.items() if (not effects or key in effects)
-             and not in_model(views[k], effect)]
+             and (where is None or where(k, key)) and not in_model(views[k], effect)]
     tasks.sort(key=lambda task: -discovery_cost(catalogues[task[0]][task[1]]))
     found: list[Suggestion] = []
     fmus: dict[tuple[int, str], str] = {}

@@ -27,14 +27,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.component import ModelChange, components
 from pydiag.gear.effect import (GEAR, GEAR_BEARING, GEAR_SHAFT, MESH, OTHER_SHAFT, PINION,
-                               PINION_BEARING, PINION_SHAFT)
+                               PINION_BEARING, PINION_SHAFT, Effect)
 from pydiag.gear.machine import Machine
 from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.loop.compare import compare
@@ -109,28 +109,43 @@ def fit_healthy(machine: Machine, model: MachineModel, baseline: FitProblem,
 
 def record_changes(healthy: HealthyModel, machine: Machine, model: MachineModel,
                    problem: FitProblem, effect_estimator: FaultEstimator | None = None,
-                   effect_model: Callable[[Machine], str] | None = None
-                   ) -> list[ModelChange]:
+                   effect_model: Callable[[Machine], str] | None = None,
+                   asked: Collection[str] | None = None) -> list[ModelChange]:
     """The model's verdict on the record of ``problem`` (:func:`own_changes`): each effect
     of the ``healthy`` model, and each it lacks that it was fitted with, tried held out on
-    the record as on its baseline and repeats (:func:`fit_healthy`)."""
+    the record as on its baseline and repeats (:func:`fit_healthy`). ``asked``: the names
+    of the components the model is asked about (those the indicators found changed, or
+    near it); an effect it lacks is then tried only on a stage where it could name one of
+    them (None: everywhere). A lacking effect's try is the costly part of a record's
+    verdict (a swarm over the whole record), and one that could name only components
+    whose every measure stayed well within the healthy spread would, held to the same
+    repeats, name none of them either but by chance."""
     rows = _rows(healthy, machine, model, problem,
-                 effect_estimator or FaultEstimator(**EFFECT_REFIT), effect_model)
+                 effect_estimator or FaultEstimator(**EFFECT_REFIT), effect_model,
+                 None if asked is None else set(asked))
     return _changes(machine, model, healthy.parameters, rows, healthy.baseline_z,
                     list(healthy.repeat_z))
 
 
 def _rows(healthy: HealthyModel, machine: Machine, model: MachineModel, problem: FitProblem,
-          refit: FaultEstimator, effect_model: Callable[[Machine], str] | None
-          ) -> list[Suggestion]:
-    """Every effect of the healthy model, and every one of ``healthy.lacking``, tried held
-    out on ``problem`` seen through the healthy fit."""
+          refit: FaultEstimator, effect_model: Callable[[Machine], str] | None,
+          asked: set[str] | None = None) -> list[Suggestion]:
+    """Every effect of the healthy model, and every one of ``healthy.lacking`` (on the
+    stages where it covers a component of ``asked``; None: on every stage), tried held out
+    on ``problem`` seen through the healthy fit."""
     if healthy.lacking and effect_model is None:
         raise ValueError("trying lacking effects needs effect_model")
     seen = compare(problem, None, healthy.false_alarm_rate, parameters=healthy.parameters)
     seen = dataclasses.replace(seen, fit_error=seen.error)
+    catalogues: dict[int, dict] = {}
+
+    def where(k: int, key: str) -> bool:
+        if asked is None:
+            return True
+        catalogue = catalogues.setdefault(k, model.stage_effects(k))
+        return bool(asked & set(effect_covers(machine, k, catalogue[key])))
     new = discover_machine(problem, machine, model, seen, effect_model, refit,
-                           list(healthy.lacking)) if healthy.lacking else []
+                           list(healthy.lacking), where=where) if healthy.lacking else []
     return refit_own_effects(problem, machine, model, seen, refit) + new
 
 
@@ -183,8 +198,7 @@ def _changes(machine: Machine, model: MachineModel, healthy: Mapping[str, float]
         values = {name: (healthy.get(name, off.get(name, math.nan)), h.parameters[name])
                   for name, _ in effect.parts if name in h.parameters}
         part = effect.part_of({name: after - before for name, (before, after) in values.items()})
-        covers = tuple(dict.fromkeys(name for _, p in effect.parts
-                                     for name in part_components(machine, k, p)))
+        covers = effect_covers(machine, k, effect)
         out.append(ModelChange(row.stage, row.effect, h.z, base_z, repeat_rise,
                                (h.z - base_z) / held_to, values, part,
                                part_components(machine, k, part), effect.fault_of(values),
@@ -211,6 +225,13 @@ def _settled(changes: list[ModelChange], claimed: dict[tuple[str, str], set[str]
         out.append(c if winner is None or not c.changed else dataclasses.replace(
             c, beaten_by=f"{winner.effect} on {winner.stage}"))
     return out
+
+
+def effect_covers(machine: Machine, stage: int, effect: Effect) -> tuple[str, ...]:
+    """The names of ``machine``'s components a change of ``effect`` on stage ``stage``
+    could name: those of any of its parts (:attr:`~pydiag.gear.effect.Effect.parts`)."""
+    return tuple(dict.fromkeys(name for _, part in effect.parts
+                               for name in part_components(machine, stage, part)))
 
 
 def part_components(machine: Machine, stage: int, part: str | None) -> tuple[str, ...]:

@@ -7,8 +7,9 @@ import math
 
 import pytest
 
-from pydiag.gear.component import (BY_BOTH, BY_INDICATORS, BY_MODEL, Component, ComponentVerdict,
-                                   ModelChange, judged_by_model)
+from pydiag.gear.component import (ASK_MODEL, BY_BOTH, BY_INDICATORS, BY_MODEL, Component,
+                                   ComponentVerdict, ModelChange, asked_of_model,
+                                   judged_by_model)
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.faults import model_shaft_state, shaft_state, tooth_state
 
@@ -140,3 +141,14 @@ def test_a_bearing_fault_the_model_tried_and_did_not_find_is_good():
     eccentric = (ComponentVerdict(PINION, "eccentric", {}, 6.0, 10.2, "its shaft's swing"),)
     assert judged_by_model(eccentric, [change(0.2, (), (PINION.name,), "eccentric",
                                               "gear_eccentricity")])[0].state == "eccentric"
+
+
+def test_the_model_is_asked_about_what_the_indicators_find_faulty_or_near_it():
+    shaft = Component("shaft", "input", "input")
+    verdicts = (ComponentVerdict(PINION, "changed", {}, 6.0, 1.4),
+                ComponentVerdict(GEAR, "good", {}, 6.0, ASK_MODEL),  # half its threshold
+                ComponentVerdict(BEARING, "good", {}, 6.0, 0.9 * ASK_MODEL),
+                ComponentVerdict(shaft, "not judged", {}, None, None, "no baseline"))
+    assert asked_of_model(verdicts) == {PINION.name, GEAR.name}
+    # a fault the indicators name is asked about whatever its margin (a swing's own rule)
+    assert asked_of_model((ComponentVerdict(BEARING, "outer", {}, 6.0, None),)) == {BEARING.name}

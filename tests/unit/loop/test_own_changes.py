@@ -13,7 +13,7 @@ from conftest import ROOT
 from pydiag.gear.effect import MESH
 from pydiag.gear.machine_file import machine_from_dict
 from pydiag.loop.machine_model import machine_model
-from pydiag.loop.own_changes import own_changes, part_components
+from pydiag.loop.own_changes import effect_covers, own_changes, part_components
 from pydiag.loop.results import HeldOut, Suggestion
 
 
@@ -191,3 +191,17 @@ def test_a_rise_whose_fit_leaves_its_own_lines_worse_names_nothing(spur):
     assert c.margin > 1 and not c.changed and c.explained == -2.6
     c, = own_changes(machine, model, {}, [ball], base, [repeat])  # explained 0.5
     assert c.changed and c.components == ("IS:IS", "IS:OS")
+
+
+def test_an_effect_covers_the_components_its_parts_are_on_its_stage(spur):
+    """What a record's verdict asks of the model (record_changes' ``asked``) picks the
+    stages an effect is tried on by these: a bearing's race the bearings of the shaft its
+    stage's pinion (or, on the last stage, gear) turns, a tooth the stage's gears, a
+    shaft's orders its shaft."""
+    machine, model = spur
+    inp, out = (model.stage_effects(k) for k in (0, 1))
+    assert effect_covers(machine, 0, inp["bearing_inner_race"]) == ("IS:IS", "IS:OS")
+    assert effect_covers(machine, 1, out["bearing_inner_race"]) == ("ID:IS", "ID:OS")
+    assert effect_covers(machine, 1, out["gear_bearing_ball"]) == ("OS:IS", "OS:OS")
+    assert set(effect_covers(machine, 1, out["gear_tooth_fault"])) == {"80T gear of output stage"}
+    assert effect_covers(machine, 0, inp["pinion_shaft_orders"]) == ("input",)
