@@ -279,6 +279,22 @@ class FitProblem:
         out = [linear(y[i], self.spec.sample_rate_hz) for i in range(len(self.channels))]
         return None if any(v is None for v in out) else out
 
+    def analytic(self, y: np.ndarray) -> list[np.ndarray] | None:
+        """Complex signals a channel, linear in the signals ``y``, whose moduli are the
+        envelopes the features are spectra of (``FullSpectrumFeaturizer.analytic``); None
+        when the features are not an envelope's."""
+        analytic = getattr(self.featurizer, "analytic", None)
+        if analytic is None:
+            return None
+        out = [analytic(y[i], self.spec.sample_rate_hz) for i in range(len(self.channels))]
+        return None if any(v is None for v in out) else out
+
+    def residuals_of_analytic(self, analytic: list[np.ndarray]) -> np.ndarray:
+        """:meth:`residuals_of` the signals whose :meth:`analytic` is ``analytic``."""
+        fs = self.spec.sample_rate_hz
+        return self.residuals_of_amplitudes([self.featurizer.of_analytic(z, fs).amplitude
+                                             for z in analytic])
+
     def derive(self, fmu_path: str | None = None, parameters: tuple[Parameter, ...] | None = None,
                fixed_values: dict[str, float] | None = None,
                featurizer: Featurizer | None = None,

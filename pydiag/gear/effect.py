@@ -64,7 +64,10 @@ class Effect:
             shows only as a tilt, which a fit with the base held makes up for); the better
             polish is kept
         affine: its outputs are affine in its parameters (a strike amplitude, a shaft's
-            orders): fitted from one simulation more than it has parameters
+            orders): fitted from one simulation more than it has parameters; but for one
+            periodic parameter, a phase they depend on as a first harmonic (where a load
+            zone or a cage's turn peaks the strikes), three a parameter then
+            (:func:`pydiag.fit.affine.fit_affine`)
         envelope: its lines show in the envelope of the acceleration above the gear's bands
             (a bearing's strikes ringing a structural mode), where held-out validation
             fits and scores it

@@ -41,7 +41,7 @@ _INNER = Effect(
     (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
      Parameter("phi_zone", -math.pi, math.pi, periodic=True)),
     family(("bpfi", "bpfi_sb")), synchronous=False, outputs=("acc",), envelope=True,
-    machine_values=bearing_values, missing=bearing_missing,
+    affine=True, machine_values=bearing_values, missing=bearing_missing,
     parts=(("A_b", PINION_BEARING),), fault=INNER)
 # a spalled ball strikes both races once each a turn about its axis (2 x BSF, the
 # kinematic map's even BSF lines), the cage carrying it through the load zone
@@ -51,7 +51,7 @@ _BALL = Effect(
     "structural mode)",
     (Parameter("A_b", 0.0, MAX_STRIKE_M_S2),
      Parameter("phi_cage", -math.pi, math.pi, periodic=True)),
-    ball_defect, synchronous=False, outputs=("acc",), envelope=True,
+    ball_defect, synchronous=False, outputs=("acc",), envelope=True, affine=True,
     machine_values=bearing_values, missing=bearing_missing,
     parts=(("A_b", PINION_BEARING),), fault=BALL)
 

@@ -24,7 +24,7 @@ import numpy as np
 from pydiag.core.errors import MeasurementError, UsageError
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.signal.features import first_window
-from pydiag.signal.spectra import (Spectrum, SyncSpectrum, amplitude_spectrum, band_envelope,
+from pydiag.signal.spectra import (Spectrum, SyncSpectrum, amplitude_spectrum, band_analytic,
                                    noise_power, sync_spectrum, without_synchronous)
 
 N_MESH_HARMONICS = 4
@@ -210,11 +210,29 @@ class FullSpectrumFeaturizer:
 
     def _analysed(self, signal: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, float]:
         """The samples the spectrum is taken of, and their rate."""
+        z = self.analytic(signal, sample_rate_hz)
+        return self._halved(first_window(signal, sample_rate_hz, self.duration_s,
+                                         self.describe_duration()) if z is None else np.abs(z),
+                            sample_rate_hz)
+
+    def analytic(self, signal: np.ndarray, sample_rate_hz: float) -> np.ndarray | None:
+        """The analytic signal whose magnitude is the envelope the spectrum is taken of
+        (:func:`pydiag.signal.spectra.band_analytic`), linear in ``signal``; None for a
+        spectrum of the signal itself."""
+        if self.envelope_band_hz is None:
+            return None
         x = first_window(signal, sample_rate_hz, self.duration_s, self.describe_duration())
-        if self.envelope_band_hz is not None:
-            periods = int(round(self.duration_s / self.kinematics.period_s))
-            x = band_envelope(without_synchronous(x, periods), sample_rate_hz,
-                              self.envelope_band_hz)
+        periods = int(round(self.duration_s / self.kinematics.period_s))
+        return band_analytic(without_synchronous(x, periods), sample_rate_hz,
+                             self.envelope_band_hz)
+
+    def of_analytic(self, analytic: np.ndarray, sample_rate_hz: float) -> Spectrum:
+        """What this featurizer makes of a signal whose :meth:`analytic` is ``analytic``."""
+        return self._masked(self._spectrum_of(*self._halved(np.abs(analytic), sample_rate_hz)))
+
+    def _halved(self, x: np.ndarray, sample_rate_hz: float) -> tuple[np.ndarray, float]:
+        """The samples of ``x`` (the analysed window) the spectrum is taken of: every other
+        period for a half."""
         if self.half is not None:
             x, sample_rate_hz = _whole_samples_per_period(x, sample_rate_hz,
                                                           self.kinematics.period_s)
@@ -225,7 +243,10 @@ class FullSpectrumFeaturizer:
 
     def spectrum(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
         """Every bin up to max_freq_hz, and the noise between the synchronous lines."""
-        x, sample_rate_hz = self._analysed(signal, sample_rate_hz)
+        return self._spectrum_of(*self._analysed(signal, sample_rate_hz))
+
+    def _spectrum_of(self, x: np.ndarray, sample_rate_hz: float) -> Spectrum:
+        """:meth:`spectrum` of the analysed samples ``x``."""
         freqs, amp = amplitude_spectrum(x, sample_rate_hz)
         keep = (freqs > 0) & (freqs <= self.max_freq_hz)
         idx = np.flatnonzero(keep)
@@ -270,7 +291,10 @@ class FullSpectrumFeaturizer:
         return values if self.bins is None else values[self.bins]
 
     def __call__(self, signal: np.ndarray, sample_rate_hz: float) -> Spectrum:
-        full = self.spectrum(signal, sample_rate_hz)
+        return self._masked(self.spectrum(signal, sample_rate_hz))
+
+    def _masked(self, full: Spectrum) -> Spectrum:
+        """``full`` at this featurizer's bins."""
         freqs, amp, noise = full.freq_hz, full.amplitude, full.noise_power
         mask = self.bins if self.bins is not None else np.ones(freqs.size, dtype=bool)
         return Spectrum(freqs[mask], amp[mask], noise)

@@ -232,7 +232,9 @@ def _effect_parameters(machine: Machine, k: int, instance: str
                       if name not in names})
         fixed.update(e.values_from(kin))
         fitted += chosen
-        if e.affine:
+        if e.affine and not any(p.periodic for p in e.parameters):
+            # (one with a phase is fitted whole with the others: the machine's affine fit
+            # takes no phase of several effects at once)
             affine.update(p.name for p in chosen)
     return fitted, fixed, affine
 

@@ -67,6 +67,14 @@ def band_envelope(signal: np.ndarray, sample_rate_hz: float,
     at the mode, smeared by the rolling elements' slip, while the envelope of the band
     around the mode beats at the strike frequency and its low harmonics, as lines.
     """
+    return np.abs(band_analytic(signal, sample_rate_hz, band_hz))
+
+
+def band_analytic(signal: np.ndarray, sample_rate_hz: float,
+                  band_hz: tuple[float, float]) -> np.ndarray:
+    """The analytic signal whose magnitude :func:`band_envelope` is: complex, linear in
+    ``signal`` (what a fit of a model affine in its parameters combines before the
+    magnitude is taken)."""
     low, high = band_hz
     if not 0 < low < high < sample_rate_hz / 2:
         raise ValueError(f"the band must lie inside (0, {sample_rate_hz / 2:g}) Hz with low < "
@@ -74,7 +82,7 @@ def band_envelope(signal: np.ndarray, sample_rate_hz: float,
     import scipy.signal  # here: importing it takes 0.6 s of every command's start
 
     sos = scipy.signal.butter(4, [low, high], btype="bandpass", fs=sample_rate_hz, output="sos")
-    return np.abs(scipy.signal.hilbert(scipy.signal.sosfiltfilt(sos, np.asarray(signal, float))))
+    return scipy.signal.hilbert(scipy.signal.sosfiltfilt(sos, np.asarray(signal, float)))
 
 
 def noise_power(amplitude: np.ndarray, robust: bool = False, min_bins: int = 1) -> float:

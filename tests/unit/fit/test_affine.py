@@ -27,7 +27,7 @@ def problem(truth: float, low: float = 0.0, high: float = 10.0):
     spec = SimpleNamespace(open=lambda: contextlib.nullcontext(None))
     return SimpleNamespace(parameters=(Parameter("a", low, high),), spec=spec,
                            simulate=simulate, residuals_of=residuals_of,
-                           linear_features=lambda y: None), calls
+                           linear_features=lambda y: None, analytic=lambda y: None), calls
 
 
 def test_the_value_is_found_from_two_simulations():
@@ -71,7 +71,7 @@ def lines(truth: list[float], high: float = 10.0, linear: bool = False, low: flo
     spec = SimpleNamespace(open=lambda: contextlib.nullcontext(None))
     params = tuple(Parameter(f"a{j}", low, high) for j in range(3))
     return SimpleNamespace(parameters=params, spec=spec, simulate=simulate,
-                           residuals_of=residuals_of, linear_features=linear_features,
+                           residuals_of=residuals_of, linear_features=linear_features, analytic=lambda y: None,
                            residuals_of_amplitudes=lambda amps: amps[0] - measured,
                            spectra=spectra), calls
 
@@ -142,3 +142,48 @@ def test_signed_coefficients_are_simulated_off_and_one_at_a_time():
     assert np.abs([fit.values[f"a{j}"] for j in range(3)]) == pytest.approx(
         [2.5, 1.0, 7.25], abs=1e-2)  # an amplitude spectrum does not tell the sign
     assert fit.values["a2"] == pytest.approx(-7.25, abs=1e-2)  # +7.25 is out of range
+
+
+def modulated(truth_a: float, truth_phi: float):
+    """y(a, phi) = base + a (1 + cos(2 pi t - phi)) carrier: a line at 40 cycles whose
+    sidebands at 39 and 41 beat with the base's lines there (two lines of other phases, so
+    that their amplitudes tell the phase); counts its simulations."""
+    t = np.linspace(0.0, 1.0, 400, endpoint=False)
+    base = (np.sin(2 * np.pi * 3 * t) + 0.3 * np.cos(2 * np.pi * 39 * t + 0.7)
+            + 0.2 * np.cos(2 * np.pi * 41 * t - 2.0))
+    carrier = np.cos(2 * np.pi * 40 * t)
+    calls = []
+
+    def signal(a, phi):
+        return base + a * (1 + np.cos(2 * np.pi * t - phi)) * carrier
+
+    def simulate(plant, x):
+        calls.append(tuple(float(v) for v in x))
+        return signal(*x)[None, :]
+
+    measured = np.abs(np.fft.rfft(signal(truth_a, truth_phi)))
+    spec = SimpleNamespace(open=lambda: contextlib.nullcontext(None))
+    params = (Parameter("a", 0.0, 5.0), Parameter("phi", -np.pi, np.pi, periodic=True))
+    return SimpleNamespace(parameters=params, spec=spec, simulate=simulate,
+                           residuals_of=lambda y: np.abs(np.fft.rfft(y[0])) - measured,
+                           linear_features=lambda y: None, analytic=lambda y: None), calls
+
+
+@pytest.mark.parametrize("phi", [-2.5, 0.4, 2.9])
+def test_an_amplitude_modulated_at_a_phase_is_fitted_from_four_simulations(phi):
+    """Three simulations at the amplitude's end (the phase at 0, a quarter and a half
+    turn) and one off give the outputs at every phase: the fit finds both, simulating
+    nothing more."""
+    p, calls = modulated(1.7, phi)
+    fit = fit_affine(p)
+    assert len(calls) == 4 and fit.unseen == ()
+    assert fit.values["a"] == pytest.approx(1.7, abs=1e-3)
+    assert np.angle(np.exp(1j * (fit.values["phi"] - phi))) == pytest.approx(0.0, abs=1e-3)
+    assert -np.pi <= fit.values["phi"] < np.pi and fit.error < 1e-3
+
+
+def test_two_phases_are_not_fitted_affinely():
+    p, _ = modulated(1.0, 0.0)
+    p.parameters += (Parameter("psi", -np.pi, np.pi, periodic=True),)
+    with pytest.raises(ValueError, match="at most one phase"):
+        fit_affine(p)

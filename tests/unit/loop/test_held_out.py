@@ -283,3 +283,24 @@ def test_an_effect_that_predicts_the_other_half_worse_is_not_confident():
     assert not worse.confirmed and worse.status is Status.WORSE
     assert "0.699 -> 0.721" in worse.message
     assert worse.to_dict()["status"] == "worse held out"
+
+
+def test_an_envelope_spectrum_is_the_modulus_of_an_analytic_signal_linear_in_the_record():
+    """What a fit of a model affine in its parameters combines (``analytic``) gives the
+    featurizer's envelope spectrum (``of_analytic``), and is linear: two records' analytic
+    signals add to their sum's."""
+    kin = GearKinematics(14, 21, 25.0)
+    rate = 20_000.0
+    n = int(np.ceil(8 * kin.period_s * rate))
+    t = np.arange(n) / rate
+    rng = np.random.default_rng(5)
+    strikes = np.sin(2 * np.pi * 3000 * t) * (1 + np.cos(2 * np.pi * 87.0 * t))
+    x, other = strikes + rng.normal(0, 0.3, n), rng.normal(0, 1, n)
+    for half in (None, 0):
+        f = FullSpectrumFeaturizer(kin, 4, 500.0, half=half, envelope_band_hz=(2000.0, 4000.0))
+        z = f.analytic(x, rate)
+        assert f.of_analytic(z, rate).amplitude == pytest.approx(f(x, rate).amplitude,
+                                                                 rel=1e-9, abs=1e-12)
+        assert f.analytic(x + 2 * other, rate) == pytest.approx(
+            z + 2 * f.analytic(other, rate), abs=1e-9)
+    assert FullSpectrumFeaturizer(kin, 4, 500.0).analytic(x, rate) is None
