@@ -207,21 +207,32 @@ def refit_own_effects(problem: FitProblem, machine: Machine, model: MachineModel
     (:func:`~pydiag.loop.held_out.held_out`, ``own``), on the stage's view of ``problem``
     (the machine's model, ``base`` a fit of it: a healthy baseline's, seen on another
     record): whether the record asks for other values of what the model has (a gear's
-    deeper modulation), where :func:`discover_machine` asks what it lacks. Rows stage by
-    stage, a stage's by key."""
+    deeper modulation), where :func:`discover_machine` asks what it lacks. The fits run
+    side by side, one a core, as :func:`discover_machine`'s do. Rows stage by stage, a
+    stage's by key."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
-    rows = []
-    for k, stage in enumerate(machine.stages):
+    stages, tasks = {}, []
+    for k in range(len(machine.stages)):
         keys = sorted(machine.effect_keys(k))
         if not keys:
             continue
         view = stage_view(problem, machine, model, k, base.parameters)
         seen = compare(view, None, base.false_alarm_rate, base.n_periods,
                        parameters=base.parameters)
-        memo: dict = {}
-        rows += [held_out_row(view, seen, model.stage_effects(k)[key], view.spec.fmu_path,
-                              estimator, memo, stage.name, own=True) for key in keys]
-    return rows
+        stages[k] = _Stage(view, seen, shared_halves(view, seen, keys, estimator,
+                                                     model.stage_effects(k)))
+        tasks += [(k, key) for key in keys]
+    name = [s.name for s in machine.stages]
+    return side_by_side(lambda task, one: (_refit_on_stage, (
+        stages[task[0]], model, task[0], name[task[0]], task[1], one)), tasks, estimator, None)
+
+
+def _refit_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, key: str,
+                    estimator: FaultEstimator) -> Suggestion:
+    """:func:`~pydiag.loop.discover.held_out_row` of the effect ``key`` stage ``index``
+    (called ``name``) has, its values asked for again (``own``): a worker's task."""
+    return held_out_row(stage.view, stage.seen, model.stage_effects(index)[key],
+                        stage.view.spec.fmu_path, estimator, stage.memo, name, own=True)
 
 
 def _with_effect(machine: Machine, key: str, stage: int) -> Machine:
