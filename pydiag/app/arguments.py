@@ -96,6 +96,9 @@ def teeth(text: str) -> tuple[int, int]:
 
 
 def effect_list(text: str) -> list[str]:
+    """Comma-separated effect keys; "none" for none."""
+    if text.strip() == "none":
+        return []
     keys = [k.strip() for k in text.split(",") if k.strip()]
     unknown = [k for k in keys if k not in EFFECTS]
     if unknown or not keys:

@@ -28,6 +28,7 @@ from pydiag.gear.comparable import BASELINE_SPEED_SHARE, at_speed
 from pydiag.loop import history
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.stage_catalogue import FAULT_EFFECTS
 
 #: The --baseline value that stands for the baselines kept in the history.
 KEPT = "kept"
@@ -82,10 +83,20 @@ def healthy_fingerprint(args, built: BuiltModel, files: list[str]) -> str:
              "model": history.sha256_of(built.fmu),
              "library": [[str(p.relative_to(root)), history.sha256_of(p)] for p in sources],
              "baselines": [history.sha256_of(f) for f in files],
-             "lacking": sorted(getattr(args, "lacking", None) or []),
+             "lacking": sorted(lacking_effects(args)),
              "arguments": {k: v for k, v in sorted(vars(args).items())
                            if k not in NOT_FITTED_FROM}}
     return hashlib.sha256(json.dumps(facts, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def lacking_effects(args) -> tuple[str, ...]:
+    """The effects the machine's healthy model lacks that a record is asked about: --lacking,
+    else every component fault of the catalogue
+    (:data:`~pydiag.loop.stage_catalogue.FAULT_EFFECTS`); none for a command without the
+    option (batch: its workers build no model)."""
+    if not hasattr(args, "lacking"):
+        return ()
+    return FAULT_EFFECTS if args.lacking is None else tuple(args.lacking)
 
 
 def kept_healthy_model(args, machine: Machine, model: MachineModel, built: BuiltModel,
@@ -103,7 +114,7 @@ def kept_healthy_model(args, machine: Machine, model: MachineModel, built: Built
     if kept is not None:
         return kept, False, db
     fitted = healthy_model(str(built.fmu), model, machine, list(read.values()), args.input_hz,
-                           settings, estimator, getattr(args, "lacking", None) or (),
+                           settings, estimator, lacking_effects(args),
                            effect_model)
     return history.keep_healthy_model(db, machine, key,
                                       [str(Path(p).resolve()) for p in read], fitted), True, db

@@ -185,8 +185,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "every stage judged against it (repeat for more; with a machine file "
                    "that has effects, the first is the healthy model's record and the "
                    "others its repeats)" + KEPT_HELP)
-    p.add_argument("--lacking", type=effect_list, help="with that healthy model: effects it "
-                   "lacks, tried on every stage too (comma-separated keys; minutes each)")
+    p.add_argument("--lacking", type=effect_list, help="with that healthy model: the effects "
+                   "it lacks that a record is asked for, held out, where they could name a "
+                   "component the indicators find changed (comma-separated keys, or none; "
+                   "default: every fault of a gear, bearing or shaft the catalogue has)")
     _history_arg(p)
     p.add_argument("--json", help="write the result as JSON here")
     _force(p)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from pydiag.app import batch
 from pydiag.app.baselines import (KEPT, baseline_records, healthy_measurements,
-                                  kept_healthy_model)
+                                  kept_healthy_model, lacking_effects)
 from pydiag.app.models import machine_models
 from pydiag.app.formatting import (format_facts, format_healthy_model, format_indicators,
                                    format_machine_report,
@@ -175,10 +175,10 @@ def cmd_diagnose(args) -> int:
     if args.fmu is None and args.adapter:
         raise UsageError("--adapter describes an FMU of your own: give it with --fmu (the "
                          "machine's own model needs none)")
-    if args.lacking and (args.fmu or not machine.effects
-                         or len([b for b in args.baseline or [] if b != KEPT]) < 2):
+    if args.lacking is not None and (args.fmu or len([b for b in args.baseline or []
+                                                       if b != KEPT]) < 2):
         raise UsageError("--lacking tries effects against the machine's healthy model: give "
-                         "--machine a file with effects (no --fmu) and two --baseline files")
+                         "--machine FILE (no --fmu) and two --baseline files")
     check_effects(args.lacking)
     m = read_input(args)
     if _staged(args):
@@ -214,7 +214,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     against the baselines when there are some."""
     settings = problem_settings(args)
     # the healthy model's records, read once for it and for the baselines' indicators
-    healthy = healthy_measurements(args) if not args.fmu and machine.effects else {}
+    healthy = healthy_measurements(args) if not args.fmu else {}
     baselines = baseline_records(args, machine, settings.tracking, healthy)
     machines = None if args.fmu else machine_models(args)
     model = None if machines is None else machines(machine)
@@ -228,7 +228,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
         else:  # the machine's own model, every stage at once
             def effect_model(with_one: Machine) -> str:
                 return str(machines(with_one)[1].fmu)
-            if len(healthy) >= 2:
+            if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
                 kept = kept_healthy_model(args, machine, model[0], model[1], healthy,
                                           settings, estimator, effect_model)
             result = diagnose_machine_model(
@@ -241,11 +241,10 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
         print(format_healthy_model(*kept))
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
-    if model is not None and machine.effects and args.baseline and len(healthy) < 2:
-        print("pydiag diagnose: warning: the model's verdict on the machine file's effects "
-              "needs two --baseline files (the healthy model's record, then a healthy "
-              f"repeat; kept baselines hold no record): {len(healthy)} given",
-              file=sys.stderr)
+    if model is not None and args.baseline and len(healthy) < 2:
+        print("pydiag diagnose: warning: the model's verdict on the components needs two "
+              "--baseline files (the healthy model's record, then a healthy repeat; kept "
+              f"baselines hold no record): {len(healthy)} given", file=sys.stderr)
     if args.json:
         out = {**result.to_dict(), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)

@@ -13,6 +13,7 @@ import functools
 from pydiag.core.parameters import Parameter
 from pydiag.gear.effect import Effect
 from pydiag.gear.effects import EFFECTS
+from pydiag.gear.faults import CHANGED
 from pydiag.gear.machine import Machine
 
 
@@ -22,6 +23,20 @@ def on_a_stage(effect: Effect) -> bool:
     of a component the machine file describes on them (a bearing on the stage's pinion
     shaft, another shaft of the machine), not a sensor's path (the housing)."""
     return effect.transfer is None
+
+
+def names_a_fault(effect: Effect) -> bool:
+    """Whether ``effect`` is a component's fault (:attr:`~pydiag.gear.effect.Effect.fault`
+    a fault word or a rule, not "changed": a tooth's, a gear's runout, a bearing's race or
+    ball, a shaft's orders) that a stage can have and that leaves the base model's own
+    lines to the base (a second tooth of a pinion whose first the base already has is
+    not a healthy model's question)."""
+    return on_a_stage(effect) and effect.fault != CHANGED and not effect.reshapes_base
+
+
+#: The keys of the effects :func:`names_a_fault`: what a record is asked about against a
+#: machine's healthy model by default (``diagnose --machine`` with two baselines).
+FAULT_EFFECTS = tuple(key for key, effect in EFFECTS.items() if names_a_fault(effect))
 
 
 def not_on_a_stage(key: str) -> str:

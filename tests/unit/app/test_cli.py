@@ -149,7 +149,7 @@ def test_a_one_stage_machine_files_sensor_keeps_its_name_for_the_machines_model(
 
 
 @pytest.mark.parametrize("extra", [
-    [],  # the example's machine file has no effects: no healthy model
+    [],  # no baseline: no healthy model
     ["--baseline", "a.csv", "--baseline", "kept"],  # kept baselines hold no record
 ])
 def test_lacking_effects_need_the_healthy_model_and_its_repeat(capsys, tmp_path, extra):

@@ -6,6 +6,7 @@ from pathlib import Path
 from pydiag.app.baselines import healthy_fingerprint
 from pydiag.app.cli import build_parser
 from pydiag.loop.compose import BuiltModel
+from pydiag.loop.stage_catalogue import FAULT_EFFECTS
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -31,9 +32,22 @@ def test_the_healthy_models_key_follows_what_it_is_fitted_from(tmp_path):
     # the fit's settings, the effects tried, the reading of the records: another model
     assert key("--particles", "8") != plain
     assert key("--lacking", "bearing_outer_race") != plain
+    assert key("--lacking", "none") != plain
+    # without --lacking, every component fault of the catalogue: the same model
+    assert key("--lacking", ",".join(reversed(FAULT_EFFECTS))) == plain
     assert key("--sample-rate", "66666.67") != plain
     repeat.write_text("t,acc\n0,3\n")  # the repeat's bytes
     assert key() != plain
     repeat.write_text("t,acc\n0,2\n")
     fmu.write_bytes(b"another FMU")  # the model built
     assert key() != plain
+
+
+def test_a_healthy_model_is_asked_about_every_component_fault_of_the_catalogue():
+    """The default --lacking: each effect that names a gear's, bearing's or shaft's fault,
+    none that says only "changed" or that reshapes the base's own lines."""
+    assert {"gear_tooth_fault", "gear_eccentricity", "bearing_outer_race", "bearing_inner_race",
+            "bearing_ball", "gear_bearing_outer_race", "pinion_shaft_orders",
+            "other_shaft_orders"} <= set(FAULT_EFFECTS)
+    assert not {"mesh_modulation", "mesh_stiffness_shape", "backlash",
+                "second_pinion_tooth_fault", "housing_sensor"} & set(FAULT_EFFECTS)
