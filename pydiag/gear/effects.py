@@ -20,9 +20,9 @@ from pydiag.gear.signatures import (GEAR_PAIR_FAMILIES, MAX_HOUSING_HZ, MAX_RIPP
                                     gear_eccentricity, gear_tooth_fault, housing_hint,
                                     housing_start, load_fluctuation, mesh_modulation,
                                     other_shaft, other_shaft_hint, other_shaft_missing,
-                                    other_shaft_values, pinion_shaft, pinion_shaft_hint,
-                                    ripple_hint, second_pinion_tooth, shaft_swing,
-                                    stiffness_shape, tooth_hint)
+                                    other_shaft_values, pinion_eccentricity, pinion_shaft,
+                                    pinion_shaft_hint, ripple_hint, second_pinion_tooth,
+                                    shaft_swing, stiffness_shape, tooth_hint)
 from pydiag.gear.faults import BALL, ECCENTRIC, INNER, OUTER, model_shaft_state, tooth_state
 from pydiag.gear.kinematic_map import SHAFT_ORDERS
 from pydiag.signal.ripple import LoadRipple, SpeedRipple
@@ -83,6 +83,9 @@ EFFECTS = {e.key: e for e in (
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
            (Parameter("ecc_gear", 0.0, 50e-6),), gear_eccentricity,
            parts=(("ecc_gear", GEAR),), fault=ECCENTRIC),
+    Effect("pinion_eccentricity", "GearDiag.Effects.PinionEccentricity", "pinion runout",
+           (Parameter("ecc_pinion", 0.0, 50e-6),), pinion_eccentricity,
+           parts=(("ecc_pinion", PINION),), fault=ECCENTRIC),
     # an eccentric or tilted gear: the load along the face varies around the turn
     Effect("mesh_modulation", "GearDiag.Effects.MeshModulation",
            "the mesh stiffness modulated once per turn of each shaft (a gear mounted tilted "

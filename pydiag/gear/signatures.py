@@ -32,6 +32,15 @@ def gear_eccentricity(line, freq, kin):
     return 1.0 if line.family == "mesh_sb_gear" and abs(line.order) == 1 else 0.0
 
 
+def pinion_eccentricity(line, freq, kin):
+    # gear_eccentricity's twin at the pinion's turn
+    if line is None:
+        return 0.0
+    if line.family == "pinion":
+        return 1.0 if line.order == 1 else 0.5 if line.order == 2 else 0.0
+    return 1.0 if line.family == "mesh_sb_pinion" and abs(line.order) == 1 else 0.0
+
+
 def mesh_modulation(line, freq, kin):
     # amplitude modulation once per turn of a shaft: the first sideband of that shaft's
     # order either side of every mesh harmonic, and, at half weight, the shaft's first
