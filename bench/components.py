@@ -81,7 +81,7 @@ def size(verdict) -> str:
     return "-"
 
 
-def _right(said: str, truth: str) -> bool:
+def names(said: str, truth: str) -> bool:
     """A state said names the labelled fault (a gear "changed" is its fault not told)."""
     return said in truth.split("/") or (said == "changed" and truth in ("chipped", "broken",
                                                                           "eccentric"))
@@ -243,7 +243,7 @@ def main() -> int:
         for name, truth in labels.items():
             v = judged[name]
             counts["faults"] += 1
-            counts["right"] += _right(v.state, truth)
+            counts["right"] += names(v.state, truth)
             rows.append((path.stem, name, truth, v.state, v.margin, size(v)))
         for v in faulty:
             counts["said"] += 1

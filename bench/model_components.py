@@ -1,7 +1,7 @@
 """Every component of the gearbox simulator's short box judged by the machine's healthy
 model (``diagnose --machine`` with the loop's healthy model, tests/golden/short_box.loop.toml,
-its effects refitted held out and the effects of every component it lacks tried, held to
-healthy repeats) beside the indicators alone (``indicators --machine``, the same
+its effects refitted held out and, by default, every component fault of the catalogue it
+lacks tried where the indicators see a change, held to healthy repeats) beside the indicators alone (``indicators --machine``, the same
 baselines), on the independent simulator's records (tests/truth/gearbox.py: faults written
 from the shafts' angles and the bearings' own geometry, not the catalogue's equations).
 Prints a row a record (seconds of each command; the first diagnose also fits the healthy
@@ -10,10 +10,17 @@ the truth, the indicators' state, the joined state and its judge, the model's ma
 the size it fitted. Usage:
 
     .venv/bin/python bench/model_components.py [--seeds 2,5]
+    .venv/bin/python bench/model_components.py --phm09 [DIR]   # default ../shared/data/phm09
 
 Baselines: healthy seeds 1 (the healthy model's record), 3 and 4 (its repeats); each case's
 record on each seed of ``--seeds``. The commands run as a user runs them, with their
 defaults, a history and build folder of their own (a temporary folder).
+
+``--phm09``: the PHM 2009 records of the folder whose box, speed and load have two healthy
+runs (run 2, the healthy model's record, then run 1, its repeat), each judged with the
+machine files of examples/ as they are (no effects: the model is the stages alone, asked
+for the catalogue's component faults), beside the data set's labels (bench/components.py's).
+Cite the PHM Society 2009 Data Challenge where you report results.
 """
 
 from __future__ import annotations
@@ -31,17 +38,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
-from components import SIMULATED, _right  # noqa: E402
+from components import LABELS, NAME, SIMULATED, names  # noqa: E402
 
 from pydiag.io.measurements import write_measurement  # noqa: E402
 
 HEALTHY_MODEL = ROOT / "tests" / "golden" / "short_box.loop.toml"
-#: The catalogue effects of the short box's components that its healthy model lacks:
-#: each bearing's races and ball (the pinion's and, on the output shaft, the gear's), the
-#: shafts' orders, a gear's tooth.
-LACKING = ("bearing_outer_race", "bearing_inner_race", "bearing_ball",
-           "gear_bearing_outer_race", "gear_bearing_inner_race", "gear_bearing_ball",
-           "pinion_shaft_orders", "other_shaft_orders", "gear_tooth_fault")
 #: The kind of each gear fault the simulator writes (bench/components.py labels a gear
 #: "changed": its judge does not tell the kind; the model's tooth effect may).
 GEAR_FAULTS = {"broken tooth, short box's output gear": "broken",
@@ -79,10 +80,89 @@ def _fitted(component: dict, changes: list[dict]) -> str:
                      for k, (a, b) in said["values"].items())
 
 
+def phm09_main(folder: Path) -> int:
+    """The shared PHM 2009 records with two healthy runs of their operating point: a row a
+    record (seconds), a row a labelled or said component, the counts."""
+    files = sorted(p for p in folder.iterdir() if NAME.search(p.name))
+    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}, PHM 2009 records of {folder}")
+    records, rows, skipped = [], [], []
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = Path(scratch)
+        print(f"{'record':<28}{'indicators s':>14}{'diagnose s':>12}")
+        for path in files:
+            box, case, hz, load, run = NAME.search(path.name).groups()
+            labels = LABELS.get((box, int(case)))
+            healthy = sorted((p for p in files if p != path
+                              and NAME.search(p.name).groups()[:4] == (box, "1", hz, load)),
+                             key=lambda p: NAME.search(p.name).group(5) != "2")
+            if labels is None or case == "1":
+                continue
+            if len(healthy) < 2:
+                skipped.append(path.stem)
+                continue
+            common = ["--machine", str(ROOT / "examples" / f"phm09_{box}.toml"),
+                      "--sample-rate", "66666.67", "--rpm", str(60 * int(hz)),
+                      "--measurement", str(path), "--force",
+                      *(a for h in healthy for a in ("--baseline", str(h)))]
+            alone, s_ind = _run("indicators", *common, "--json", str(tmp / "ind.json"))
+            joined, s_diag = _run("diagnose", *common, "--build-dir", str(tmp / "build"),
+                                  "--quiet", "--history", str(tmp / "history.sqlite"),
+                                  "--json", str(tmp / "diag.json"))
+            print(f"{path.stem:<28}{s_ind:>14.1f}{s_diag:>12.1f}", flush=True)
+            records.append((path.stem, s_ind, s_diag))
+            _rows_of(path.stem, 0, labels, alone, joined, rows)
+    _report(rows, records, healthy_records=[])
+    print(f"not judged by the model (one healthy run of their operating point): "
+          f"{', '.join(skipped) or 'none'}")
+    return 0
+
+
+def _rows_of(case: str, seed: int, labels: dict, alone: dict, joined: dict,
+             rows: list) -> None:
+    """A row a component the labels name or either verdict calls faulty."""
+    ind = {c["name"]: c for c in alone["components"]}
+    for c in joined["components"]:
+        truth = labels.get(c["name"], "good")
+        faulty = c["state"] != "good" or ind[c["name"]]["state"] != "good"
+        if truth != "good" or faulty:
+            rows.append((case, seed, c["name"], truth, ind[c["name"]]["state"], c["state"],
+                         c["judge"], c["margin"], _fitted(c, joined["model_changes"])))
+
+
+def _report(rows: list, records: list, healthy_records: list) -> None:
+    """The table of ``rows`` (:func:`_rows_of`) and the counts, each verdict's."""
+    print()
+    print(f"{'case':<40}{'seed':>5}  {'component':<26}{'truth':<12}{'indicators':<11}"
+          f"{'joined':<11}{'judge':<11}{'x thr':>7}  model's size")
+    for case, seed, name, truth, ind, said, judge, margin, fitted in rows:
+        shown = "-" if margin is None else f"{margin:.2f}"
+        print(f"{case:<40}{seed:>5}  {name:<26}{truth:<12}{ind:<11}{said:<11}{judge:<11}"
+              f"{shown:>7}  {fitted}")
+    labelled = [r for r in rows if r[3] != "good"]
+    for title, k in (("indicators alone", 4), ("joined with the model", 5)):
+        right = sum(names(r[k], r[3]) for r in labelled)
+        wrong = sum(r[3] == "good" and r[k] != "good" for r in rows)
+        clean = sum(not any(r[0] == case and r[1] == seed and r[3] == "good" and r[k] != "good"
+                            for r in rows) for case, seed in healthy_records)
+        print(f"{title}: faults named on their component {right} of {len(labelled)}; "
+              f"components called faulty that are not {wrong}"
+              + (f"; healthy records all good {clean} of {len(healthy_records)}"
+                 if healthy_records else ""))
+    diag = sorted(r[-1] for r in records[1:])
+    if diag:
+        print(f"diagnose with the healthy model kept: median {diag[len(diag) // 2]:.1f} s, "
+              f"first (fitting it, building the models) {records[0][-1]:.1f} s")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="2,5", help="the records' seeds (default 2,5)")
+    ap.add_argument("--phm09", nargs="?", const=str(ROOT.parent / "shared" / "data" / "phm09"),
+                    help="the shared PHM 2009 records instead (folder)")
     args = ap.parse_args()
+    if args.phm09:
+        return phm09_main(Path(args.phm09))
     seeds = [int(s) for s in args.seeds.split(",")]
     from truth import gearbox as sim
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
@@ -106,39 +186,12 @@ def main() -> int:
                 joined, s_diag = _run("diagnose", *common, "--measurement", str(rec),
                                       "--build-dir", str(tmp / "build"), "--quiet",
                                       "--history", str(tmp / "history.sqlite"),
-                                      "--lacking", ",".join(LACKING),
                                       "--json", str(tmp / "diag.json"))
                 print(f"{case:<40}{seed:>5}{s_ind:>14.1f}{s_diag:>12.1f}", flush=True)
                 records.append((case, seed, s_ind, s_diag))
-                ind = {c["name"]: c for c in alone["components"]}
-                for c in joined["components"]:
-                    truth = labels.get(c["name"], "good")
-                    faulty = c["state"] != "good" or ind[c["name"]]["state"] != "good"
-                    if truth != "good" or faulty:
-                        rows.append((case, seed, c["name"], truth, ind[c["name"]]["state"],
-                                     c["state"], c["judge"], c["margin"],
-                                     _fitted(c, joined["model_changes"])))
-    print()
-    print(f"{'case':<40}{'seed':>5}  {'component':<22}{'truth':<10}{'indicators':<11}"
-          f"{'joined':<11}{'judge':<11}{'x thr':>7}  model's size")
-    for case, seed, name, truth, ind, said, judge, margin, fitted in rows:
-        shown = "-" if margin is None else f"{margin:.2f}"
-        print(f"{case:<40}{seed:>5}  {name:<22}{truth:<10}{ind:<11}{said:<11}{judge:<11}"
-              f"{shown:>7}  {fitted}")
-    labelled = [r for r in rows if r[3] != "good"]
-    for title, k in (("indicators alone", 4), ("joined with the model", 5)):
-        right = sum(_right(r[k], r[3]) for r in labelled)
-        wrong = sum(r[3] == "good" and r[k] != "good" for r in rows)
-        clean = sum(not any(r[0] == case and r[1] == seed and r[3] == "good" and r[k] != "good"
-                            for r in rows)
-                    for case, seed, *_ in records if case.startswith("healthy"))
-        print(f"{title}: faults named on their component {right} of {len(labelled)}; "
-              f"components called faulty that are not {wrong}; healthy records all good "
-              f"{clean} of {sum(case.startswith('healthy') for case, *_ in records)}")
-    diag = sorted(s for *_, s in records[1:])
-    if diag:
-        print(f"diagnose with the healthy model kept: median {diag[len(diag) // 2]:.1f} s, "
-              f"first (fitting it, building the models) {records[0][3]:.1f} s")
+                _rows_of(case, seed, labels, alone, joined, rows)
+    _report(rows, records, [(case, seed) for case, seed, *_ in records
+                            if case.startswith("healthy")])
     return 0
 
 
