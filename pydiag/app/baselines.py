@@ -28,6 +28,7 @@ from pydiag.gear.comparable import BASELINE_SPEED_SHARE, at_speed
 from pydiag.loop import history
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.own_changes import HealthyModel
 from pydiag.loop.stage_catalogue import FAULT_EFFECTS
 
 #: The --baseline value that stands for the baselines kept in the history.
@@ -101,7 +102,7 @@ def lacking_effects(args) -> tuple[str, ...]:
 
 def kept_healthy_model(args, machine: Machine, model: MachineModel, built: BuiltModel,
                        read: Mapping[str, Measurement], settings: ProblemSettings,
-                       estimator: FaultEstimator, effect_model: Callable[[Machine], str]
+                       estimator: FaultEstimator
                        ) -> tuple[history.KeptHealthyModel, bool, str]:
     """(the machine's healthy model of the --baseline files ``read``, whether it was fitted
     now, the history): the one kept in the history under the same fingerprint
@@ -114,10 +115,24 @@ def kept_healthy_model(args, machine: Machine, model: MachineModel, built: Built
     if kept is not None:
         return kept, False, db
     fitted = healthy_model(str(built.fmu), model, machine, list(read.values()), args.input_hz,
-                           settings, estimator, lacking_effects(args),
-                           effect_model)
-    return history.keep_healthy_model(db, machine, key,
-                                      [str(Path(p).resolve()) for p in read], fitted), True, db
+                           settings, estimator, lacking_effects(args))
+    return history.keep_healthy_model(db, machine, key, _resolved(read), fitted), True, db
+
+
+def keeper(args, machine: Machine, built: BuiltModel, read: Mapping[str, Measurement],
+           kept: list[history.KeptHealthyModel]) -> Callable[[HealthyModel], None]:
+    """What keeps the healthy model of the --baseline files ``read`` again, grown (the
+    rows of the lacking effects a record first asked for), under the same fingerprint
+    (found after the one before), and appends it to ``kept``."""
+    def keep(grown: HealthyModel) -> None:
+        kept.append(history.keep_healthy_model(
+            str(history.resolve(args.history)), machine,
+            healthy_fingerprint(args, built, list(read)), _resolved(read), grown))
+    return keep
+
+
+def _resolved(read: Mapping[str, Measurement]) -> list[str]:
+    return [str(Path(p).resolve()) for p in read]
 
 
 def _files(args, warn: bool) -> dict[str, str]:

@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.baselines import (KEPT, baseline_records, healthy_measurements,
+from pydiag.app.baselines import (KEPT, baseline_records, healthy_measurements, keeper,
                                   kept_healthy_model, lacking_effects)
 from pydiag.app.models import machine_models
 from pydiag.app.formatting import (format_facts, format_healthy_model, format_indicators,
@@ -219,7 +219,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     machines = None if args.fmu else machine_models(args)
     model = None if machines is None else machines(machine)
     update, close = progress_bar(args.quiet)
-    kept = None
+    kept, grown = None, []
     try:
         estimator = FaultEstimator(**estimator_settings(args), progress=update)
         if model is None:
@@ -230,15 +230,16 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
                 return str(machines(with_one)[1].fmu)
             if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
                 kept = kept_healthy_model(args, machine, model[0], model[1], healthy,
-                                          settings, estimator, effect_model)
+                                          settings, estimator)
             result = diagnose_machine_model(
                 str(model[1].fmu), model[0], m, machine, args.input_hz, settings, estimator,
-                baselines, None if kept is None else kept[0].model, effect_model)
+                baselines, None if kept is None else kept[0].model, effect_model,
+                list(healthy.values()), keeper(args, machine, model[1], healthy, grown))
     finally:
         close()
     print(format_machine_report(result))
     if kept is not None:
-        print(format_healthy_model(*kept))
+        print(format_healthy_model(*kept, grown[-1] if grown else None))
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
     if model is not None and args.baseline and len(healthy) < 2:
@@ -317,8 +318,7 @@ def cmd_batch(args) -> int:
     kept = None
     if len(healthy) >= 2:  # its healthy model, fitted once here too (or found kept)
         kept = kept_healthy_model(args, machine, model, built[1], healthy,
-                                  problem, FaultEstimator(**settings),
-                                  lambda with_one: str(machines(with_one)[1].fmu))
+                                  problem, FaultEstimator(**settings))
         print(format_healthy_model(*kept))
     tasks = [batch.BatchTask(p, fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,

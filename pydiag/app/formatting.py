@@ -320,13 +320,19 @@ def format_model_changes(changes: tuple[ModelChange, ...]) -> list[str]:
     return lines
 
 
-def format_healthy_model(kept: KeptHealthyModel, fitted: bool, db: str) -> str:
-    """Which healthy model a record was judged by: the files it was fitted and held to, and
-    whether it was fitted now or read as kept in the history ``db``."""
+def format_healthy_model(kept: KeptHealthyModel, fitted: bool, db: str,
+                         grown: KeptHealthyModel | None = None) -> str:
+    """Which healthy model a record was judged by: the files it was fitted and held to,
+    whether it was fitted now or read as kept in the history ``db``, and where it was
+    kept again when the record asked for lacking effects it had not tried on them
+    (``grown``)."""
+    more = "" if grown is None else (
+        f"; with {len(grown.model.held) - len(kept.model.held)} more of its lacking effects "
+        f"tried on them, kept again (id {grown.id})")
     return (f"healthy    : the model fitted to {kept.baselines[0]}, held to "
             f"{', '.join(kept.baselines[1:])}; "
             + (f"kept in {db} (id {kept.id})" if fitted else
-               f"as kept in {db} on {kept.time_utc} (id {kept.id})"))
+               f"as kept in {db} on {kept.time_utc} (id {kept.id})") + more)
 
 
 def format_kept_baselines(name: str, kept: list[KeptBaseline], db: str) -> str:

@@ -45,7 +45,8 @@ from pydiag.gear.tracking import Upsampled, order_track, upsampled_record
 from pydiag.diagnose.diagnosis import Diagnosis, classified, diagnose
 from pydiag.loop.machine_fit import fit_machine, machine_problem, refit_machine, stage_view
 from pydiag.loop.machine_model import MachineModel
-from pydiag.loop.own_changes import HealthyModel, fit_healthy, record_changes
+from pydiag.loop.own_changes import (HealthyModel, fit_healthy, lacking_tries,
+                                     record_changes, with_lacking)
 from pydiag.model.adapter import Adapter
 
 #: Without baselines, a shaft is the suspect when its sidebands carry this many times the
@@ -194,7 +195,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            estimator: FaultEstimator | None = None,
                            baselines: Sequence[MachineRecord] = (),
                            healthy: HealthyModel | None = None,
-                           effect_model: Callable[[Machine], str] | None = None
+                           effect_model: Callable[[Machine], str] | None = None,
+                           healthy_records: Sequence[Measurement] = (),
+                           keep: Callable[[HealthyModel], None] | None = None
                            ) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
@@ -211,7 +214,11 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     record, the change held to its repeats'), which joins the indicators' on every
     component an effect of that model sizes
     (:func:`~pydiag.gear.component.judged_by_model`); ``effect_model``: the FMU of the
-    machine with one effect more (for the effects it lacks)."""
+    machine with one effect more (for the effects it lacks). A lacking effect the record
+    is asked for that the healthy model has not yet tried on its own records
+    (``healthy_records``: the one it was fitted to, then its repeats) is tried there
+    first (:func:`~pydiag.loop.own_changes.with_lacking`), and the model so grown given
+    to ``keep``; without those records, it is not asked."""
     estimator = estimator or FaultEstimator()
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
@@ -227,9 +234,19 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
         stages.append(stage_diagnosis(stage.name, view, classified(view, fit, facts, False,
                                                                    prefix),
                                       _verdict(judged, k), prefix))
-    changes = [] if healthy is None else record_changes(
-        healthy, machine, model, problem, effect_model=effect_model,
-        asked=asked_of_model(judged.components))
+    changes = []
+    if healthy is not None:
+        asked = asked_of_model(judged.components)
+        tries = lacking_tries(healthy, machine, model, asked)
+        if tries - set(healthy.held) and len(healthy_records) >= 2:
+            first, *others = healthy_problems(fmu_path, model, machine, healthy_records,
+                                              input_hz, settings)
+            healthy = with_lacking(healthy, machine, model, first, others, tries,
+                                   effect_model)
+            if keep is not None:
+                keep(healthy)
+        changes = record_changes(healthy, machine, model, problem, effect_model=effect_model,
+                                 asked=asked)
     return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes),
                                components=judged_by_model(judged.components, changes))
 
@@ -237,20 +254,29 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
 def healthy_model(fmu_path: str, model: MachineModel, machine: Machine,
                   healthy: Sequence[Measurement], input_hz: float,
                   settings: ProblemSettings = ProblemSettings(),
-                  estimator: FaultEstimator | None = None, lacking: Sequence[str] = (),
-                  effect_model: Callable[[Machine], str] | None = None) -> HealthyModel:
+                  estimator: FaultEstimator | None = None, lacking: Sequence[str] = ()
+                  ) -> HealthyModel:
     """The machine's healthy model (:func:`~pydiag.loop.own_changes.fit_healthy`): its
     own model (``model``, built at ``fmu_path``, with the effects the machine file gives
     its stages, say from ``pydiag loop`` on the first record) fitted to the first of the
     ``healthy`` records and held to the others (two or more); ``lacking``: catalogue
-    effects it lacks, tried too, on the models ``effect_model`` builds."""
+    effects it lacks that a record may be asked about (tried on these records when one
+    first is: :func:`diagnose_machine_model`)."""
     if len(healthy) < 2:
         raise ValueError("a healthy model needs its record and a healthy repeat")
-    first, *others = [machine_problem(fmu_path, model, m, machine,
-                                      machine_speed(m, machine, input_hz, settings.tracking),
-                                      settings) for m in healthy]
+    first, *others = healthy_problems(fmu_path, model, machine, healthy, input_hz, settings)
     return fit_healthy(machine, model, first, others, estimator or FaultEstimator(),
-                       lacking=lacking, effect_model=effect_model)
+                       lacking=lacking)
+
+
+def healthy_problems(fmu_path: str, model: MachineModel, machine: Machine,
+                     healthy: Sequence[Measurement], input_hz: float,
+                     settings: ProblemSettings = ProblemSettings()) -> list[FitProblem]:
+    """The problems of the machine's model on each of the ``healthy`` records, each at
+    its own speed found from the record."""
+    return [machine_problem(fmu_path, model, m, machine,
+                            machine_speed(m, machine, input_hz, settings.tracking), settings)
+            for m in healthy]
 
 
 def stage_diagnosis(name: str, problem: FitProblem, fit: Diagnosis,

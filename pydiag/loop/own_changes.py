@@ -40,6 +40,7 @@ from pydiag.gear.stage_judge import K_SPREAD
 from pydiag.loop.compare import compare
 from pydiag.loop.effect_fit import EFFECT_REFIT
 from pydiag.loop.machine_discover import discover_machine, refit_own_effects
+from pydiag.loop.machine_discover import lacking as stage_lacking
 from pydiag.loop.machine_fit import compare_machine
 from pydiag.loop.machine_model import MachineModel
 from pydiag.loop.results import Suggestion
@@ -54,21 +55,26 @@ class HealthyModel:
     """The machine's healthy model as its verdict uses it: its fit to the baseline
     (``parameters``, ``false_alarm_rate``), and the held-out z of each (stage, effect) on
     the baseline (``baseline_z``) and on each healthy repeat (``repeat_z``), seen through
-    that fit, what a record's are held to; ``lacking``: the effects it lacks that were
-    tried too. Plain data, so that it is fitted once and kept (the run history)."""
+    that fit, what a record's are held to; ``lacking``: the effects it lacks that a record
+    may be asked about; ``held``: the (stage, effect) of those already tried on the
+    baseline and every repeat (a record's try is held to those rows; the others are tried
+    there when a record first asks for them: :func:`with_lacking`). Plain data, so that it
+    is fitted once and kept (the run history)."""
 
     parameters: dict[str, float]
     false_alarm_rate: float
     baseline_z: dict[tuple[str, str], float]
     repeat_z: tuple[dict[tuple[str, str], float], ...]
     lacking: tuple[str, ...] = ()
+    held: tuple[tuple[str, str], ...] = ()
 
     def to_dict(self) -> dict:
         def rows(z: dict[tuple[str, str], float]) -> list:
             return [[stage, effect, value] for (stage, effect), value in z.items()]
         return {"parameters": self.parameters, "false_alarm_rate": self.false_alarm_rate,
                 "baseline_z": rows(self.baseline_z),
-                "repeat_z": [rows(z) for z in self.repeat_z], "lacking": list(self.lacking)}
+                "repeat_z": [rows(z) for z in self.repeat_z], "lacking": list(self.lacking),
+                "held": [list(pair) for pair in self.held]}
 
     @classmethod
     def from_dict(cls, data: dict) -> "HealthyModel":
@@ -77,13 +83,14 @@ class HealthyModel:
         return cls({str(k): float(v) for k, v in data["parameters"].items()},
                    float(data["false_alarm_rate"]), z(data["baseline_z"]),
                    tuple(z(rows) for rows in data["repeat_z"]),
-                   tuple(str(k) for k in data["lacking"]))
+                   tuple(str(k) for k in data["lacking"]),
+                   tuple((str(stage), str(effect)) for stage, effect in data.get("held", [])))
 
 
 def fit_healthy(machine: Machine, model: MachineModel, baseline: FitProblem,
                 repeats: Sequence[FitProblem], estimator: FaultEstimator,
-                effect_estimator: FaultEstimator | None = None, lacking: Sequence[str] = (),
-                effect_model: Callable[[Machine], str] | None = None) -> HealthyModel:
+                effect_estimator: FaultEstimator | None = None, lacking: Sequence[str] = ()
+                ) -> HealthyModel:
     """The machine's model with the effects its file gives (the healthy model) fitted once
     to the ``baseline`` problem (:func:`~pydiag.loop.machine_fit.compare_machine`, from the
     file's ``[start]``), and the rows a record's are held to: each of its effects refitted
@@ -91,20 +98,58 @@ def fit_healthy(machine: Machine, model: MachineModel, baseline: FitProblem,
     on the baseline and on each healthy repeat, seen through that fit. Every problem is of
     the same model (:func:`~pydiag.loop.machine_fit.machine_problem`).
 
-    ``lacking``: catalogue effects the healthy model does not have, each also tried held
-    out on every stage that can have it (the first question,
-    :func:`~pydiag.loop.machine_discover.discover_machine`, on the models ``effect_model``
-    builds: the machine with one effect more), from off, and held to the repeats the same
-    way: a bearing's strikes, a tooth fault where the model has none."""
+    ``lacking``: catalogue effects the healthy model does not have that a record may be
+    asked about (the first question: a bearing's strikes, a tooth fault where the model has
+    none); each is tried on the baseline and the repeats when a record first asks for it
+    (:func:`with_lacking`), not here: a record asks about the components the indicators
+    see change, a few of the machine's, and a healthy one about none."""
     refit = effect_estimator or FaultEstimator(**EFFECT_REFIT)
     fitted = compare_machine(baseline, model, estimator, refit, start=machine.fit_start())
     healthy = HealthyModel(dict(fitted.parameters), fitted.false_alarm_rate, {}, (),
                            tuple(lacking))
-    own = _rows(healthy, machine, model, baseline, refit, effect_model)
-    again = [_rows(healthy, machine, model, problem, refit, effect_model)
+    own = _rows(healthy, machine, model, baseline, refit, None, set())
+    again = [_rows(healthy, machine, model, problem, refit, None, set())
              for problem in repeats]
     return dataclasses.replace(healthy, baseline_z=_z_of(own),
                                repeat_z=tuple(_z_of(rows) for rows in again))
+
+
+def lacking_tries(healthy: HealthyModel, machine: Machine, model: MachineModel,
+                  asked: Collection[str] | None) -> set[tuple[str, str]]:
+    """The (stage, effect) of ``healthy.lacking`` a record is asked for: on every stage
+    that can have the effect, where it could name one of the components ``asked`` (their
+    names; None: wherever it can be)."""
+    out = set()
+    for k, stage in enumerate(machine.stages):
+        catalogue = stage_lacking(machine, model, k)
+        for key in healthy.lacking:
+            if key in catalogue and (asked is None or set(asked) & set(
+                    effect_covers(machine, k, catalogue[key]))):
+                out.add((stage.name, key))
+    return out
+
+
+def with_lacking(healthy: HealthyModel, machine: Machine, model: MachineModel,
+                 baseline: FitProblem, repeats: Sequence[FitProblem],
+                 tries: Collection[tuple[str, str]], effect_model: Callable[[Machine], str],
+                 effect_estimator: FaultEstimator | None = None) -> HealthyModel:
+    """``healthy`` with the rows a record's ``tries`` (:func:`lacking_tries`) are held to:
+    each (stage, effect) not yet in ``healthy.held`` tried held out on the ``baseline``
+    and each of the ``repeats`` problems (of the records it was fitted to and held to),
+    as a record's is (:func:`~pydiag.loop.machine_discover.discover_machine`, on the models
+    ``effect_model`` builds); ``healthy`` itself when every one is there. A try's rows do
+    not depend on which others are tried with it, so a model grown record by record holds
+    the same rows as one that tried them all at once."""
+    missing = set(tries) - set(healthy.held)
+    if not missing:
+        return healthy
+    refit = effect_estimator or FaultEstimator(**EFFECT_REFIT)
+    rows = [_rows(healthy, machine, model, problem, refit, effect_model, missing, own=False)
+            for problem in (baseline, *repeats)]
+    return dataclasses.replace(
+        healthy, baseline_z={**healthy.baseline_z, **_z_of(rows[0])},
+        repeat_z=tuple({**z, **_z_of(r)} for z, r in zip(healthy.repeat_z, rows[1:])),
+        held=tuple(sorted(set(healthy.held) | missing)))
 
 
 def record_changes(healthy: HealthyModel, machine: Machine, model: MachineModel,
@@ -112,41 +157,36 @@ def record_changes(healthy: HealthyModel, machine: Machine, model: MachineModel,
                    effect_model: Callable[[Machine], str] | None = None,
                    asked: Collection[str] | None = None) -> list[ModelChange]:
     """The model's verdict on the record of ``problem`` (:func:`own_changes`): each effect
-    of the ``healthy`` model, and each it lacks that it was fitted with, tried held out on
-    the record as on its baseline and repeats (:func:`fit_healthy`). ``asked``: the names
-    of the components the model is asked about (those the indicators found changed, or
-    near it); an effect it lacks is then tried only on a stage where it could name one of
-    them (None: everywhere). A lacking effect's try is the costly part of a record's
-    verdict (a swarm over the whole record), and one that could name only components
-    whose every measure stayed well within the healthy spread would, held to the same
-    repeats, name none of them either but by chance."""
+    of the ``healthy`` model, and each it lacks (:func:`lacking_tries`) whose rows on its
+    baseline and repeats it holds (:func:`with_lacking`), tried held out on the record as
+    there. ``asked``: the names of the components the model is asked about (those the
+    indicators found changed, or near it); an effect it lacks is tried only on a stage
+    where it could name one of them (None: everywhere). A lacking effect's try is the
+    costly part of a record's verdict, and one that could name only components whose every
+    measure stayed well within the healthy spread would, held to the same repeats, name
+    none of them either but by chance."""
+    tries = lacking_tries(healthy, machine, model, asked) & set(healthy.held)
     rows = _rows(healthy, machine, model, problem,
-                 effect_estimator or FaultEstimator(**EFFECT_REFIT), effect_model,
-                 None if asked is None else set(asked))
+                 effect_estimator or FaultEstimator(**EFFECT_REFIT), effect_model, tries)
     return _changes(machine, model, healthy.parameters, rows, healthy.baseline_z,
                     list(healthy.repeat_z))
 
 
 def _rows(healthy: HealthyModel, machine: Machine, model: MachineModel, problem: FitProblem,
           refit: FaultEstimator, effect_model: Callable[[Machine], str] | None,
-          asked: set[str] | None = None) -> list[Suggestion]:
-    """Every effect of the healthy model, and every one of ``healthy.lacking`` (on the
-    stages where it covers a component of ``asked``; None: on every stage), tried held out
-    on ``problem`` seen through the healthy fit."""
-    if healthy.lacking and effect_model is None:
+          tries: set[tuple[str, str]], own: bool = True) -> list[Suggestion]:
+    """Every effect of the healthy model (``own``), and those of ``healthy.lacking`` named
+    in ``tries`` (stage, effect), tried held out on ``problem`` seen through the healthy
+    fit."""
+    if tries and effect_model is None:
         raise ValueError("trying lacking effects needs effect_model")
     seen = compare(problem, None, healthy.false_alarm_rate, parameters=healthy.parameters)
     seen = dataclasses.replace(seen, fit_error=seen.error)
-    catalogues: dict[int, dict] = {}
-
-    def where(k: int, key: str) -> bool:
-        if asked is None:
-            return True
-        catalogue = catalogues.setdefault(k, model.stage_effects(k))
-        return bool(asked & set(effect_covers(machine, k, catalogue[key])))
+    name = [s.name for s in machine.stages]
     new = discover_machine(problem, machine, model, seen, effect_model, refit,
-                           list(healthy.lacking), where=where) if healthy.lacking else []
-    return refit_own_effects(problem, machine, model, seen, refit) + new
+                           sorted({key for _, key in tries}),
+                           where=lambda k, key: (name[k], key) in tries) if tries else []
+    return (refit_own_effects(problem, machine, model, seen, refit) if own else []) + new
 
 
 def _z_of(rows: Sequence[Suggestion]) -> dict[tuple[str, str], float]:

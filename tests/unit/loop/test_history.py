@@ -109,7 +109,7 @@ def test_a_healthy_model_is_found_again_by_its_machine_and_fingerprint(tmp_path)
                          {("input stage", "pinion_shaft_orders"): 0.9},
                          ({("input stage", "pinion_shaft_orders"): 11.8},
                           {("input stage", "pinion_shaft_orders"): -2.0}),
-                         ("bearing_outer_race",))
+                         ("bearing_outer_race",), (("input stage", "bearing_outer_race"),))
     db = tmp_path / "h.sqlite"
     assert history.kept_healthy_model(db, spur, "abc") is None  # no history yet
     kept = history.keep_healthy_model(db, spur, "abc", ["/b/run2.zip", "/b/run1.zip"], model)

@@ -13,7 +13,8 @@ from conftest import ROOT
 from pydiag.gear.effect import MESH
 from pydiag.gear.machine_file import machine_from_dict
 from pydiag.loop.machine_model import machine_model
-from pydiag.loop.own_changes import effect_covers, own_changes, part_components
+from pydiag.loop.own_changes import (HealthyModel, effect_covers, lacking_tries, own_changes,
+                                     part_components)
 from pydiag.loop.results import HeldOut, Suggestion
 
 
@@ -205,3 +206,21 @@ def test_an_effect_covers_the_components_its_parts_are_on_its_stage(spur):
     assert effect_covers(machine, 1, out["gear_bearing_ball"]) == ("OS:IS", "OS:OS")
     assert set(effect_covers(machine, 1, out["gear_tooth_fault"])) == {"80T gear of output stage"}
     assert effect_covers(machine, 0, inp["pinion_shaft_orders"]) == ("input",)
+
+
+def test_a_record_is_asked_for_the_lacking_effects_that_could_name_what_changed(spur):
+    """lacking_tries: the (stage, effect) pairs of the healthy model's lacking effects a
+    record is asked for, where they could name a component asked about; the healthy
+    model's own effects are not among them (the output stage has its modulation)."""
+    machine, model = spur
+    healthy = HealthyModel({}, 0.01, {}, (), ("bearing_outer_race", "gear_tooth_fault",
+                                              "mesh_modulation"))
+    assert lacking_tries(healthy, machine, model, {"IS:OS"}) == {
+        ("input stage", "bearing_outer_race")}
+    assert lacking_tries(healthy, machine, model, {"80T gear of output stage", "ID:IS"}) == {
+        ("output stage", "gear_tooth_fault"), ("output stage", "bearing_outer_race")}
+    assert lacking_tries(healthy, machine, model, set()) == set()
+    assert lacking_tries(healthy, machine, model, None) == {
+        (stage, key) for stage in ("input stage", "output stage")
+        for key in ("bearing_outer_race", "gear_tooth_fault")} | {
+        ("input stage", "mesh_modulation")}
