@@ -27,11 +27,15 @@ def on_a_stage(effect: Effect) -> bool:
 
 def names_a_fault(effect: Effect) -> bool:
     """Whether ``effect`` is a component's fault (:attr:`~pydiag.gear.effect.Effect.fault`
-    a fault word or a rule, not "changed": a tooth's, a gear's runout, a bearing's race or
-    ball, a shaft's orders) that a stage can have and that leaves the base model's own
-    lines to the base (a second tooth of a pinion whose first the base already has is
-    not a healthy model's question)."""
-    return on_a_stage(effect) and effect.fault != CHANGED and not effect.reshapes_base
+    a fault word or a rule, not "changed": a gear's tooth or runout, a bearing's race or
+    ball, a shaft's orders) that a stage can have, of a model of its own: not a refinement
+    of the pair's own pinion tooth (``in_base``: its softening over its contact, a second
+    tooth), which each stage's fit already has and classifies, and not one that reshapes
+    the base's own lines. (The pinion tooth's softening, asked of every record, named
+    healthy pinions "chipped" beside a fault on their shaft: the simulator's chipped idler
+    gear, PHM09 helical 6's bent input shaft; bench/CHANGELOG.md.)"""
+    return (on_a_stage(effect) and effect.fault != CHANGED and not effect.in_base
+            and not effect.reshapes_base)
 
 
 #: The keys of the effects :func:`names_a_fault`: what a record is asked about against a

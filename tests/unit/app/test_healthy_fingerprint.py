@@ -45,9 +45,11 @@ def test_the_healthy_models_key_follows_what_it_is_fitted_from(tmp_path):
 
 def test_a_healthy_model_is_asked_about_every_component_fault_of_the_catalogue():
     """The default --lacking: each effect that names a gear's, bearing's or shaft's fault,
-    none that says only "changed" or that reshapes the base's own lines."""
-    assert {"gear_tooth_fault", "gear_eccentricity", "bearing_outer_race", "bearing_inner_race",
+    none that says only "changed", refines the pair's own pinion tooth or reshapes the
+    base's own lines."""
+    assert {"gear_tooth_fault", "gear_eccentricity", "pinion_eccentricity",
+            "bearing_outer_race", "bearing_inner_race",
             "bearing_ball", "gear_bearing_outer_race", "pinion_shaft_orders",
             "other_shaft_orders"} <= set(FAULT_EFFECTS)
-    assert not {"mesh_modulation", "mesh_stiffness_shape", "backlash",
+    assert not {"mesh_modulation", "mesh_stiffness_shape", "backlash", "pinion_tooth_softening",
                 "second_pinion_tooth_fault", "housing_sensor"} & set(FAULT_EFFECTS)
