@@ -112,7 +112,7 @@ def phm09_main(folder: Path) -> int:
             print(f"{path.stem:<28}{s_ind:>14.1f}{s_diag:>12.1f}", flush=True)
             records.append((path.stem, s_ind, s_diag))
             _rows_of(path.stem, 0, labels, alone, joined, rows)
-    _report(rows, records, healthy_records=[])
+    _report(rows, records, healthy_records=[], firsts=False)
     print(f"not judged by the model (one healthy run of their operating point): "
           f"{', '.join(skipped) or 'none'}")
     return 0
@@ -130,14 +130,16 @@ def _rows_of(case: str, seed: int, labels: dict, alone: dict, joined: dict,
                          c["judge"], c["margin"], _fitted(c, joined["model_changes"])))
 
 
-def _report(rows: list, records: list, healthy_records: list) -> None:
-    """The table of ``rows`` (:func:`_rows_of`) and the counts, each verdict's."""
+def _report(rows: list, records: list, healthy_records: list, firsts: bool = True) -> None:
+    """The table of ``rows`` (:func:`_rows_of`) and the counts, each verdict's; ``firsts``:
+    the records are of one machine, the first fitting its healthy model (a line of the
+    times)."""
     print()
-    print(f"{'case':<40}{'seed':>5}  {'component':<26}{'truth':<12}{'indicators':<11}"
+    print(f"{'case':<40}{'seed':>5}  {'component':<28}{'truth':<12}{'indicators':<11}"
           f"{'joined':<11}{'judge':<11}{'x thr':>7}  model's size")
     for case, seed, name, truth, ind, said, judge, margin, fitted in rows:
         shown = "-" if margin is None else f"{margin:.2f}"
-        print(f"{case:<40}{seed:>5}  {name:<26}{truth:<12}{ind:<11}{said:<11}{judge:<11}"
+        print(f"{case:<40}{seed:>5}  {name:<28}{truth:<12}{ind:<11}{said:<11}{judge:<11}"
               f"{shown:>7}  {fitted}")
     labelled = [r for r in rows if r[3] != "good"]
     for title, k in (("indicators alone", 4), ("joined with the model", 5)):
@@ -150,7 +152,7 @@ def _report(rows: list, records: list, healthy_records: list) -> None:
               + (f"; healthy records all good {clean} of {len(healthy_records)}"
                  if healthy_records else ""))
     diag = sorted(r[-1] for r in records[1:])
-    if diag:
+    if diag and firsts:
         print(f"diagnose with the healthy model kept: median {diag[len(diag) // 2]:.1f} s, "
               f"first (fitting it, building the models) {records[0][-1]:.1f} s")
 
