@@ -81,6 +81,15 @@ def size(verdict) -> str:
     return "-"
 
 
+def healthy_runs(path: Path, files: list[Path]) -> list[Path]:
+    """The healthy runs among ``files`` of the box, speed and load of the record at
+    ``path``, but itself, run 2 first (the README's baseline)."""
+    box, _, hz, load, _ = NAME.search(path.name).groups()
+    return sorted((p for p in files if p != path
+                   and NAME.search(p.name).groups()[:4] == (box, "1", hz, load)),
+                  key=lambda p: NAME.search(p.name).group(5) != "2")
+
+
 def names(said: str, truth: str) -> bool:
     """A state said names the labelled fault (a gear "changed" is its fault not told)."""
     return said in truth.split("/") or (said == "changed" and truth in ("chipped", "broken",
@@ -213,10 +222,7 @@ def main() -> int:
     for path in files:
         box, case, hz, load, run = NAME.search(path.name).groups()
         labels = LABELS.get((box, int(case)))
-        # a healthy run of the box at its speed and load, run 2 first (the README's)
-        healthy = sorted((p for p in files if p != path
-                          and NAME.search(p.name).groups()[:4] == (box, "1", hz, load)),
-                         key=lambda p: NAME.search(p.name).group(5) != "2")
+        healthy = healthy_runs(path, files)
         baselines = healthy if args.every_baseline else healthy[:1]
         if labels is None or not baselines:
             continue

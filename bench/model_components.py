@@ -38,7 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
-from components import LABELS, NAME, SIMULATED, names  # noqa: E402
+from components import LABELS, NAME, SIMULATED, healthy_runs, names  # noqa: E402
 
 from pydiag.io.measurements import write_measurement  # noqa: E402
 
@@ -93,9 +93,7 @@ def phm09_main(folder: Path) -> int:
         for path in files:
             box, case, hz, load, run = NAME.search(path.name).groups()
             labels = LABELS.get((box, int(case)))
-            healthy = sorted((p for p in files if p != path
-                              and NAME.search(p.name).groups()[:4] == (box, "1", hz, load)),
-                             key=lambda p: NAME.search(p.name).group(5) != "2")
+            healthy = healthy_runs(path, files)
             if labels is None or case == "1":
                 continue
             if len(healthy) < 2:

@@ -24,21 +24,20 @@ from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.peaks import Peak
 
 
-def gear_eccentricity(line, freq, kin):
-    if line is None:
-        return 0.0
-    if line.family == "gear":
-        return 1.0 if line.order == 1 else 0.5 if line.order == 2 else 0.0
-    return 1.0 if line.family == "mesh_sb_gear" and abs(line.order) == 1 else 0.0
+def _runout(shaft: str):
+    """A runout of the ``shaft`` ("pinion" or "gear") gear: a transmission error once its
+    turn, its shaft's 1x (2x at half weight) and the mesh's first sidebands of it."""
+    def weight(line, freq, kin):
+        if line is None:
+            return 0.0
+        if line.family == shaft:
+            return 1.0 if line.order == 1 else 0.5 if line.order == 2 else 0.0
+        return 1.0 if line.family == f"mesh_sb_{shaft}" and abs(line.order) == 1 else 0.0
+    return weight
 
 
-def pinion_eccentricity(line, freq, kin):
-    # gear_eccentricity's twin at the pinion's turn
-    if line is None:
-        return 0.0
-    if line.family == "pinion":
-        return 1.0 if line.order == 1 else 0.5 if line.order == 2 else 0.0
-    return 1.0 if line.family == "mesh_sb_pinion" and abs(line.order) == 1 else 0.0
+gear_eccentricity = _runout("gear")
+pinion_eccentricity = _runout("pinion")
 
 
 def mesh_modulation(line, freq, kin):
