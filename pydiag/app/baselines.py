@@ -67,7 +67,7 @@ def healthy_measurements(args) -> dict[str, Measurement]:
 #: Arguments that leave the healthy model as it is: the records judged, where outputs go,
 #: what is said, how the work is spread, where models are built (the model built and its
 #: library count instead), the machine file as parsed (its bytes count instead), and
-#: --lacking, which counts as a set (batch has none).
+#: --lacking, which counts as the set it resolves to (:func:`lacking_effects`).
 NOT_FITTED_FROM = {"func", "command", "measurement", "measurements", "json", "out", "force",
                    "quiet", "history", "workers", "oversubscribe", "scheduler", "indicators",
                    "build_dir", "modelica", "baseline", "eval_timeout", "machine",

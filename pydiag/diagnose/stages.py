@@ -209,9 +209,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     :func:`diagnose_machine` judges. With the machine's ``healthy`` model
     (:func:`healthy_model`), the model's own verdict too
     (:func:`~pydiag.loop.own_changes.record_changes`: each of its effects, and each it
-    lacks that it was fitted with where it could name a component the indicators ask
-    about, :func:`~pydiag.gear.component.asked_of_model`, refitted held out on the
-    record, the change held to its repeats'), which joins the indicators' on every
+    lacks where it could name a component the indicators ask about,
+    :func:`~pydiag.gear.component.asked_of_model`, refitted held out on the record, the
+    change held to its repeats'), which joins the indicators' on every
     component an effect of that model sizes
     (:func:`~pydiag.gear.component.judged_by_model`); ``effect_model``: the FMU of the
     machine with one effect more (for the effects it lacks). A lacking effect the record

@@ -6,7 +6,7 @@ machine each change sizes. :func:`fit_healthy` makes the healthy model once (pla
 it.
 
 The healthy model is the machine's own model fitted to a healthy baseline (with the
-effects the loop gave it there). Each effect a stage of it has is polished on half of a
+effects the loop gave it there, if any). Each effect a stage of it has is polished on half of a
 record's periods from the healthy values and scored on the other half
 (:func:`~pydiag.loop.machine_discover.refit_own_effects`): its held-out z says whether the
 record asks for other values. On a real machine two healthy records differ by more than a
@@ -19,8 +19,10 @@ deeper pinion modulation is its pinion, larger orders of the pinion shaft are th
 the effect names the fault where it can (``Effect.fault``: a softer tooth chipped or
 broken, a shaft's risen orders an imbalance or a bend), else "changed". An effect the
 healthy model lacks is tried the same way, from off
-(:func:`~pydiag.loop.machine_discover.discover_machine`). Of two changes whose held-out
-fits claim one line, the larger names it (:func:`_settled`).
+(:func:`~pydiag.loop.machine_discover.discover_machine`), where it could name a component
+a record is asked about (:func:`lacking_tries`), on the baseline and the repeats the first
+time a record asks for it (:func:`with_lacking`). Of two changes whose held-out fits
+claim one line, the larger names it (:func:`_settled`).
 """
 
 from __future__ import annotations
