@@ -178,3 +178,37 @@ def test_a_record_is_fitted_from_the_healthy_fit_without_a_swarm(tmp_path):
     assert fit.error < at_start.error
     assert set(fit.parameters) == {p.name for p in problem.parameters}
     assert fit.parameters["stage_2.m_g"] > start["stage_2.m_g"]  # the gear's modulation deepens
+
+
+def test_a_healthy_model_grown_record_by_record_holds_what_one_grown_at_once_does(tmp_path):
+    """with_lacking: the rows of the lacking effects a record first asks for, tried on the
+    healthy model's own records. Asked one stage at a time (two records, each asking about
+    one bearing), the model holds the same rows as asked both at once, so a record's
+    verdict does not depend on which records came before it; asked again, nothing is
+    tried."""
+    from pydiag.diagnose.stages import healthy_problems
+    from pydiag.gear.machine_file import load_machine
+    from pydiag.loop.machine_model import machine_fmu
+    from pydiag.loop.own_changes import HealthyModel, with_lacking
+    from truth.gearbox import INPUT_HZ
+
+    machine = load_machine(HEALTHY_MODEL)
+    model, built = machine_fmu(machine, ROOT / "modelica", tmp_path)
+    first, *repeats = healthy_problems(str(built.fmu), model, machine,
+                                       [gearbox_record(s, box=SHORT_BOX) for s in (1, 3, 4)],
+                                       INPUT_HZ)
+    start = machine.fit_start()
+    healthy = HealthyModel({p.name: start.get(p.name, p.off) for p in first.parameters}, 0.01,
+                           {}, ({}, {}), ("bearing_outer_race",))
+
+    def effect_model(with_one):
+        return str(machine_fmu(with_one, ROOT / "modelica", tmp_path)[1].fmu)
+    one, two = ("stage 1", "bearing_outer_race"), ("stage 2", "bearing_outer_race")
+    stepwise = with_lacking(healthy, machine, model, first, repeats, {one}, effect_model)
+    assert stepwise.held == (one,)
+    stepwise = with_lacking(stepwise, machine, model, first, repeats, {one, two}, effect_model)
+    at_once = with_lacking(healthy, machine, model, first, repeats, {one, two}, effect_model)
+    assert stepwise.held == at_once.held == (one, two)
+    assert set(at_once.baseline_z) == {one, two}  # tried there: lines of theirs stood out
+    assert stepwise.baseline_z == at_once.baseline_z and stepwise.repeat_z == at_once.repeat_z
+    assert with_lacking(at_once, machine, model, first, repeats, {two}, effect_model) is at_once
