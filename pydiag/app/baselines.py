@@ -67,7 +67,8 @@ def healthy_measurements(args) -> dict[str, Measurement]:
 #: Arguments that leave the healthy model as it is: the records judged, where outputs go,
 #: what is said, how the work is spread, where models are built (the model built and its
 #: library count instead), the machine file as parsed (its bytes count instead), and
-#: --lacking, which counts as the set it resolves to (:func:`lacking_effects`).
+#: --lacking (the effects a record may be asked about: the fit does not depend on them,
+#: and each is tried on the healthy records when a record first asks for it).
 NOT_FITTED_FROM = {"func", "command", "measurement", "measurements", "json", "out", "force",
                    "quiet", "history", "workers", "oversubscribe", "scheduler", "indicators",
                    "build_dir", "modelica", "baseline", "eval_timeout", "machine",
@@ -84,7 +85,6 @@ def healthy_fingerprint(args, built: BuiltModel, files: list[str]) -> str:
              "model": history.sha256_of(built.fmu),
              "library": [[str(p.relative_to(root)), history.sha256_of(p)] for p in sources],
              "baselines": [history.sha256_of(f) for f in files],
-             "lacking": sorted(lacking_effects(args)),
              "arguments": {k: v for k, v in sorted(vars(args).items())
                            if k not in NOT_FITTED_FROM}}
     return hashlib.sha256(json.dumps(facts, sort_keys=True, default=str).encode()).hexdigest()
@@ -112,8 +112,9 @@ def kept_healthy_model(args, machine: Machine, model: MachineModel, built: Built
     history.check(db)
     key = healthy_fingerprint(args, built, list(read))
     kept = history.kept_healthy_model(db, machine, key)
-    if kept is not None:
-        return kept, False, db
+    if kept is not None:  # asked about this call's lacking effects
+        return dataclasses.replace(kept, model=dataclasses.replace(
+            kept.model, lacking=lacking_effects(args))), False, db
     fitted = healthy_model(str(built.fmu), model, machine, list(read.values()), args.input_hz,
                            settings, estimator, lacking_effects(args))
     return history.keep_healthy_model(db, machine, key, _resolved(read), fitted), True, db
