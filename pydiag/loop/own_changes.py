@@ -121,11 +121,12 @@ def lacking_tries(healthy: HealthyModel, machine: Machine, model: MachineModel,
     """The (stage, effect) of ``healthy.lacking`` a record is asked for: on every stage
     that can have the effect, where it could name one of the components ``asked`` (their
     names; None: wherever it can be)."""
+    wanted = None if asked is None else set(asked)
     out = set()
     for k, stage in enumerate(machine.stages):
         catalogue = stage_lacking(machine, model, k)
         for key in healthy.lacking:
-            if key in catalogue and (asked is None or set(asked) & set(
+            if key in catalogue and (wanted is None or wanted & set(
                     effect_covers(machine, k, catalogue[key]))):
                 out.add((stage.name, key))
     return out

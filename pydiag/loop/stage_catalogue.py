@@ -31,9 +31,8 @@ def names_a_fault(effect: Effect) -> bool:
     ball, a shaft's orders) that a stage can have, of a model of its own: not a refinement
     of the pair's own pinion tooth (``in_base``: its softening over its contact, a second
     tooth), which each stage's fit already has and classifies, and not one that reshapes
-    the base's own lines. (The pinion tooth's softening, asked of every record, named
-    healthy pinions "chipped" beside a fault on their shaft: the simulator's chipped idler
-    gear, PHM09 helical 6's bent input shaft; bench/CHANGELOG.md.)"""
+    the base's own lines (docs/gearbox.md says why the pinion tooth's softening is not
+    asked by default)."""
     return (on_a_stage(effect) and effect.fault != CHANGED and not effect.in_base
             and not effect.reshapes_base)
 
