@@ -9,16 +9,16 @@ import dataclasses
 import hashlib
 import json
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 
 from pydiag import __version__
 from pydiag.app.formatting import format_kept_baselines
-from pydiag.app.models import library
+from pydiag.app.models import library, machine_models
 from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
-from pydiag.diagnose.stages import healthy_model
+from pydiag.diagnose.stages import grown_healthy, healthy_model
 from pydiag.fit.build import ProblemSettings
 from pydiag.fit.estimator import FaultEstimator
 from pydiag.gear.machine import Machine
@@ -27,6 +27,7 @@ from pydiag.gear.speed import SpeedSettings
 from pydiag.gear.comparable import BASELINE_SPEED_SHARE, at_speed
 from pydiag.loop import history
 from pydiag.loop.compose import BuiltModel
+from pydiag.loop.machine_discover import check_effects
 from pydiag.loop.machine_model import MachineModel
 from pydiag.loop.own_changes import HealthyModel
 from pydiag.loop.stage_catalogue import FAULT_EFFECTS
@@ -94,10 +95,19 @@ def lacking_effects(args) -> tuple[str, ...]:
     """The effects the machine's healthy model lacks that a record is asked about: --lacking,
     else every component fault of the catalogue
     (:data:`~pydiag.loop.stage_catalogue.FAULT_EFFECTS`); none for a command without the
-    option (batch: its workers build no model)."""
+    option."""
     if not hasattr(args, "lacking"):
         return ()
     return FAULT_EFFECTS if args.lacking is None else tuple(args.lacking)
+
+
+def check_lacking(args) -> None:
+    """--lacking is asked of the machine's healthy model: refused with --fmu or fewer than
+    two --baseline files; its keys checked."""
+    if args.lacking is not None and (args.fmu or len(_files(args, warn=False)) < 2):
+        raise UsageError("--lacking tries effects against the machine's healthy model: give "
+                         "--machine FILE (no --fmu) and two --baseline files")
+    check_effects(args.lacking)
 
 
 def kept_healthy_model(args, machine: Machine, model: MachineModel, built: BuiltModel,
@@ -130,6 +140,26 @@ def keeper(args, machine: Machine, built: BuiltModel, read: Mapping[str, Measure
             str(history.resolve(args.history)), machine,
             healthy_fingerprint(args, built, list(read)), _resolved(read), grown))
     return keep
+
+
+def grower(args, machine: Machine, model: MachineModel, built: BuiltModel,
+           read: Mapping[str, Measurement], settings: ProblemSettings,
+           kept: list[history.KeptHealthyModel]
+           ) -> Callable[[HealthyModel, Collection[tuple[str, str]]], HealthyModel]:
+    """What grows the healthy model of the --baseline files ``read`` by lacking tries on
+    those records (:func:`~pydiag.diagnose.stages.grown_healthy`, the effect models built
+    as --build-dir says) and keeps it again (:func:`keeper`)."""
+    effects = machine_models(args)
+    keep = keeper(args, machine, built, read, kept)
+
+    def grow(healthy: HealthyModel, tries: Collection[tuple[str, str]]) -> HealthyModel:
+        grown = grown_healthy(healthy, str(built.fmu), model, machine, list(read.values()),
+                              args.input_hz, settings, tries,
+                              lambda with_one: str(effects(with_one)[1].fmu))
+        if grown is not healthy:
+            keep(grown)
+        return grown
+    return grow
 
 
 def _resolved(read: Mapping[str, Measurement]) -> list[str]:

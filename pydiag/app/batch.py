@@ -7,11 +7,14 @@ a fleet's records can be trended in one table.
 With a machine file of several stages (``batch --machine``), every stage of every record
 is diagnosed (:mod:`pydiag.diagnose.stages`), against the ``--baseline`` records when given:
 a column group a stage, and with baselines every component's state (``<component>:state``)
-and the faulty ones in one column (``faulty``). Without an FMU of one's own, by the machine's own model, built
-once before the tasks (a task carries it and the FMU's path); with a machine file that
-gives its stages effects and two or more --baseline files, its healthy model too, fitted
-(or found kept) once before the tasks, whose changes are a column (``model``) and join
-the components' states.
+and the faulty ones in one column (``faulty``). Without an FMU of one's own, by the machine's
+own model, built once before the tasks (a task carries it and the FMU's path); with two
+or more --baseline files, its healthy model too, fitted (or found kept) once before the
+tasks, whose changes are a column (``model``) and join the components' states, as
+``diagnose`` joins them. The effects that model lacks a record asks for are asked of every
+record first (its indicators alone), and the model grown by all of them once
+(:func:`grown_first`), so that each record is judged against the same model whatever the
+order its tasks finish in.
 
 Every measurement is one task; inside a task the estimator runs in a single process
 (the parallelism is across measurements). A measurement that fails becomes a row with
@@ -21,6 +24,7 @@ order; the same seed gives the same rows on any number of workers or machines.
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import os
 import signal
@@ -40,12 +44,13 @@ from pydiag.gear.indicators import condition_indicators
 from pydiag.gear.kinematics import GearKinematics
 from pydiag.gear.machine_file import load_machine
 from pydiag.gear.machine_indicators import MachineRecord
+from pydiag.gear.machine import Machine
 from pydiag.io.readers import is_measurement_file, read_measurement
 from pydiag.io.outputs import atomic_output
-from pydiag.loop.machine_model import MachineModel
+from pydiag.loop.machine_model import MachineModel, machine_fmu
 from pydiag.loop.own_changes import HealthyModel
 from pydiag.diagnose.diagnosis import diagnose
-from pydiag.diagnose.stages import diagnose_machine, diagnose_machine_model
+from pydiag.diagnose.stages import asked_tries, diagnose_machine, diagnose_machine_model
 from pydiag.model.adapter import load_adapter
 
 ROW_COLUMNS = ("measurement", "status", "message", "fault_mode", "severity", "error",
@@ -71,6 +76,7 @@ class BatchTask:
     input_hz: float | None = None  # its nominal input speed
     model: MachineModel | None = None  # the machine's own model, built at ``fmu``
     healthy: HealthyModel | None = None  # that model fitted to the first baseline
+    library: tuple[str, str] | None = None  # (Modelica root, build folder) of effect models
 
 
 def find_measurements(spec: str) -> list[str]:
@@ -136,7 +142,8 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     machine = load_machine(task.machine)
     if task.model is not None:  # every stage at once, by the machine's own model
         result = diagnose_machine_model(task.fmu, task.model, m, machine, task.input_hz,
-                                        task.problem, estimator, task.baselines, task.healthy)
+                                        task.problem, estimator, task.baselines, task.healthy,
+                                        _effect_models(task))
     else:
         result = diagnose_machine(task.fmu, m, machine, task.input_hz, task.problem,
                                   estimator, task.baselines, adapter)
@@ -166,6 +173,49 @@ def _machine_row(task: BatchTask, m: Measurement, adapter) -> dict:
     return row
 
 
+def _effect_models(task: BatchTask) -> Callable[[Machine], str] | None:
+    """The FMU of the machine with an effect more, built in ``task.library`` (found there:
+    the batch built those a record asks for before its tasks, :func:`grown_first`)."""
+    if task.library is None:
+        return None
+    root, build = (Path(p) for p in task.library)
+    return lambda machine: str(machine_fmu(machine, root, build)[1].fmu)
+
+
+def asked_task(task: BatchTask) -> frozenset[tuple[str, str]]:
+    """The (stage, effect) tries of its healthy model's lacking effects that ``task``'s
+    record asks for (:func:`pydiag.diagnose.stages.asked_tries`); none for a record that
+    cannot be read or judged (its row says why)."""
+    if task.model is None or task.healthy is None or not task.healthy.lacking:
+        return frozenset()
+    try:
+        m = _read(task, task.measurement)
+        return frozenset(asked_tries(task.model, m, load_machine(task.machine),
+                                     task.input_hz, task.healthy, task.baselines,
+                                     task.problem))
+    except Exception:  # the record's row, made next, says what is wrong with it
+        return frozenset()
+
+
+def grown_first(tasks: list[BatchTask], grow: Callable[[set[tuple[str, str]]], HealthyModel],
+                scheduler: str | object = "local", n_workers: int | None = None,
+                progress: Callable[[int, int], None] | None = None) -> list[BatchTask]:
+    """``tasks`` with their healthy model grown once by every lacking try any of their
+    records asks for (``grow``: the model with those tries held on its own records), asked
+    of every record first (:func:`asked_task`, spread as :func:`run_batch` spreads): each
+    record is then judged against the same model, whatever the order records are done in
+    or the workers they are done on."""
+    healthy = tasks[0].healthy if tasks else None
+    if healthy is None or not healthy.lacking:
+        return tasks
+    asked = run_batch(tasks, scheduler, n_workers, progress, work=asked_task)
+    tries = set().union(*asked)
+    if not tries - set(healthy.held):
+        return tasks
+    grown = grow(tries)
+    return [dataclasses.replace(t, healthy=grown) for t in tasks]
+
+
 def _severity_rank(severity: str) -> int:
     """The paper's classes in order; "unknown" (no diagnosis, a changed stage the model
     cannot class) below them all."""
@@ -174,8 +224,9 @@ def _severity_rank(severity: str) -> int:
 
 def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
               n_workers: int | None = None,
-              progress: Callable[[int, int], None] | None = None) -> list[dict]:
-    """Rows in the order of ``tasks``.
+              progress: Callable[[int, int], None] | None = None,
+              work: Callable[[BatchTask], object] = diagnose_task) -> list:
+    """``work`` of each task (its row: :func:`diagnose_task`), in the order of ``tasks``.
 
     ``scheduler``: "local" (a process pool of ``n_workers``, default all cores), a Dask
     scheduler address ("tcp://host:port"), or a ``dask.distributed.Client``.
@@ -184,11 +235,11 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
     if scheduler == "local":
         workers = n_workers or os.cpu_count() or 1
         if workers == 1:
-            return _collect(tasks, diagnose_task, progress)
+            return _collect(tasks, work, progress)
         pool = ProcessPoolExecutor(workers, initializer=_die_with_parent)
         try:
             with deferred():  # the first submits start the workers
-                futures = [pool.submit(_task_in_worker, t) for t in tasks]
+                futures = [pool.submit(_task_in_worker, work, t) for t in tasks]
             rows = _collect(futures, lambda f: f.result(), progress)
         except BaseException:  # Ctrl-C, SIGTERM: stop the workers now, not after their tasks
             stop_pool(pool)
@@ -197,7 +248,7 @@ def run_batch(tasks: Iterable[BatchTask], scheduler: str | object = "local",
         return rows
     client, owned = _dask_client(scheduler)
     try:
-        futures = client.map(diagnose_task, tasks, pure=False)
+        futures = client.map(work, tasks, pure=False)
         return _collect(futures, lambda f: f.result(), progress)
     finally:
         if owned:
@@ -213,11 +264,11 @@ class _WorkerTerminated(BaseException):
 _worker_terminated = raise_once(_WorkerTerminated)
 
 
-def _task_in_worker(task: BatchTask) -> dict:
-    """:func:`diagnose_task` in a local worker, which ends on SIGTERM once the task's own
+def _task_in_worker(work: Callable[[BatchTask], object], task: BatchTask) -> object:
+    """``work`` of ``task`` in a local worker, which ends on SIGTERM once the task's own
     cleanup has run (the executor would otherwise wait for its next task forever)."""
     try:
-        return diagnose_task(task)
+        return work(task)
     except _WorkerTerminated:
         os._exit(143)
 

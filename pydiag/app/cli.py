@@ -145,6 +145,19 @@ KEPT_HELP = ("; the word kept: those kept for the machine (pydiag baseline) with
              f"{100 * BASELINE_SPEED_SHARE:g} %% of its nominal speed")
 
 
+def _baseline_args(p: argparse.ArgumentParser) -> None:
+    """diagnose's and batch's: the machine's healthy records, and its healthy model's."""
+    p.add_argument("--baseline", metavar="FILE|kept", action="append",
+                   help="with --machine: a record of the machine in a known healthy state, "
+                   "every stage judged against it (repeat for more; without --fmu, the "
+                   "first file is the healthy model's record, the others its repeats)"
+                   + KEPT_HELP)
+    p.add_argument("--lacking", type=effect_list, help="with that healthy model: the effects "
+                   "it lacks that a record is asked for, held out, where they could name a "
+                   "component the indicators find changed (comma-separated keys, or none; "
+                   "default: every fault of a gear, bearing or shaft the catalogue has)")
+
+
 def _history_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--history", help="SQLite history of runs and kept baselines (default: the "
                    "per-user ~/.local/share/pydiag/history.sqlite, or under $XDG_DATA_HOME)")
@@ -180,15 +193,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "without it, --machine's own model is written and built")
     _measurement_args(p)
     _library_args(p)
-    p.add_argument("--baseline", metavar="FILE|kept", action="append",
-                   help="with --machine: a record of the machine in a known healthy state, "
-                   "every stage judged against it (repeat for more; with a machine file "
-                   "that has effects, the first is the healthy model's record and the "
-                   "others its repeats)" + KEPT_HELP)
-    p.add_argument("--lacking", type=effect_list, help="with that healthy model: the effects "
-                   "it lacks that a record is asked for, held out, where they could name a "
-                   "component the indicators find changed (comma-separated keys, or none; "
-                   "default: every fault of a gear, bearing or shaft the catalogue has)")
+    _baseline_args(p)
     _history_arg(p)
     p.add_argument("--json", help="write the result as JSON here")
     _force(p)
@@ -221,9 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default="local", help="'local' or a Dask tcp://HOST:PORT")
     p.add_argument("--indicators", nargs="?", const="pinion", choices=SHAFTS,
                    help="add the condition indicators of this shaft as columns (default pinion)")
-    p.add_argument("--baseline", metavar="FILE|kept", action="append", help="with --machine: "
-                   "a healthy record of the machine, every stage judged against it (repeat)"
-                   + KEPT_HELP)
+    _baseline_args(p)
     _history_arg(p)
     _record_args(p)
     _library_args(p)
@@ -273,8 +276,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "lines, and again among the other bins, in (0, 1) (default 0.01)")
     p.add_argument("--json", help="write error, peaks, suggested_effects as JSON here")
     p.add_argument("--report", help="write a self-contained HTML report here")
-    p.add_argument("--history", help="SQLite run history (default: the per-user "
-                   "~/.local/share/pydiag/history.sqlite, or under $XDG_DATA_HOME)")
+    _history_arg(p)
     p.add_argument("--source", help="the Modelica source of the FMU, hashed into the history")
     p.add_argument("--effect", choices=list(EFFECTS), help="also fit this catalogue effect: "
                    "the FMU is its model (or the base, for housing_sensor's transfer path)")
@@ -309,8 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "the machine file that gets the accepted effects (default <name>.loop.toml "
                    "beside it)")
     p.add_argument("--json", help="write the steps as JSON here")
-    p.add_argument("--history", help="SQLite run history every step is recorded in "
-                   "(default: as for compare)")
+    _history_arg(p)
     _force(p)
     _optimiser_args(p)
     p.set_defaults(func=cmd_loop)

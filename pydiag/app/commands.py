@@ -10,9 +10,10 @@ import tempfile
 from pathlib import Path
 
 from pydiag.app import batch
-from pydiag.app.baselines import (KEPT, baseline_records, healthy_measurements, keeper,
-                                  kept_healthy_model, lacking_effects)
-from pydiag.app.models import machine_models
+from pydiag.app.baselines import (baseline_records, check_lacking, grower,
+                                  healthy_measurements, kept_healthy_model, lacking_effects)
+from pydiag.app.models import library, machine_models
+from pydiag.app.progress import progress_bar, records_bar
 from pydiag.app.formatting import (format_facts, format_healthy_model, format_indicators,
                                    format_machine_report,
                                    format_regression, format_result)
@@ -36,7 +37,6 @@ from pydiag.io.measurements import write_measurement
 from pydiag.io.readers import read_measurement
 from pydiag.io.outputs import check_output, write_text
 from pydiag.loop.compose import BuiltModel
-from pydiag.loop.machine_discover import check_effects
 from pydiag.loop.machine_model import SPEED_PARAMETER, MachineModel
 from pydiag.model import regress
 from pydiag.diagnose.diagnosis import Diagnosis, diagnose
@@ -91,22 +91,6 @@ def check_outputs(args, *names: str) -> None:
             raise UsageError(f"{option} and {seen[path]} name the same file {out}")
         seen[path] = option
         check_output(out, getattr(args, "force", False))
-
-
-def progress_bar(quiet: bool, desc: str = "diagnose"):
-    """(update(done, total, best), close) for a tqdm bar on stderr; no-ops when quiet."""
-    if quiet:
-        return None, lambda: None
-    from tqdm import tqdm
-    bar = tqdm(total=1, desc=desc, unit="sim", file=sys.stderr, leave=False)
-
-    def update(done: int, total: int, best: float) -> None:
-        bar.total = total
-        bar.n = done
-        bar.set_postfix(best_error=f"{best:.4g}", refresh=False)
-        bar.refresh()
-
-    return update, bar.close
 
 
 def problem_settings(args) -> ProblemSettings:
@@ -175,11 +159,7 @@ def cmd_diagnose(args) -> int:
     if args.fmu is None and args.adapter:
         raise UsageError("--adapter describes an FMU of your own: give it with --fmu (the "
                          "machine's own model needs none)")
-    if args.lacking is not None and (args.fmu or len([b for b in args.baseline or []
-                                                       if b != KEPT]) < 2):
-        raise UsageError("--lacking tries effects against the machine's healthy model: give "
-                         "--machine FILE (no --fmu) and two --baseline files")
-    check_effects(args.lacking)
+    check_lacking(args)
     m = read_input(args)
     if _staged(args):
         return _diagnose_stages(args, machine, m)
@@ -234,7 +214,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
             result = diagnose_machine_model(
                 str(model[1].fmu), model[0], m, machine, args.input_hz, settings, estimator,
                 baselines, None if kept is None else kept[0].model, effect_model,
-                list(healthy.values()), keeper(args, machine, model[1], healthy, grown))
+                grower(args, machine, *model, healthy, settings, grown))
     finally:
         close()
     print(format_machine_report(result))
@@ -298,6 +278,7 @@ def _said_indicators(args, text: str, speed: SpeedEstimate, data: dict) -> int:
 def cmd_batch(args) -> int:
     check_outputs(args, "out")
     batch.check_results_name(args.out)
+    check_lacking(args)
     paths = batch.find_measurements(args.measurements)
     if args.adapter:
         load_adapter(args.adapter)  # fail early, once, on a bad adapter
@@ -309,34 +290,32 @@ def cmd_batch(args) -> int:
     staged = _staged(args)
     problem = problem_settings(args)
     # the healthy model's records, read once for it and for the baselines' indicators
-    healthy = healthy_measurements(args) if not args.fmu and machine.effects else {}
+    healthy = healthy_measurements(args) if not args.fmu else {}
     baselines = tuple(baseline_records(args, machine, problem.tracking, healthy))
     # the machine's own model, built once here for every record (a worker only runs it)
     machines = None if args.fmu else machine_models(args)
     built = None if machines is None else machines(machine)
     model, fmu = (None, args.fmu) if built is None else _built(built)
-    kept = None
-    if len(healthy) >= 2:  # its healthy model, fitted once here too (or found kept)
+    kept, grown = None, []
+    if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
         kept = kept_healthy_model(args, machine, model, built[1], healthy,
-                                  problem, FaultEstimator(**settings))
-        print(format_healthy_model(*kept))
+                                  problem, FaultEstimator(**settings))  # once, here
     tasks = [batch.BatchTask(p, fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,
                              tuple(args.sensitivity or ()), args.machine if staged else None,
                              baselines, args.input_hz if staged else None, model,
-                             None if kept is None else kept[0].model)
+                             None if kept is None else kept[0].model,
+                             None if kept is None else tuple(map(str, library(args))))
              for p in paths]
-    bar = None
-    if not args.quiet:
-        from tqdm import tqdm
-        bar = tqdm(total=len(tasks), desc="batch", unit="meas", file=sys.stderr, leave=False)
-    try:
-        rows = batch.run_batch(tasks, args.scheduler, args.workers,
-                               (lambda done, total: bar.update(done - bar.n)) if bar else None)
-    finally:
-        if bar:
-            bar.close()
+    if kept is not None:  # grown once by what any record asks, before any is judged
+        grow = grower(args, machine, *built, healthy, problem, grown)
+        with records_bar(args.quiet, len(tasks), "asking") as update:
+            tasks = batch.grown_first(tasks, lambda tries: grow(kept[0].model, tries),
+                                      args.scheduler, args.workers, update)
+        print(format_healthy_model(*kept, grown[-1] if grown else None))
+    with records_bar(args.quiet, len(tasks), "batch") as update:
+        rows = batch.run_batch(tasks, args.scheduler, args.workers, update)
     batch.write_results(rows, args.out, args.force)
     failed = [r for r in rows if r["status"] != "ok"]
     print(f"wrote {args.out}: {len(rows)} measurements, {len(rows) - len(failed)} diagnosed, "

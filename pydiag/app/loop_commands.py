@@ -8,7 +8,8 @@ from pathlib import Path
 from typing import Callable
 
 from pydiag.app.commands import (check_outputs, estimator_settings, problem_of,
-                                 problem_settings, progress_bar)
+                                 problem_settings)
+from pydiag.app.progress import progress_bar
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
                                    format_history, format_loop_step)
 from pydiag.app.models import effect_models, library, machine_models

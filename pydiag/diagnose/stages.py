@@ -25,7 +25,7 @@ on every sensor it describes.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 
 import numpy as np
 
@@ -196,8 +196,8 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                            baselines: Sequence[MachineRecord] = (),
                            healthy: HealthyModel | None = None,
                            effect_model: Callable[[Machine], str] | None = None,
-                           healthy_records: Sequence[Measurement] = (),
-                           keep: Callable[[HealthyModel], None] | None = None
+                           grow: Callable[[HealthyModel, Collection[tuple[str, str]]],
+                                          HealthyModel] | None = None
                            ) -> MachineReport:
     """Every stage of ``measurement`` diagnosed by the machine's own model (``model``,
     built at ``fmu_path``: :mod:`pydiag.loop.machine_model`): every stage fitted at once
@@ -215,10 +215,9 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     component an effect of that model sizes
     (:func:`~pydiag.gear.component.judged_by_model`); ``effect_model``: the FMU of the
     machine with one effect more (for the effects it lacks). A lacking effect the record
-    is asked for that the healthy model has not yet tried on its own records
-    (``healthy_records``: the one it was fitted to, then its repeats) is tried there
-    first (:func:`~pydiag.loop.own_changes.with_lacking`), and the model so grown given
-    to ``keep``; without those records, it is not asked."""
+    is asked for that the healthy model has not yet tried on its own records is tried
+    there first by ``grow`` (the model and the tries: the model grown, say by
+    :func:`grown_healthy`, and kept); without ``grow``, it is not asked."""
     estimator = estimator or FaultEstimator()
     found = machine_speed(measurement, machine, input_hz, settings.tracking)
     judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
@@ -238,17 +237,39 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     if healthy is not None:
         asked = asked_of_model(judged.components)
         tries = lacking_tries(healthy, machine, model, asked)
-        if tries - set(healthy.held) and len(healthy_records) >= 2:
-            first, *others = healthy_problems(fmu_path, model, machine, healthy_records,
-                                              input_hz, settings)
-            healthy = with_lacking(healthy, machine, model, first, others, tries,
-                                   effect_model)
-            if keep is not None:
-                keep(healthy)
+        if tries - set(healthy.held) and grow is not None:
+            healthy = grow(healthy, tries)
         changes = record_changes(healthy, machine, model, problem, effect_model=effect_model,
                                  asked=asked)
     return dataclasses.replace(judged, stages=tuple(stages), model_changes=tuple(changes),
                                components=judged_by_model(judged.components, changes))
+
+
+def asked_tries(model: MachineModel, measurement: Measurement, machine: Machine,
+                input_hz: float, healthy: HealthyModel, baselines: Sequence[MachineRecord],
+                settings: ProblemSettings = ProblemSettings()) -> set[tuple[str, str]]:
+    """The (stage, effect) of ``healthy.lacking`` that :func:`diagnose_machine_model` asks
+    of ``measurement``: where they could name a component the indicators ask about
+    against ``baselines`` (:func:`~pydiag.gear.component.asked_of_model`); the
+    indicators alone, no fit (a batch asks every record first, so that the healthy model
+    is grown once, before any record is judged)."""
+    found = machine_speed(measurement, machine, input_hz, settings.tracking)
+    judged = _judged(measurement, machine, found, settings.tracking, None, baselines)
+    return lacking_tries(healthy, machine, model, asked_of_model(judged.components))
+
+
+def grown_healthy(healthy: HealthyModel, fmu_path: str, model: MachineModel,
+                  machine: Machine, healthy_records: Sequence[Measurement], input_hz: float,
+                  settings: ProblemSettings, tries: Collection[tuple[str, str]],
+                  effect_model: Callable[[Machine], str]) -> HealthyModel:
+    """``healthy`` with the lacking ``tries`` it has not held yet tried on its own records
+    (``healthy_records``: the one it was fitted to, then its repeats), each at its own
+    speed (:func:`~pydiag.loop.own_changes.with_lacking`)."""
+    if not set(tries) - set(healthy.held):
+        return healthy
+    first, *others = healthy_problems(fmu_path, model, machine, healthy_records, input_hz,
+                                      settings)
+    return with_lacking(healthy, machine, model, first, others, tries, effect_model)
 
 
 def healthy_model(fmu_path: str, model: MachineModel, machine: Machine,

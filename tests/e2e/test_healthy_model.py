@@ -126,7 +126,9 @@ def test_the_output_shafts_bearing_is_named_by_the_last_stages_gear_bearing(tmp_
 
 def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
     """batch --machine with the healthy model: fitted (or found kept) once before the
-    records, each record's changes a column and its components' states the joined ones."""
+    records, grown once by the lacking effects any record asks for, each record's changes
+    a column and its components' states the joined ones: what diagnose says of the
+    record."""
     folder, records = tmp_path / "baselines", tmp_path / "records"
     folder.mkdir()
     records.mkdir()
@@ -134,8 +136,8 @@ def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
     for seed in (1, 3, 4):
         healthy.append(folder / f"healthy_{seed}.csv")
         write_measurement(healthy[-1], gearbox_record(seed, box=SHORT_BOX))
-    write_measurement(records / "broken.csv", gearbox_record(2, faulty_shaft=2, stage=1,
-                                                             box=SHORT_BOX))
+    broken = gearbox_record(2, faulty_shaft=2, stage=1, box=SHORT_BOX)
+    write_measurement(records / "broken.csv", broken)
     write_measurement(records / "healthy_5.csv", gearbox_record(5, box=SHORT_BOX))
     out = tmp_path / "rows.csv"
     r = run_cli("-m", "pydiag", "batch", "--machine", str(HEALTHY_MODEL), "--measurements",
@@ -144,12 +146,24 @@ def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
                 "--particles", "8", "--iterations", "4", "--polish", "60")
     assert r.returncode == 0, r.stderr
     assert r.stdout.count("healthy    : the model fitted to ") == 1, r.stdout
+    assert "more of its lacking effects tried on them, kept again" in r.stdout, r.stdout
     rows = {Path(row["measurement"]).name: row for row in csv.DictReader(out.open())}
     assert rows["broken.csv"]["model"].startswith(
         "mesh_modulation on stage 2: changed"), rows["broken.csv"]["model"]
     assert rows["broken.csv"]["50T gear of stage 2:state"] == "changed"
     assert rows["healthy_5.csv"]["model"] == "", rows["healthy_5.csv"]["model"]
     assert rows["healthy_5.csv"]["faulty"] == ""
+    # one path: diagnose asks the record the same lacking effects of the same model
+    _, alone = diagnosed(tmp_path, broken, run="alone")
+    asked = {(c["stage"], c["effect"]) for c in alone["model_changes"]}
+    assert ("stage 2", "gear_tooth_fault") in asked  # a lacking effect, tried in the batch too
+    assert {c["name"]: c["state"] for c in alone["components"]} == {
+        k.removesuffix(":state"): v for k, v in rows["broken.csv"].items()
+        if k.endswith(":state")}
+    assert rows["broken.csv"]["model"] == "; ".join(
+        f"{c['effect']} on {c['stage']}: {c['fault']} ({c['margin']:.2f} x)"
+        + (f", {', '.join(c['components'])}" if c["components"] else "")
+        for c in alone["model_changes"] if c["changed"])
 
 
 def test_a_record_is_fitted_from_the_healthy_fit_without_a_swarm(tmp_path):

@@ -148,11 +148,14 @@ def test_a_one_stage_machine_files_sensor_keeps_its_name_for_the_machines_model(
     assert args.channel == ["a1=acc"]
 
 
+@pytest.mark.parametrize("command", [["diagnose", "--measurement", "m.csv"],
+                                     ["batch", "--measurements", "m.csv", "--out", "o.csv"]])
 @pytest.mark.parametrize("extra", [
     [],  # no baseline: no healthy model
     ["--baseline", "a.csv", "--baseline", "kept"],  # kept baselines hold no record
 ])
-def test_lacking_effects_need_the_healthy_model_and_its_repeat(capsys, tmp_path, extra):
+def test_lacking_effects_need_the_healthy_model_and_its_repeat(capsys, tmp_path, extra,
+                                                                command):
     from pathlib import Path
     machine = Path(__file__).resolve().parents[3] / "examples" / "phm09_spur.toml"
     if extra:  # a machine file with an effect
@@ -160,7 +163,7 @@ def test_lacking_effects_need_the_healthy_model_and_its_repeat(capsys, tmp_path,
         machine.write_text(Path(__file__).resolve().parents[3].joinpath(
             "examples", "phm09_spur.toml").read_text()
             + '\n[[effects]]\nkey = "mesh_modulation"\nstage = "output stage"\n')
-    code, err = run(["diagnose", "--measurement", "m.csv", "--machine", str(machine),
-                     "--lacking", "bearing_outer_race", *extra], capsys)
+    code, err = run([*command, "--machine", str(machine), "--lacking", "bearing_outer_race",
+                     *extra], capsys)
     assert code == 2 and "--lacking tries effects against the machine's healthy model" in err \
         and len(err.strip().splitlines()) == 1, err
