@@ -80,12 +80,16 @@ EFFECTS = {e.key: e for e in (
            (Parameter("d_f", 0.0, 0.6), Parameter("eps_c", 1.1, 1.9),
             Parameter("q_c", 1.0, 5.0), Parameter("r_c", 0.02, 0.5)),
            second_pinion_tooth, in_base=True, parts=(("d_f", PINION),), fault=tooth_state),
+    # a runout is a transmission error, which the mesh's linear contact passes on
+    # linearly: the outputs are affine in its amplitude's two phase components
     Effect("gear_eccentricity", "GearDiag.Effects.GearEccentricity", "driven-gear runout",
-           (Parameter("ecc_gear", 0.0, 50e-6),), gear_eccentricity,
-           parts=(("ecc_gear", GEAR),), fault=ECCENTRIC),
+           (Parameter("ecc_gear", 0.0, 50e-6),
+            Parameter("phase_gear", -math.pi, math.pi, periodic=True)), gear_eccentricity,
+           affine=True, parts=(("ecc_gear", GEAR),), fault=ECCENTRIC),
     Effect("pinion_eccentricity", "GearDiag.Effects.PinionEccentricity", "pinion runout",
-           (Parameter("ecc_pinion", 0.0, 50e-6),), pinion_eccentricity,
-           parts=(("ecc_pinion", PINION),), fault=ECCENTRIC),
+           (Parameter("ecc_pinion", 0.0, 50e-6),
+            Parameter("phase_pinion", -math.pi, math.pi, periodic=True)), pinion_eccentricity,
+           affine=True, parts=(("ecc_pinion", PINION),), fault=ECCENTRIC),
     # an eccentric or tilted gear: the load along the face varies around the turn
     Effect("mesh_modulation", "GearDiag.Effects.MeshModulation",
            "the mesh stiffness modulated once per turn of each shaft (a gear mounted tilted "
