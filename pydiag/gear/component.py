@@ -151,7 +151,38 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
     lines another change's), the model's "good" stands: it tested that fault on the
     record. A component no effect covers keeps the indicators' verdict: what the model
     lacks, it cannot judge.
+    A gear the model alone names whose shaft's gear of the other stage the indicators find
+    faulty keeps the indicators' "good": the model's stages are not coupled, so a fault of
+    one gear of a shaft, which moves the shaft and with it the other stage's mesh, is
+    fitted as well by a change of the other gear; the indicators tell the two apart by each
+    mesh's own sidebands (:mod:`pydiag.gear.gear_sidebands`).
     The indicators' measures stay in the evidence, their word in the reason."""
+    out = _joined(verdicts, changes)
+    mates = {v.component.name: v for v in verdicts}
+    for i, v in enumerate(out):
+        mate = _shaft_mate(v, verdicts)
+        if v.judge == BY_MODEL and v.faulty and mate is not None and mates[mate].faulty:
+            out[i] = dataclasses.replace(
+                mates[v.component.name], evidence=v.evidence,
+                reason=f"{v.reason}; but the indicators find {mate} on its shaft faulty and "
+                "it good, and the model's uncoupled stages do not tell a change of one gear "
+                "of a shaft from one of the other: the indicators' good stands")
+    return tuple(sorted(out, key=lambda v: not v.faulty))
+
+
+def _shaft_mate(v: ComponentVerdict, verdicts: Sequence[ComponentVerdict]) -> str | None:
+    """The name of the gear of another stage on ``v``'s gear's shaft (None: none, or
+    ``v`` is no gear)."""
+    c = v.component
+    if c.kind != "gear":
+        return None
+    return next((o.component.name for o in verdicts if o.component.kind == "gear"
+                 and o.component.shaft == c.shaft and o.component.stage != c.stage), None)
+
+
+def _joined(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
+            ) -> list[ComponentVerdict]:
+    """Each of ``verdicts`` with the model's word (:func:`judged_by_model`), in order."""
     held = [c for c in changes if math.isfinite(c.margin)]
     out = []
     for v in verdicts:
@@ -201,7 +232,7 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
                 v.component, GOOD, evidence, v.threshold_db,
                 None if said.changed else said.margin, model,
                 BY_BOTH if v.state == GOOD else BY_MODEL))
-    return tuple(sorted(out, key=lambda v: not v.faulty))
+    return out
 
 
 def _not_named(change: ModelChange) -> str:

@@ -152,3 +152,31 @@ def test_the_model_is_asked_about_what_the_indicators_find_faulty_or_near_it():
     assert asked_of_model(verdicts) == {PINION.name, GEAR.name}
     # a fault the indicators name is asked about whatever its margin (a swing's own rule)
     assert asked_of_model((ComponentVerdict(BEARING, "outer", {}, 6.0, None),)) == {BEARING.name}
+
+
+def test_a_gear_the_model_alone_names_beside_its_shafts_faulty_gear_stays_good():
+    """An idler's 48T pinion eccentric (the indicators, by its shaft's swing, and the
+    model's runout): its shaft's 96T gear of the other stage, good by the indicators, is
+    fitted by the model's tooth fault (the eccentric pinion moves the shaft, and with it the
+    other mesh, which the model's uncoupled stages give to that mesh's own gear): the
+    indicators' good stands. With the pinion good by the indicators, the model's word on
+    the gear stands."""
+    idler_gear = Component("gear", "96T gear of input", "idler", 96, "input", "gear")
+    eccentric = ModelChange("output", "pinion_eccentricity", 90.0, 0.0, 1.0, 13.5,
+                            {"ecc_pinion": (0.0, 5e-5)}, "pinion", (PINION.name,),
+                            "eccentric", (PINION.name,))
+    tooth = ModelChange("input", "gear_tooth_fault", 80.0, 0.0, 1.0, 12.3,
+                        {"d_g": (0.0, 0.6)}, "gear", (idler_gear.name,), "broken",
+                        (idler_gear.name,))
+    indicators = (ComponentVerdict(PINION, "eccentric", {}, 6.0, 7.8, "its shaft's swing"),
+                  ComponentVerdict(idler_gear, "good", {"sidebands": 0.2}, 6.0, 0.3))
+    judged = {v.component.name: v for v in judged_by_model(indicators, [eccentric, tooth])}
+    assert (judged[PINION.name].state, judged[PINION.name].judge) == ("eccentric", BY_BOTH)
+    gear = judged[idler_gear.name]
+    assert (gear.state, gear.judge, gear.margin) == ("good", BY_INDICATORS, 0.3)
+    assert "gear_tooth_fault" in gear.reason and "96T" not in gear.reason.split("; but")[1]
+    assert gear.evidence["model input gear_tooth_fault"] == 12.3
+    calm = (dataclasses.replace(indicators[0], state="good", margin=0.4), indicators[1])
+    judged = {v.component.name: v for v in judged_by_model(calm, [tooth])}
+    assert (judged[idler_gear.name].state, judged[idler_gear.name].judge) == ("broken",
+                                                                              BY_MODEL)
