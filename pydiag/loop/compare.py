@@ -36,7 +36,7 @@ from pydiag.fit.objective import noise_corrected_error, spectral_error
 from pydiag.fit.problem import FitProblem
 from pydiag.gear.effect import Effect
 from pydiag.gear.effects import EFFECTS
-from pydiag.gear.kinematic_map import kinematic_map, match, with_gear_bearing
+from pydiag.gear.kinematic_map import kinematic_map, match_each, with_gear_bearing
 from pydiag.gear.peaks import Peak
 from pydiag.loop.effect_fit import evidence_channels, fit_effect
 from pydiag.loop.residual import (NOT_KINEMATIC, MeasuredSpectra, bin_groups,
@@ -89,10 +89,12 @@ def compare(problem: FitProblem, estimator: FaultEstimator | None = None,
         line_margin = np.sqrt(noise * np.log(max(np.count_nonzero(kinematic), 1)
                                              / false_alarm_rate))
         over = (excess > measured.margin[channel]) | (kinematic & (excess > line_margin))
-        for k in np.flatnonzero(over & local_maxima(excess)):
+        peaks_at = np.flatnonzero(over & local_maxima(excess))
+        # the lines near each peak found by bisection: a record's thousands of peaks
+        # against a gearbox's thousands of lines
+        for k, line in zip(peaks_at, match_each(freqs[peaks_at], lines, bin_hz)):
             power = max(meas[k] ** 2 - model[k] ** 2 - noise, 0.0) / channel_power
-            candidates.append((channel, power, match(freqs[k], lines, bin_hz), freqs[k], meas[k],
-                               model[k]))
+            candidates.append((channel, power, line, freqs[k], meas[k], model[k]))
     candidates.sort(key=lambda c: -c[1])
     total = sum(c[1] for c in candidates) or 1.0
     peaks = [Peak(ch, float(f), float(m - s), float(m), float(s),
