@@ -222,14 +222,21 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
         print(format_healthy_model(*kept, grown[-1] if grown else None))
     for warning in result.warnings:
         print(f"pydiag diagnose: warning: {warning}", file=sys.stderr)
-    if model is not None and args.baseline and len(healthy) < 2:
-        print("pydiag diagnose: warning: the model's verdict on the components needs two "
-              "--baseline files (the healthy model's record, then a healthy repeat; kept "
-              f"baselines hold no record): {len(healthy)} given", file=sys.stderr)
+    if model is not None:
+        _warn_one_healthy(args, len(healthy))
     if args.json:
         out = {**result.to_dict(), "measurement": str(args.measurement)}
         write_text(args.json, json.dumps(out, indent=2) + "\n", args.force)
     return 0 if all(s.fit.explained for s in result.stages) else 1
+
+
+def _warn_one_healthy(args, files: int) -> None:
+    """Say that the machine's model judges no component with baselines of fewer than two
+    files (``files``)."""
+    if args.baseline and files < 2:
+        print(f"pydiag {args.command}: warning: the model's verdict on the components needs "
+              "two --baseline files (the healthy model's record, then a healthy repeat; kept "
+              f"baselines hold no record): {files} given", file=sys.stderr)
 
 
 def record_kinematics(args, measurement: Measurement) -> GearKinematics:
@@ -300,6 +307,8 @@ def cmd_batch(args) -> int:
     if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
         kept = kept_healthy_model(args, machine, model, built[1], healthy,
                                   problem, FaultEstimator(**settings))  # once, here
+    elif built is not None:
+        _warn_one_healthy(args, len(healthy))
     tasks = [batch.BatchTask(p, fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,
                              tuple(args.unit) if args.unit else None, args.indicators,
