@@ -10,17 +10,11 @@ the truth, the indicators' state, the joined state and its judge, the model's ma
 the size it fitted. Usage:
 
     .venv/bin/python bench/model_components.py [--seeds 2,5]
-    .venv/bin/python bench/model_components.py --long-box [--seeds 2,5]
     .venv/bin/python bench/model_components.py --phm09 [DIR]   # default ../shared/data/phm09
 
 Baselines: healthy seeds 1 (the healthy model's record), 3 and 4 (its repeats); each case's
 record on each seed of ``--seeds``. The commands run as a user runs them, with their
 defaults, a history and build folder of their own (a temporary folder).
-
-``--long-box``: the simulator's two-stage box (20/64 + 24/54) and its cases without a tacho
-(bench/components.py's), its machine file written from the simulator's description with
-no effects, as a user would first write it: the model is the stages alone, asked for the
-catalogue's component faults.
 
 ``--phm09``: the PHM 2009 records of the folder whose box, speed and load have two healthy
 runs (run 2, the healthy model's record, then run 1, its repeat), each judged with the
@@ -61,30 +55,6 @@ CASES = [(name, box, faults, {c: GEAR_FAULTS[name] if state == "changed" else st
          for name, box, faults, labels in SIMULATED if box == "SHORT_BOX"] + [
     ("output outer race", "SHORT_BOX", dict(bearing=((2, "outer", 6.0),)),
      {"output bearing": "outer"})]
-
-
-#: The kind of each gear fault of the long box's cases (bench/components.py says "changed").
-LONG_GEAR_FAULTS = {"broken tooth, stage 2's gear": "broken", "chipped input pinion": "chipped",
-                    "eccentric output gear": "eccentric", "eccentric idler pinion": "eccentric",
-                    "output unbalance + broken tooth": "broken"}
-#: bench/components.py's cases of the long box without a tacho (its file has none).
-LONG_CASES = [(name, box, faults, {c: LONG_GEAR_FAULTS[name] if state == "changed" else state
-                                   for c, state in labels.items()})
-              for name, box, faults, labels in SIMULATED
-              if box == "BOX" and "tacho_pulses" not in faults]
-
-
-def _machine_toml(described: dict, input_rpm: float) -> str:
-    """The simulator's box as its machine file (no effects: the model is its stages)."""
-    lines = [f'name = "{described["name"]}"', f"input_rpm = {input_rpm:g}",
-             "shafts = [" + ", ".join(f'"{s}"' for s in described["shafts"]) + "]"]
-    for k, stage in enumerate(described["stages"]):
-        lines += ["", "[[stages]]", f'name = "stage {k + 1}"',
-                  f"pinion_teeth = {stage['pinion_teeth']}", f"gear_teeth = {stage['gear_teeth']}"]
-    for b in described["bearings"]:
-        lines += ["", "[[bearings]]", *(f'{k} = "{v}"' if isinstance(v, str) else f"{k} = {v}"
-                                        for k, v in b.items())]
-    return "\n".join(lines) + "\n"
 
 
 def _run(*argv: str) -> tuple[dict, float]:
@@ -188,9 +158,6 @@ def _report(rows: list, records: list, healthy_records: list, firsts: bool = Tru
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="2,5", help="the records' seeds (default 2,5)")
-    ap.add_argument("--long-box", action="store_true", help="the simulator's two-stage box "
-                    "(20/64 + 24/54) instead, its machine file without effects (the model the "
-                    "stages alone), its cases without a tacho")
     ap.add_argument("--phm09", nargs="?", const=str(ROOT.parent / "shared" / "data" / "phm09"),
                     help="the shared PHM 2009 records instead (folder)")
     args = ap.parse_args()
@@ -198,27 +165,22 @@ def main() -> int:
         return phm09_main(Path(args.phm09))
     seeds = [int(s) for s in args.seeds.split(",")]
     from truth import gearbox as sim
-    box = sim.BOX if args.long_box else sim.SHORT_BOX
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}, the gearbox simulator's {box.name}, seeds {seeds}")
+          f"{platform.python_version()}, the gearbox simulator's short box, seeds {seeds}")
     with tempfile.TemporaryDirectory() as scratch:
         tmp = Path(scratch)
-        machine = HEALTHY_MODEL
-        if args.long_box:
-            machine = tmp / "box.toml"
-            machine.write_text(_machine_toml(sim.described(box), 60 * sim.INPUT_HZ))
         healthy = []
         for seed in (1, 3, 4):
             healthy.append(tmp / f"healthy_{seed}.csv")
-            write_measurement(healthy[-1], sim.gearbox_record(seed, box=box))
+            write_measurement(healthy[-1], sim.gearbox_record(seed, box=sim.SHORT_BOX))
         baselines = [a for h in healthy for a in ("--baseline", str(h))]
-        common = ["--machine", str(machine), *baselines, "--force"]
+        common = ["--machine", str(HEALTHY_MODEL), *baselines, "--force"]
         records, rows = [], []
         print(f"{'case':<40}{'seed':>5}{'indicators s':>14}{'diagnose s':>12}")
-        for i, (case, _, faults, labels) in enumerate(LONG_CASES if args.long_box else CASES):
+        for i, (case, _, faults, labels) in enumerate(CASES):
             for seed in seeds:
                 rec = tmp / f"case{i}_seed{seed}.csv"
-                write_measurement(rec, sim.gearbox_record(seed, box=box, **faults))
+                write_measurement(rec, sim.gearbox_record(seed, box=sim.SHORT_BOX, **faults))
                 alone, s_ind = _run("indicators", *common, "--measurement", str(rec),
                                     "--json", str(tmp / "ind.json"))
                 joined, s_diag = _run("diagnose", *common, "--measurement", str(rec),
