@@ -69,9 +69,12 @@ def _gears(machine: Machine, verdicts: Sequence[StageVerdict]) -> list[Component
         if change.explained_by:
             whose = " and ".join(change.explained_by) + (
                 " shafts'" if len(change.explained_by) > 1 else " shaft's")
-            out.append(ComponentVerdict(c, GOOD if v.suspect != c.role else CHANGED, evidence,
-                                        held, margin, f"the {whose} change accounts for its "
-                                        "shaft's rise, on the lines they share"))
+            suspect = v.suspect == c.role  # its shaft named by the stage all the same
+            out.append(ComponentVerdict(c, CHANGED if suspect else GOOD, evidence, held,
+                                        margin, f"the {whose} change accounts for its "
+                                        "shaft's rise, on the lines they share"
+                                        + (f", but its shaft is its stage's suspect "
+                                           f"({v.suspect_by})" if suspect else "")))
         elif not v.changed:
             out.append(ComponentVerdict(c, GOOD, evidence, held, margin,
                                         "its stage did not change"))
