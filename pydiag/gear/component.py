@@ -165,8 +165,8 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
             out[i] = dataclasses.replace(
                 mates[v.component.name], evidence=v.evidence,
                 reason=f"{v.reason}; but the indicators find {mate} on its shaft faulty and "
-                "it good, and the model's uncoupled stages do not tell a change of one gear "
-                "of a shaft from one of the other: the indicators' good stands")
+                "not it, and the model's uncoupled stages do not tell a change of one gear "
+                "of a shaft from one of the other: the indicators' word stands")
     return tuple(sorted(out, key=lambda v: not v.faulty))
 
 
