@@ -14,7 +14,7 @@ from pathlib import Path
 
 from pydiag import __version__
 from pydiag.app.formatting import format_kept_baselines
-from pydiag.app.models import library, machine_models
+from pydiag.app.models import library, machine_fmus
 from pydiag.app.reading import read_input
 from pydiag.core.errors import UsageError
 from pydiag.core.measurement import Measurement
@@ -149,13 +149,12 @@ def grower(args, machine: Machine, model: MachineModel, built: BuiltModel,
     """What grows the healthy model of the --baseline files ``read`` by lacking tries on
     those records (:func:`~pydiag.diagnose.stages.grown_healthy`, the effect models built
     as --build-dir says) and keeps it again (:func:`keeper`)."""
-    effects = machine_models(args)
+    effects = machine_fmus(args)
     keep = keeper(args, machine, built, read, kept)
 
     def grow(healthy: HealthyModel, tries: Collection[tuple[str, str]]) -> HealthyModel:
         grown = grown_healthy(healthy, str(built.fmu), model, machine, list(read.values()),
-                              args.input_hz, settings, tries,
-                              lambda with_one: str(effects(with_one)[1].fmu))
+                              args.input_hz, settings, tries, effects)
         if grown is not healthy:
             keep(grown)
         return grown

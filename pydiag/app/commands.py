@@ -12,7 +12,7 @@ from pathlib import Path
 from pydiag.app import batch
 from pydiag.app.baselines import (baseline_records, check_lacking, grower,
                                   healthy_measurements, kept_healthy_model, lacking_effects)
-from pydiag.app.models import library, machine_models
+from pydiag.app.models import library, machine_fmus, machine_models
 from pydiag.app.progress import progress_bar, records_bar
 from pydiag.app.formatting import (format_facts, format_healthy_model, format_indicators,
                                    format_machine_report,
@@ -206,14 +206,12 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
             result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
                                       estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
-            def effect_model(with_one: Machine) -> str:
-                return str(machines(with_one)[1].fmu)
             if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
                 kept = kept_healthy_model(args, machine, model[0], model[1], healthy,
                                           settings, estimator)
             result = diagnose_machine_model(
                 str(model[1].fmu), model[0], m, machine, args.input_hz, settings, estimator,
-                baselines, None if kept is None else kept[0].model, effect_model,
+                baselines, None if kept is None else kept[0].model, machine_fmus(args),
                 grower(args, machine, *model, healthy, settings, grown))
     finally:
         close()

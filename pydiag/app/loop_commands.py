@@ -12,7 +12,7 @@ from pydiag.app.commands import (check_outputs, estimator_settings, problem_of,
 from pydiag.app.progress import progress_bar
 from pydiag.app.formatting import (format_comparison, format_discovery, format_facts,
                                    format_history, format_loop_step)
-from pydiag.app.models import effect_models, library, machine_models
+from pydiag.app.models import effect_models, library, machine_fmus, machine_models
 from pydiag.app.reading import read_input
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.core.measurement import Measurement
@@ -139,7 +139,7 @@ def cmd_compare(args) -> int:
         close()
     if machine_model is not None and not args.no_validate:
         c = validate_machine(problem, args.machine_description, machine_model[0], c,
-                             lambda machine: str(machines(machine)[1].fmu),
+                             machine_fmus(args),
                              _effect_estimator(args), None if args.quiet else
                              (lambda key: print(f"validating {key} held out ...",
                                                 file=sys.stderr)))
@@ -201,7 +201,7 @@ def cmd_discover(args) -> int:
         finally:
             close()
         found = discover_machine(problem, args.machine_description, model, base,
-                                 lambda machine: str(machines(machine)[1].fmu),
+                                 machine_fmus(args),
                                  _effect_estimator(args), args.effects, progress)
         facts["model"] = _model_fact(args, built)
         for warning in _start_warnings(args.machine_description, model):

@@ -48,3 +48,10 @@ def machine_models(args) -> Callable[[Machine], tuple[MachineModel, BuiltModel]]
     """A machine's own model, as written and as built (:func:`library`)."""
     root, build = library(args)
     return lambda machine: machine_fmu(machine, root, build)
+
+
+def machine_fmus(args) -> Callable[[Machine], str]:
+    """A machine's own model's FMU, by the machine (:func:`machine_models`): what the
+    effect a fit tries on a stage is tried on (the machine with one effect more)."""
+    machines = machine_models(args)
+    return lambda machine: str(machines(machine)[1].fmu)

@@ -174,7 +174,8 @@ def test_a_gear_the_model_alone_names_beside_its_shafts_faulty_gear_stays_good()
     assert (judged[PINION.name].state, judged[PINION.name].judge) == ("eccentric", BY_BOTH)
     gear = judged[idler_gear.name]
     assert (gear.state, gear.judge, gear.margin) == ("good", BY_INDICATORS, 0.3)
-    assert "gear_tooth_fault" in gear.reason and "96T" not in gear.reason.split("; but")[1]
+    assert "gear_tooth_fault" in gear.reason
+    assert f"the indicators find {PINION.name} on its shaft faulty" in gear.reason
     assert gear.evidence["model input gear_tooth_fault"] == 12.3
     calm = (dataclasses.replace(indicators[0], state="good", margin=0.4), indicators[1])
     judged = {v.component.name: v for v in judged_by_model(calm, [tooth])}
