@@ -31,6 +31,12 @@ def _depends(expr: SX, symbol: SX) -> bool:
     return bool(ca.depends_on(expr, symbol))
 
 
+def _appearing(expr: SX, ids: dict[int, str]) -> set[str]:
+    """The names of the unknowns (``ids``: symbol hash -> name) whose symbols ``expr``
+    holds."""
+    return {ids[h] for h in (s.element_hash() for s in ca.symvar(expr)) if h in ids}
+
+
 def causalise(residuals: list[Residual], unknowns: dict[str, SX]) -> dict[str, SX]:
     """Return ``{unknown name: explicit expression in the knowns}``.
 
@@ -42,12 +48,17 @@ def causalise(residuals: list[Residual], unknowns: dict[str, SX]) -> dict[str, S
             f"model is not balanced: {len(residuals)} equations for {len(unknowns)} unknowns")
     remaining = list(residuals)
     open_unknowns = dict(unknowns)
+    ids = {sym.element_hash(): name for name, sym in unknowns.items()}
+    # the open unknowns whose symbol each residual holds, read once and kept up to date: a
+    # scan of every residual for every unknown after each substitution is quadratic
+    appears = [_appearing(r.expr, ids) for r in remaining]
     solved: dict[str, SX] = {}
     progress = True
     while remaining and progress:
         progress = False
-        for res in list(remaining):
-            present = [n for n, s in open_unknowns.items() if _depends(res.expr, s)]
+        for i, res in enumerate(remaining):
+            present = [n for n in open_unknowns
+                       if n in appears[i] and _depends(res.expr, open_unknowns[n])]
             if len(present) == 0:
                 raise ModelicaBuildError(
                     "equation determines no unknown (redundant or over-determined)", res.location)
@@ -60,9 +71,12 @@ def causalise(residuals: list[Residual], unknowns: dict[str, SX]) -> dict[str, S
                 continue  # nonlinear in its only unknown: left for the joint step (error there)
             value = ca.simplify(-ca.substitute(res.expr, sym, SX(0.0)) / slope)
             solved[name] = value
-            del open_unknowns[name]
-            remaining.remove(res)
-            remaining = [Residual(ca.substitute(r.expr, sym, value), r.location) for r in remaining]
+            del open_unknowns[name], ids[sym.element_hash()], remaining[i], appears[i]
+            for j, other in enumerate(remaining):
+                if name in appears[j]:
+                    remaining[j] = Residual(ca.substitute(other.expr, sym, value),
+                                            other.location)
+                    appears[j] = _appearing(remaining[j].expr, ids)
             progress = True
             break  # rescan: the substitution may have left other equations with one unknown
     for res in remaining:
