@@ -147,10 +147,12 @@ def judged_by_model(verdicts: Sequence[ComponentVerdict], changes: Sequence[Mode
     judge is "both" where the two agree that it is faulty or that it is good. Where the
     indicators name a bearing's fault (its race or ball, read from its defect lines in the
     envelope, which another bearing's comb may share) and the covering effect of that very
-    fault, tried held out on the record, does not name it (within the repeats, or its
-    lines another change's), the model's "good" stands: it tested that fault on the
-    record. A component no effect covers keeps the indicators' verdict: what the model
-    lacks, it cannot judge.
+    fault, tried held out on the record, has its lines claimed by another bearing's
+    change, the model's "good" stands: the lines are that bearing's. Where the try is only
+    within the repeats, or its lines a gear's or a shaft's change, the indicators' word
+    stands: the envelope of what does not repeat with the machine, which no synchronous
+    change makes, is the more sensitive reading of a bearing. A component no effect
+    covers keeps the indicators' verdict: what the model lacks, it cannot judge.
     A gear the model alone names whose shaft's gear of the other stage the indicators find
     faulty keeps the indicators' "good": the model's stages are not coupled, so a fault of
     one gear of a shaft, which moves the shaft and with it the other stage's mesh, is
@@ -184,6 +186,7 @@ def _joined(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
             ) -> list[ComponentVerdict]:
     """Each of ``verdicts`` with the model's word (:func:`judged_by_model`), in order."""
     held = [c for c in changes if math.isfinite(c.margin)]
+    bearings = {v.component.name for v in verdicts if v.component.kind == "bearing"}
     out = []
     for v in verdicts:
         name = v.component.name
@@ -209,9 +212,10 @@ def _joined(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
             continue
         tested = [c for c in covering if v.component.kind == "bearing" and v.faulty
                   and c.fault == v.state]
-        if tested:  # the model tried the indicators' very fault on it, and it is not there
+        if tested:  # the indicators' very fault, tried by the model: its word is that try's
             said = max(tested, key=lambda c: c.margin)
             evidence = {**v.evidence, f"model {said.stage} {said.effect}": said.margin}
+        if tested and _claimed_by_a_bearing(said, held, name, bearings):
             model = (f"the healthy model's {said.effect} on {said.stage}, the fault the "
                      f"indicators name, " + (f"names {', '.join(said.components)}"
                                              if said.changed else _not_named(said)))
@@ -233,6 +237,17 @@ def _joined(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
                 None if said.changed else said.margin, model,
                 BY_BOTH if v.state == GOOD else BY_MODEL))
     return out
+
+
+def _claimed_by_a_bearing(change: ModelChange, changes: Sequence[ModelChange], name: str,
+                          bearings: set[str]) -> bool:
+    """Whether the lines of ``change`` (a try of the fault the indicators name on the
+    bearing ``name``) are claimed by a larger change that names other bearings only
+    (``bearings``: the machine's bearings' names)."""
+    winner = next((c for c in changes if change.beaten_by == f"{c.effect} on {c.stage}"),
+                  None)
+    return (winner is not None and bool(winner.components) and name not in winner.components
+            and set(winner.components) <= bearings)
 
 
 def _not_named(change: ModelChange) -> str:

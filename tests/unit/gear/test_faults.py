@@ -117,30 +117,58 @@ def test_a_change_that_names_no_part_names_nothing():
     assert (v.state, v.judge, v.margin) == ("good", BY_BOTH, None) and "names no part" in v.reason
 
 
-def test_a_bearing_fault_the_model_tried_and_did_not_find_is_good():
+def test_a_bearing_fault_whose_lines_another_bearing_claims_is_good():
     """The indicators read the input bearing's ball from lines the output ball's comb
-    shares; the model's ball effect on the input bearing, held out, does not name it (its
-    lines the output's): the model's good stands. Where it is not that fault's effect (the
-    outer race's), or the component is a gear, the indicators' word stands."""
+    shares; the model's ball effect on the input bearing, held out, has its lines claimed
+    by the output bearing's ball: the model's good stands. Where it is not that fault's
+    effect (the outer race's), or the component is a gear, the indicators' word stands."""
     inner = Component("bearing", "IS:IS", "input")
-    indicators = (ComponentVerdict(inner, "ball", {"ball_db": 6.0}, 6.0, 1.9, "its 2xBSF"),)
+    output = Component("bearing", "OS:OS", "output")
+    indicators = (ComponentVerdict(inner, "ball", {"ball_db": 6.0}, 6.0, 1.9, "its 2xBSF"),
+                  ComponentVerdict(output, "ball", {"ball_db": 9.0}, 6.0, 3.0, "its 2xBSF"))
     ball = ModelChange("input", "bearing_ball", 12.0, 0.0, 2.0, 1.5, {"A_b": (0.0, 9.0)},
                        "pinion bearing", (inner.name,), "ball", (inner.name,),
                        beaten_by="gear_bearing_ball on output")
-    v, = judged_by_model(indicators, [ball])
-    assert (v.state, v.judge, v.margin) == ("good", BY_MODEL, 1.5)
-    assert "has its lines claimed by gear_bearing_ball on output" in v.reason
-    assert v.reason.endswith("; the indicators: ball (its 2xBSF)") and v.evidence["ball_db"] == 6
+    winner = ModelChange("output", "gear_bearing_ball", 30.0, 0.0, 2.0, 7.3,
+                         {"A_b": (0.0, 8.9)}, "gear bearing", (output.name,), "ball",
+                         (output.name,))
+    v, w = judged_by_model(indicators, [winner, ball])
+    assert (v.state, v.judge, v.margin) == ("ball", BY_BOTH, 7.3)  # the output's
+    assert (w.state, w.judge, w.margin) == ("good", BY_MODEL, 1.5)
+    assert "has its lines claimed by gear_bearing_ball on output" in w.reason
+    assert w.reason.endswith("; the indicators: ball (its 2xBSF)") and w.evidence["ball_db"] == 6
     outer = ModelChange("input", "bearing_outer_race", 1.0, 0.0, 2.0, 0.3, {"A_b": (0.0, 1.0)},
                         "pinion bearing", (), "outer", (inner.name,))
-    assert judged_by_model(indicators, [outer])[0].state == "ball"
+    assert judged_by_model(indicators[:1], [outer])[0].state == "ball"
     # beside a larger change of another fault, the evidence is the tested fault's
-    v, = judged_by_model(indicators, [dataclasses.replace(outer, margin=4.0), ball])
+    v = judged_by_model(indicators, [dataclasses.replace(outer, margin=4.0), winner, ball])[1]
     assert v.state == "good" and v.evidence["model input bearing_ball"] == 1.5
     assert "model input bearing_outer_race" not in v.evidence
     eccentric = (ComponentVerdict(PINION, "eccentric", {}, 6.0, 10.2, "its shaft's swing"),)
     assert judged_by_model(eccentric, [change(0.2, (), (PINION.name,), "eccentric",
                                               "gear_eccentricity")])[0].state == "eccentric"
+
+
+def test_a_bearing_fault_the_model_does_not_see_keeps_the_indicators_word():
+    """The model's try of the very fault the indicators read in the envelope within the
+    healthy repeats, or its lines claimed by a gear's change (which repeats with the
+    machine and makes no envelope line): the indicators' word stands, the model's said."""
+    inner = Component("bearing", "IS:IS", "input")
+    indicators = (ComponentVerdict(inner, "inner", {"inner_db": 13.4}, 6.9, 1.9, "its BPFI"),)
+    race = ModelChange("input", "bearing_inner_race", 2.0, 0.0, 2.0, 0.4, {"A_b": (0.0, 1.0)},
+                       "pinion bearing", (), "inner", (inner.name,))
+    v, = judged_by_model(indicators, [race])
+    assert (v.state, v.judge, v.margin) == ("inner", BY_INDICATORS, 1.9)
+    assert v.reason == ("its BPFI; the healthy model's bearing_inner_race on input is within "
+                        "the healthy repeats (0.40 x)")
+    assert v.evidence == {"inner_db": 13.4, "model input bearing_inner_race": 0.4}
+    runout = ModelChange("input", "gear_eccentricity", 60.0, 0.0, 2.0, 7.8,
+                         {"ecc_gear": (0.0, 5e-5)}, "gear", (GEAR.name,), "eccentric",
+                         (GEAR.name,))
+    claimed = dataclasses.replace(race, margin=1.6, beaten_by="gear_eccentricity on input")
+    v, = judged_by_model(indicators, [runout, claimed])
+    assert (v.state, v.judge) == ("inner", BY_INDICATORS)
+    assert "has its lines claimed by gear_eccentricity on input (1.60 x)" in v.reason
 
 
 def test_the_model_is_asked_about_what_the_indicators_find_faulty_or_near_it():
