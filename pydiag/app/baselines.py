@@ -117,16 +117,20 @@ def kept_healthy_model(args, machine: Machine, model: MachineModel, built: Built
     """(the machine's healthy model of the --baseline files ``read``, whether it was fitted
     now, the history): the one kept in the history under the same fingerprint
     (:func:`healthy_fingerprint`), else fitted
-    (:func:`~pydiag.diagnose.stages.healthy_model`) and kept there."""
+    (:func:`~pydiag.diagnose.stages.healthy_model`) and kept there. Of one file, it judges
+    nothing (no repeat) and lacks nothing a record is asked about: its fit is where each
+    record's own starts, found once."""
     db = str(history.resolve(args.history))
     history.check(db)
     key = healthy_fingerprint(args, built, list(read))
     kept = history.kept_healthy_model(db, machine, key)
-    if kept is not None:  # asked about this call's lacking effects
+    # asked about this call's lacking effects; none without a repeat, which would judge them
+    lacking = lacking_effects(args) if len(read) > 1 else ()
+    if kept is not None:
         return dataclasses.replace(kept, model=dataclasses.replace(
-            kept.model, lacking=lacking_effects(args))), False, db
+            kept.model, lacking=lacking)), False, db
     fitted = healthy_model(str(built.fmu), model, machine, list(read.values()), args.input_hz,
-                           settings, estimator, lacking_effects(args))
+                           settings, estimator, lacking)
     return history.keep_healthy_model(db, machine, key, _resolved(read), fitted), True, db
 
 

@@ -206,7 +206,7 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
             result = diagnose_machine(args.fmu, m, machine, args.input_hz, settings,
                                       estimator, baselines, adapter_of(args))
         else:  # the machine's own model, every stage at once
-            if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
+            if healthy and (machine.effects or lacking_effects(args)):
                 kept = kept_healthy_model(args, machine, model[0], model[1], healthy,
                                           settings, estimator)
             result = diagnose_machine_model(
@@ -302,10 +302,10 @@ def cmd_batch(args) -> int:
     built = None if machines is None else machines(machine)
     model, fmu = (None, args.fmu) if built is None else _built(built)
     kept, grown = None, []
-    if len(healthy) >= 2 and (machine.effects or lacking_effects(args)):
+    if healthy and (machine.effects or lacking_effects(args)):
         kept = kept_healthy_model(args, machine, model, built[1], healthy,
                                   problem, FaultEstimator(**settings))  # once, here
-    elif built is not None:
+    if built is not None:
         _warn_one_healthy(args, len(healthy))
     tasks = [batch.BatchTask(p, fmu, settings, tuple(channels) if channels else None,
                              args.sample_rate, args.adapter, problem,

@@ -329,8 +329,9 @@ def format_healthy_model(kept: KeptHealthyModel, fitted: bool, db: str,
     more = "" if grown is None else (
         f"; with {len(grown.model.held) - len(kept.model.held)} more of its lacking effects "
         f"tried on them, kept again (id {grown.id})")
-    return (f"healthy    : the model fitted to {kept.baselines[0]}, held to "
-            f"{', '.join(kept.baselines[1:])}; "
+    held = (f"held to {', '.join(kept.baselines[1:])}" if kept.baselines[1:] else
+            "no healthy repeat to hold a record to: the start of its fit")
+    return (f"healthy    : the model fitted to {kept.baselines[0]}, {held}; "
             + (f"kept in {db} (id {kept.id})" if fitted else
                f"as kept in {db} on {kept.time_utc} (id {kept.id})") + more)
 

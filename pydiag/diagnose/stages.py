@@ -207,7 +207,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
     fault parameters and tested on the lines seen from its own shafts
     (:func:`~pydiag.loop.machine_fit.stage_view`), and judged against ``baselines`` as
     :func:`diagnose_machine` judges. With the machine's ``healthy`` model
-    (:func:`healthy_model`), the model's own verdict too
+    (:func:`healthy_model`) held to a healthy repeat, the model's own verdict too
     (:func:`~pydiag.loop.own_changes.record_changes`: each of its effects, and each it
     lacks where it could name a component the indicators ask about,
     :func:`~pydiag.gear.component.asked_of_model`, refitted held out on the record, the
@@ -234,7 +234,7 @@ def diagnose_machine_model(fmu_path: str, model: MachineModel, measurement: Meas
                                                                    prefix),
                                       _verdict(judged, k), prefix))
     changes = []
-    if healthy is not None:
+    if healthy is not None and healthy.repeat_z:  # without a repeat it judges nothing
         asked = asked_of_model(judged.components)
         tries = lacking_tries(healthy, machine, model, asked)
         if tries - set(healthy.held) and grow is not None:
@@ -280,11 +280,12 @@ def healthy_model(fmu_path: str, model: MachineModel, machine: Machine,
     """The machine's healthy model (:func:`~pydiag.loop.own_changes.fit_healthy`): its
     own model (``model``, built at ``fmu_path``, with the effects the machine file gives
     its stages, say from ``pydiag loop`` on the first record) fitted to the first of the
-    ``healthy`` records and held to the others (two or more); ``lacking``: catalogue
-    effects it lacks that a record may be asked about (tried on these records when one
-    first is: :func:`diagnose_machine_model`)."""
-    if len(healthy) < 2:
-        raise ValueError("a healthy model needs its record and a healthy repeat")
+    ``healthy`` records and held to the others; ``lacking``: catalogue effects it lacks
+    that a record may be asked about (tried on these records when one first is:
+    :func:`diagnose_machine_model`). Of one record, it has no repeat to hold a change to
+    and judges nothing: its fit is where a record's own starts."""
+    if not healthy:
+        raise ValueError("a healthy model needs its record")
     first, *others = healthy_problems(fmu_path, model, machine, healthy, input_hz, settings)
     return fit_healthy(machine, model, first, others, estimator or FaultEstimator(),
                        lacking=lacking)

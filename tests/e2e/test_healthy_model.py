@@ -166,6 +166,35 @@ def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
         for c in alone["model_changes"] if c["changed"])
 
 
+def test_of_one_baseline_file_the_healthy_fit_is_kept_and_each_record_polishes_it(tmp_path):
+    """One --baseline file (the issue's command): no healthy repeat, so the model judges no
+    component (said, and a warning); but its fit to the baseline is kept in the history and
+    each record's fit is that fit polished (at most the polish's budget and one more), not
+    a swarm from nothing, record after record."""
+    baseline, history = tmp_path / "healthy_1.csv", tmp_path / "h.sqlite"
+    write_measurement(baseline, gearbox_record(1, box=SHORT_BOX))
+    runs = []
+    for name, record in (("broken", gearbox_record(2, faulty_shaft=2, stage=1, box=SHORT_BOX)),
+                         ("healthy", gearbox_record(5, box=SHORT_BOX))):
+        measured, out = tmp_path / f"{name}.csv", tmp_path / f"{name}.json"
+        write_measurement(measured, record)
+        r = run_cli("-m", "pydiag", "diagnose", "--machine", str(HEALTHY_MODEL),
+                    "--measurement", str(measured), "--baseline", str(baseline),
+                    "--json", str(out), "--build-dir", str(tmp_path / "build"), "--quiet",
+                    "--history", str(history), "--particles", "8", "--iterations", "4",
+                    "--polish", "60")
+        assert r.returncode == 0, r.stderr
+        runs.append((r, json.loads(out.read_text())))
+    for (r, report), kept in zip(runs, ("; kept in ", "; as kept in ")):
+        assert "no healthy repeat to hold a record to" in r.stdout and kept in r.stdout
+        assert "needs two --baseline files" in r.stderr and "1 given" in r.stderr
+        assert report["model_changes"] == []
+        assert {c["judge"] for c in report["components"]} == {"indicators"}
+        assert all(1 < s["model"]["evaluations"] <= 61 for s in report["stages"])
+    broken = {c["name"]: c["state"] for c in runs[0][1]["components"]}
+    assert broken["50T gear of stage 2"] == "changed"  # the indicators' word
+
+
 def test_a_record_is_fitted_from_the_healthy_fit_without_a_swarm(tmp_path):
     """refit_machine: the short box's model with the loop's effects, its fit on healthy
     seed 1 (the file's [start]) polished on a record with a broken output-gear tooth, no
