@@ -11,6 +11,7 @@ the size it fitted. Usage:
 
     .venv/bin/python bench/model_components.py [--seeds 2,5]
     .venv/bin/python bench/model_components.py --phm09 [DIR]   # default ../shared/data/phm09
+    .venv/bin/python bench/model_components.py --phm09 --one-baseline
 
 Baselines: healthy seeds 1 (the healthy model's record), 3 and 4 (its repeats); each case's
 record on each seed of ``--seeds``. The commands run as a user runs them, with their
@@ -20,6 +21,10 @@ defaults, a history and build folder of their own (a temporary folder).
 runs (run 2, the healthy model's record, then run 1, its repeat), each judged with the
 machine files of examples/ as they are (no effects: the model is the stages alone, asked
 for the catalogue's component faults), beside the data set's labels (bench/components.py's).
+``--one-baseline``: every record of the folder with a healthy run of its operating point
+but itself, judged against that one file (run 2 first), as the issue's command runs it: the
+model then judges nothing, but its fit to the file is kept and each record's fit is its
+polish; a row a record (seconds: the first of each file fits it) and the counts.
 Cite the PHM Society 2009 Data Challenge where you report results.
 """
 
@@ -116,6 +121,47 @@ def phm09_main(folder: Path) -> int:
     return 0
 
 
+def one_baseline_main(folder: Path) -> int:
+    """Every record of ``folder`` with a healthy run of its operating point but itself,
+    ``diagnose --machine`` against that one file (run 2 first), a history for all: a row a
+    record (seconds, whether its baseline's fit was kept, its faulty components), the
+    counts."""
+    files = sorted(p for p in folder.iterdir() if NAME.search(p.name))
+    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}, PHM 2009 records of {folder}, one baseline file")
+    rows, firsts, kept = [], [], []
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = Path(scratch)
+        print(f"{'record':<28}{'baseline':<24}{'diagnose s':>11}  faulty components")
+        for path in files:
+            box, case, hz, load, _ = NAME.search(path.name).groups()
+            healthy = healthy_runs(path, files)
+            if not healthy:
+                print(f"{path.stem:<28}{'none':<24}")
+                continue
+            report, seconds = _run(
+                "diagnose", "--machine", str(ROOT / "examples" / f"phm09_{box}.toml"),
+                "--sample-rate", "66666.67", "--rpm", str(60 * int(hz)), "--measurement",
+                str(path), "--baseline", str(healthy[0]), "--force", "--quiet",
+                "--build-dir", str(tmp / "build"), "--history", str(tmp / "history.sqlite"),
+                "--json", str(tmp / "diag.json"))
+            (kept if healthy[0] in {b for b, _ in firsts} else firsts).append(
+                (healthy[0], seconds))
+            faulty = [f"{c['name']}={c['state']}" for c in report["components"]
+                      if c["state"] != "good"]
+            print(f"{path.stem:<28}{healthy[0].stem:<24}{seconds:>11.1f}  "
+                  f"{'; '.join(faulty) or '-'}", flush=True)
+            _rows_of(path.stem, 0, LABELS.get((box, int(case)), {}), report, report, rows)
+    labelled = [r for r in rows if r[3] != "good"]
+    print(f"faults named on their component {sum(names(r[5], r[3]) for r in labelled)} of "
+          f"{len(labelled)}; components called faulty that are not "
+          f"{sum(r[3] == 'good' and r[5] != 'good' for r in rows)}")
+    print(f"the first record of each baseline file (its fit kept): "
+          f"{', '.join(f'{s:.1f}' for _, s in firsts)} s; the others: "
+          f"{', '.join(f'{s:.1f}' for _, s in kept)} s")
+    return 0
+
+
 def _rows_of(case: str, seed: int, labels: dict, alone: dict, joined: dict,
              rows: list) -> None:
     """A row a component the labels name or either verdict calls faulty."""
@@ -160,9 +206,11 @@ def main() -> int:
     ap.add_argument("--seeds", default="2,5", help="the records' seeds (default 2,5)")
     ap.add_argument("--phm09", nargs="?", const=str(ROOT.parent / "shared" / "data" / "phm09"),
                     help="the shared PHM 2009 records instead (folder)")
+    ap.add_argument("--one-baseline", action="store_true",
+                    help="with --phm09: every record against one healthy file")
     args = ap.parse_args()
     if args.phm09:
-        return phm09_main(Path(args.phm09))
+        return (one_baseline_main if args.one_baseline else phm09_main)(Path(args.phm09))
     seeds = [int(s) for s in args.seeds.split(",")]
     from truth import gearbox as sim
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
