@@ -97,7 +97,8 @@ def fit_healthy(machine: Machine, model: MachineModel, baseline: FitProblem,
     to the ``baseline`` problem (:func:`~pydiag.loop.machine_fit.compare_machine`, from the
     file's ``[start]``), and the rows a record's are held to: each of its effects refitted
     held out (``effect_estimator``, default :data:`~pydiag.loop.effect_fit.EFFECT_REFIT`'s)
-    on the baseline and on each healthy repeat, seen through that fit. Every problem is of
+    on the baseline and on each healthy repeat, seen through that fit (none without a
+    repeat: the model then judges nothing, its fit a record's start). Every problem is of
     the same model (:func:`~pydiag.loop.machine_fit.machine_problem`).
 
     ``lacking``: catalogue effects the healthy model does not have that a record may be
@@ -109,7 +110,8 @@ def fit_healthy(machine: Machine, model: MachineModel, baseline: FitProblem,
     fitted = compare_machine(baseline, model, estimator, refit, start=machine.fit_start())
     healthy = HealthyModel(dict(fitted.parameters), fitted.false_alarm_rate, {}, (),
                            tuple(lacking))
-    own = _rows(healthy, machine, model, baseline, refit, None, set())
+    # the rows a record's are held to; of no repeat, none (nothing to hold them to)
+    own = _rows(healthy, machine, model, baseline, refit, None, set()) if repeats else []
     again = [_rows(healthy, machine, model, problem, refit, None, set())
              for problem in repeats]
     return dataclasses.replace(healthy, baseline_z=_z_of(own),
