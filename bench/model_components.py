@@ -85,12 +85,17 @@ def _fitted(component: dict, changes: list[dict]) -> str:
                      for k, (a, b) in said["values"].items())
 
 
+def _phm09_files(folder: Path, how: str) -> list[Path]:
+    """The PHM 2009 records of ``folder``, in order, the machine's line printed first."""
+    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}, PHM 2009 records of {folder}{how}")
+    return sorted(p for p in folder.iterdir() if NAME.search(p.name))
+
+
 def phm09_main(folder: Path) -> int:
     """The shared PHM 2009 records with two healthy runs of their operating point: a row a
     record (seconds), a row a labelled or said component, the counts."""
-    files = sorted(p for p in folder.iterdir() if NAME.search(p.name))
-    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}, PHM 2009 records of {folder}")
+    files = _phm09_files(folder, "")
     records, rows, skipped = [], [], []
     with tempfile.TemporaryDirectory() as scratch:
         tmp = Path(scratch)
@@ -124,32 +129,29 @@ def phm09_main(folder: Path) -> int:
 def one_baseline_main(folder: Path) -> int:
     """Every record of ``folder`` with a healthy run of its operating point but itself,
     ``diagnose --machine`` against that one file (run 2 first), a history for all: a row a
-    record (seconds, whether its baseline's fit was kept, its faulty components), the
-    counts."""
-    files = sorted(p for p in folder.iterdir() if NAME.search(p.name))
-    print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}, PHM 2009 records of {folder}, one baseline file")
+    record (its baseline, seconds: the first of each baseline fits it, its faulty
+    components), the counts."""
+    files = _phm09_files(folder, ", one baseline file")
+    baseline = {path: next(iter(healthy_runs(path, files)), None) for path in files}
     rows, firsts, kept = [], [], []
+    print(f"{'record':<28}{'baseline':<24}{'diagnose s':>11}  faulty components")
     with tempfile.TemporaryDirectory() as scratch:
         tmp = Path(scratch)
-        print(f"{'record':<28}{'baseline':<24}{'diagnose s':>11}  faulty components")
-        for path in files:
-            box, case, hz, load, _ = NAME.search(path.name).groups()
-            healthy = healthy_runs(path, files)
-            if not healthy:
+        for path, first in baseline.items():
+            if first is None:
                 print(f"{path.stem:<28}{'none':<24}")
                 continue
+            box, case, hz, _, _ = NAME.search(path.name).groups()
             report, seconds = _run(
                 "diagnose", "--machine", str(ROOT / "examples" / f"phm09_{box}.toml"),
                 "--sample-rate", "66666.67", "--rpm", str(60 * int(hz)), "--measurement",
-                str(path), "--baseline", str(healthy[0]), "--force", "--quiet",
+                str(path), "--baseline", str(first), "--force", "--quiet",
                 "--build-dir", str(tmp / "build"), "--history", str(tmp / "history.sqlite"),
                 "--json", str(tmp / "diag.json"))
-            (kept if healthy[0] in {b for b, _ in firsts} else firsts).append(
-                (healthy[0], seconds))
+            (kept if first in {b for b, _ in firsts} else firsts).append((first, seconds))
             faulty = [f"{c['name']}={c['state']}" for c in report["components"]
                       if c["state"] != "good"]
-            print(f"{path.stem:<28}{healthy[0].stem:<24}{seconds:>11.1f}  "
+            print(f"{path.stem:<28}{first.stem:<24}{seconds:>11.1f}  "
                   f"{'; '.join(faulty) or '-'}", flush=True)
             _rows_of(path.stem, 0, LABELS.get((box, int(case)), {}), report, report, rows)
     labelled = [r for r in rows if r[3] != "good"]
