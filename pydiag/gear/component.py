@@ -82,7 +82,8 @@ class ModelChange:
     ``components``: the machine's components that part is (a mesh: both gears);
     ``fault``: the state it names them in when changed (``Effect.fault``); ``covers``:
     every component a change of the effect could name (any of its parts); ``beaten_by``:
-    the larger change that claims its lines too, which names them instead ("" for none);
+    the larger change that claims its lines too, which names them instead (its
+    :attr:`label`; "" for none);
     ``explained``: the share of the residual on its lines of the held-out half its fit
     removes (:attr:`pydiag.loop.results.HeldOut.explained`)."""
 
@@ -99,6 +100,11 @@ class ModelChange:
     covers: tuple[str, ...] = ()
     beaten_by: str = ""
     explained: float = math.nan
+
+    @property
+    def label(self) -> str:
+        """The change as another's ``beaten_by`` names it: its effect on its stage."""
+        return f"{self.effect} on {self.stage}"
 
     @property
     def changed(self) -> bool:
@@ -244,8 +250,7 @@ def _claimed_by_a_bearing(change: ModelChange, changes: Sequence[ModelChange], n
     """Whether the lines of ``change`` (a try of the fault the indicators name on the
     bearing ``name``) are claimed by a larger change that names other bearings only
     (``bearings``: the machine's bearings' names)."""
-    winner = next((c for c in changes if change.beaten_by == f"{c.effect} on {c.stage}"),
-                  None)
+    winner = next((c for c in changes if c.label == change.beaten_by), None)
     return (winner is not None and bool(winner.components) and name not in winner.components
             and set(winner.components) <= bearings)
 

@@ -268,7 +268,7 @@ def _settled(changes: list[ModelChange], claimed: dict[tuple[str, str], set[str]
         winner = next((w for w in out if w.changed and lines
                        & claimed.get((w.stage, w.effect), set())), None)
         out.append(c if winner is None or not c.changed else dataclasses.replace(
-            c, beaten_by=f"{winner.effect} on {winner.stage}"))
+            c, beaten_by=winner.label))
     return out
 
 
