@@ -17,6 +17,10 @@ What CasADi's export would otherwise get wrong or make slow, handled here:
   native engine). The binary is compiled here, with ``COMPILER_FLAGS``, each source file
   its own translation unit (CasADi's amalgamation would clash the static names of two
   generated files).
+- CasADi, rumoca and CasADi's export (which writes into the process's working folder) are
+  not made for threads: :data:`PYTHON_SIDE` lets one build at a time use them. The C
+  compile, most of a build's time, runs outside it, so builds in threads compile side by
+  side.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import os
 import re
 import shutil
 import subprocess
+import threading
 from pathlib import Path
 
 import casadi as ca
@@ -39,6 +44,9 @@ from fmu_build.scratch import scratch_folder
 
 MX = ca.MX
 COMPILER_FLAGS = ["-O2", "-pipe"]  # -pipe: no temporary files of gcc's own to leave
+#: Held while a build runs rumoca or CasADi or works in the process's working folder (the
+#: module docstring): the process's, as that folder is.
+PYTHON_SIDE = threading.Lock()
 
 
 def fmi_headers_dir() -> str:
@@ -127,17 +135,18 @@ def _removed_unless_moved(path: Path):
         path.unlink(missing_ok=True)
 
 
-def _compile(model_id: str, sources: list[str]) -> str:
-    """Build the FMU's shared library from ``sources``; returns its file name."""
+def _compile(model_id: str, sources: list[str], folder: Path) -> str:
+    """Build the FMU's shared library from ``sources`` in ``folder``; returns its file
+    name. Runs outside :data:`PYTHON_SIDE`: it reads no working folder of the process's."""
     cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if cc is None:
         raise ModelicaBuildError("no C compiler found (set CC or install gcc)")
     lib = model_id + sharedLibraryExtension
-    # the compiler's own temporary files in the build's scratch folder (the current one),
-    # removed with it even when the compiler is killed
+    # the compiler's own temporary files in the build's scratch folder, removed with it
+    # even when the compiler is killed
     res = subprocess.run([cc, *COMPILER_FLAGS, "-shared", "-fPIC", "-I", fmi_headers_dir(), "-I",
                           ".", "-o", lib, *sources, "-lm"], capture_output=True, text=True,
-                         env={**os.environ, "TMPDIR": os.getcwd()})
+                         cwd=folder, env={**os.environ, "TMPDIR": str(folder)})
     if res.returncode != 0:
         raise ModelicaBuildError(f"compiling the FMU failed: {res.stderr.strip()[:500]}")
     return lib
@@ -147,29 +156,30 @@ def export_fmu(system: OdeSystem, out_path: str | Path) -> Path:
     """Generate C code, compile it with the system C compiler and pack the FMU."""
     out_path = Path(out_path).resolve()
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    dae = to_dae_builder(system)
     model_id = model_identifier(system)
     tmp_out = out_path.with_suffix(".fmu.tmp")
-    with scratch_folder("fmu_build_") as work, contextlib.chdir(work), \
-            _removed_unless_moved(tmp_out):
-        try:
-            files = dae.export_fmu({"no_warning": True, "with_serialization": False})
-        except RuntimeError as err:
-            raise ModelicaBuildError(f"CasADi could not export the FMU: "
-                                     f"{str(err).strip().splitlines()[-1]}") from err
-        md = Path("modelDescription.xml")
-        text = add_unit_definitions(md.read_text())
-        if system.derived:
-            text = parameter_stage.add_to_export(Path("."), model_id, system, files, text)
-        sources = [f for f in files if f.endswith(".c")]
-        md.write_text(complete_for_fmi(text))
-        lib = _compile(model_id, sources)
+    with scratch_folder("fmu_build_") as work, _removed_unless_moved(tmp_out):
+        with PYTHON_SIDE, contextlib.chdir(work):
+            dae = to_dae_builder(system)
+            try:
+                files = dae.export_fmu({"no_warning": True, "with_serialization": False})
+            except RuntimeError as err:
+                raise ModelicaBuildError(f"CasADi could not export the FMU: "
+                                         f"{str(err).strip().splitlines()[-1]}") from err
+            md = Path("modelDescription.xml")
+            text = add_unit_definitions(md.read_text())
+            if system.derived:
+                text = parameter_stage.add_to_export(Path("."), model_id, system, files, text)
+            sources = [f for f in files if f.endswith(".c")]
+            md.write_text(complete_for_fmi(text))
+        lib = _compile(model_id, sources, work)
         files[lib] = f"binaries/{platform_tuple}/{lib}"
-        try:
-            packed = dae.pack_fmu(files, {"path": "model.fmu"})
-        except RuntimeError as err:
-            raise ModelicaBuildError(f"CasADi could not pack the FMU: "
-                                     f"{str(err).strip().splitlines()[-1]}") from err
+        with PYTHON_SIDE, contextlib.chdir(work):
+            try:
+                packed = work / dae.pack_fmu(files, {"path": "model.fmu"})
+            except RuntimeError as err:
+                raise ModelicaBuildError(f"CasADi could not pack the FMU: "
+                                         f"{str(err).strip().splitlines()[-1]}") from err
         shutil.move(packed, tmp_out)
         os.replace(tmp_out, out_path)
     return out_path

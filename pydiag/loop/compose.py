@@ -31,6 +31,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -306,7 +307,7 @@ def built_fmu(name: str, source: str, modelica_root: Path, folder: Path) -> Buil
     tag = _digest(source + library_hash(modelica_root))[:12]
     out = folder / f"{name}_{tag}.fmu"
     if not usable_cache(out):  # built beside, then renamed: a failed build leaves no FMU
-        partial = folder / f".{out.stem}.{os.getpid()}.fmu"
+        partial = folder / f".{out.stem}.{os.getpid()}.{threading.get_ident()}.fmu"
         try:
             build_fmu(path, f"GearDiag.{name}", partial, library_roots=(Path(modelica_root),))
             os.replace(partial, out)

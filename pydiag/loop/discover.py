@@ -35,6 +35,7 @@ import hashlib
 import math
 import multiprocessing as mp
 import os
+import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from collections.abc import Mapping
@@ -51,6 +52,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.fmu.archive import usable_cache
 from pydiag.gear.effect import Effect, model_file
 from pydiag.gear.effects import EFFECTS
+from pydiag.loop.builds import each_built
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.effect_fit import EFFECT_REFIT, in_model
@@ -94,7 +96,8 @@ def effect_fmu(key: str, modelica_root: Path, build_dir: Path | None = None) -> 
     newest = max(p.stat().st_mtime for p in sources)
     if not out.exists() or out.stat().st_mtime < newest or not usable_cache(out):
         out.parent.mkdir(parents=True, exist_ok=True)
-        partial = out.with_name(f".{out.stem}.{os.getpid()}.fmu")  # renamed when whole
+        # renamed when whole; of this thread: two may build one effect's model at once
+        partial = out.with_name(f".{out.stem}.{os.getpid()}.{threading.get_ident()}.fmu")
         try:
             fmu_build.build_fmu(model_file(effect, modelica_root), effect.model, partial)
             os.replace(partial, out)
@@ -238,19 +241,27 @@ def discover(problem: FitProblem, estimator: FaultEstimator | None = None,
     base = base or compare(problem, estimator)
     keys = [key for key in effects or list(EFFECTS) if not in_model(problem, EFFECTS[key])]
     keys.sort(key=lambda key: -discovery_cost(EFFECTS[key]))  # the longest first
-    fmus: dict[str, str] = {}
-    found: list[Suggestion] = []
-    for key in keys:  # built in this process: two workers must not build one FMU at once
+    effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
+
+    def build(key: str) -> str | Suggestion:
         started = time.perf_counter()
         try:
-            fmus[key] = (str(effect_fmu(key, modelica_root, build_dir))
-                         if EFFECTS[key].own_fmu else problem.spec.fmu_path)
+            return (str(effect_fmu(key, modelica_root, build_dir))
+                    if EFFECTS[key].own_fmu else problem.spec.fmu_path)
         except (PydiagError, BuildError) as err:  # its row, not built again
-            found.append(failed_row(key, err, started))
+            return failed_row(key, err, started)
+
+    fmus: dict[str, str] = {}
+    found: list[Suggestion] = []
+    # built in this process, side by side: two workers must not build one FMU at once
+    for key, built in zip(keys, each_built(build, keys, effect_estimator.n_workers)):
+        if isinstance(built, Suggestion):
+            found.append(built)
             if progress:
-                progress(found[-1])
+                progress(built)
+        else:
+            fmus[key] = built
     keys = [key for key in keys if key in fmus]
-    effect_estimator = effect_estimator or FaultEstimator(**EFFECT_REFIT)
     memo = shared_halves(problem, base, keys, effect_estimator)
     found += side_by_side(lambda key, estimator: (_try_effect, (
         problem, base, key, fmus[key], estimator, memo)), keys, effect_estimator, progress)

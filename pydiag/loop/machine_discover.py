@@ -35,6 +35,7 @@ from pydiag.fit.problem import FitProblem
 from pydiag.gear.effect import Effect
 from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine, StageEffect
+from pydiag.loop.builds import each_built
 from pydiag.loop.compare import compare
 from pydiag.loop.competition import mark_settled, settle
 from pydiag.loop.discover import (discovery_cost, failed_row, held_out_row, shared_halves,
@@ -106,9 +107,8 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
              and (where is None or where(k, key)) and not in_model(views[k], effect)]
     tasks.sort(key=lambda task: -discovery_cost(catalogues[task[0]][task[1]]))
     found: list[Suggestion] = []
-    fmus: dict[tuple[int, str], str] = {}
-    for k, key in tasks:  # built here: two workers must not build one model at once
-        started = time.perf_counter()
+    buildable = []
+    for k, key in tasks:
         if why := nothing_to_fit(machine, k, key):
             found.append(Suggestion(key, status=Status.NOT_TRIED,
                                     message=f"{Status.NOT_TRIED.value}: {why}",
@@ -116,13 +116,18 @@ def discover_machine(problem: FitProblem, machine: Machine, model: MachineModel,
                                     stage=machine.stages[k].name))
             if progress:
                 progress(found[-1])
-            continue
-        try:
-            fmus[k, key] = effect_model(_with_effect(machine, key, k))
-        except (PydiagError, BuildError) as err:
-            found.append(failed_row(key, err, started, machine.stages[k].name))
+        else:
+            buildable.append((k, key))
+    fmus: dict[tuple[int, str], str] = {}
+    # built here, side by side, before any fit: two workers must not build one model
+    for task, built in zip(buildable, each_built(functools.partial(
+            _effect_fmu, machine, effect_model), buildable, estimator.n_workers)):
+        if isinstance(built, Suggestion):
+            found.append(built)
             if progress:
-                progress(found[-1])
+                progress(built)
+        else:
+            fmus[task] = built
     tasks = [task for task in tasks if task in fmus]
     stages = {}
     for k in sorted({k for k, _ in tasks}):
@@ -158,21 +163,24 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     core (module docstring); ``progress`` gets each as it starts, as "effect on stage";
     ``every_synchronous``: :func:`~pydiag.loop.validate.validate`'s."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
-    stages, tasks, fmus = {}, [], {}
+    views, seens, wanted = {}, {}, []
     for k in range(len(machine.stages)):
-        view = stage_view(problem, machine, model, k, comparison.parameters)
-        effects = lacking(machine, model, k)
-        seen = compare(view, None, comparison.false_alarm_rate, comparison.n_periods,
-                       parameters=comparison.parameters, effects=effects)
-        keys = []
-        for key in effects_to_fit(view, seen, effects=effects,
-                                  every_synchronous=every_synchronous):
-            try:  # built here: two workers must not build one model at once
-                fmus[k, key] = effect_model(_with_effect(machine, key, k))
-                keys.append(key)
-            except (PydiagError, BuildError):
-                pass  # validate builds it again, and says why it cannot
-        stages[k] = _Stage(view, seen, shared_halves(view, seen, keys, estimator, effects))
+        views[k] = stage_view(problem, machine, model, k, comparison.parameters)
+        seens[k] = compare(views[k], None, comparison.false_alarm_rate, comparison.n_periods,
+                           parameters=comparison.parameters, effects=lacking(machine, model, k))
+        wanted += [(k, key) for key in effects_to_fit(views[k], seens[k],
+                                                      effects=lacking(machine, model, k),
+                                                      every_synchronous=every_synchronous)]
+    # built here, side by side, before any fit: two workers must not build one model; one
+    # that fails is built again by validate, which says why
+    fmus = {task: built for task, built in zip(wanted, each_built(functools.partial(
+        _effect_fmu, machine, effect_model), wanted, estimator.n_workers))
+        if not isinstance(built, Suggestion)}
+    stages, tasks = {}, []
+    for k in range(len(machine.stages)):
+        keys = [key for j, key in wanted if j == k and (j, key) in fmus]
+        stages[k] = _Stage(views[k], seens[k], shared_halves(
+            views[k], seens[k], keys, estimator, lacking(machine, model, k)))
         tasks += [(k, key) for key in keys]
     tasks.sort(key=lambda task: -discovery_cost(model.stage_effects(task[0])[task[1]]))
     name = [s.name for s in machine.stages]
@@ -233,6 +241,18 @@ def _refit_on_stage(stage: _Stage, model: MachineModel, index: int, name: str, k
     (called ``name``) has, its values asked for again (``own``): a worker's task."""
     return held_out_row(stage.view, stage.seen, model.stage_effects(index)[key],
                         stage.view.spec.fmu_path, estimator, stage.memo, name, own=True)
+
+
+def _effect_fmu(machine: Machine, effect_model: Callable[[Machine], str],
+                task: tuple[int, str]) -> str | Suggestion:
+    """The FMU ``effect_model`` builds of ``machine`` with the effect of ``task`` (stage,
+    key), or the row saying why it cannot be built."""
+    k, key = task
+    started = time.perf_counter()
+    try:
+        return effect_model(_with_effect(machine, key, k))
+    except (PydiagError, BuildError) as err:
+        return failed_row(key, err, started, machine.stages[k].name)
 
 
 def _with_effect(machine: Machine, key: str, stage: int) -> Machine:

@@ -314,6 +314,38 @@ def test_build_writes_only_the_requested_file(tmp_path, modelica_copy):
     assert len(res) == 10001 and np.all(np.isfinite(res["acc"]))
 
 
+def test_builds_in_threads_at_once_each_give_their_own_model(tmp_path):
+    """Builds in threads compile side by side (fmu_build.fmu_export.PYTHON_SIDE): each FMU
+    is its own model's, and the process's working folder is where it was."""
+    from concurrent.futures import ThreadPoolExecutor
+    import os
+
+    def source(rate: int) -> Path:
+        folder = tmp_path / f"R{rate}"
+        folder.mkdir()
+        return write_model(folder, f"""
+            model R{rate}
+              parameter Real k = {rate};
+              Real x(start = 1, fixed = true);
+              output Real y;
+            equation
+              der(x) = -k*x;
+              y = x;
+            end R{rate};
+            """)
+
+    here = os.getcwd()
+    rates = [1, 2, 3, 4]
+    with ThreadPoolExecutor(2) as pool:
+        fmus = list(pool.map(lambda r: build_fmu(source(r), f"R{r}", tmp_path / f"R{r}.fmu"),
+                             rates))
+    assert os.getcwd() == here
+    for rate, fmu in zip(rates, fmus):
+        y = fmpy.simulate_fmu(str(inspected(fmu)), stop_time=1.0, output=["y"],
+                              relative_tolerance=1e-8)["y"][-1]
+        assert y == pytest.approx(np.exp(-rate), rel=1e-5)
+
+
 @pytest.mark.parametrize("delay_s", [0.6, 1.2, 1.8])
 def test_two_ctrl_c_during_a_build_leave_nothing_behind(tmp_path, delay_s):
     """A build interrupted twice, the second during the first one's cleanup, leaves no
