@@ -232,7 +232,7 @@ def _joined(verdicts: Sequence[ComponentVerdict], changes: Sequence[ModelChange]
             continue
         model = (f"the healthy model's {said.effect} on {said.stage} "
                  + ((f"names {', '.join(said.components)}" if said.components else
-                     "names no part: no parameter that sizes a fault grew")
+                     "names no part: no parameter that sizes a fault grew more than another fell")
                     if said.changed else _not_named(said)))
         if v.faulty:
             out.append(dataclasses.replace(v, evidence=evidence,

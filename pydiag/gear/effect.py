@@ -150,11 +150,13 @@ class Effect:
         that of the sizing parameter that grew most (its :attr:`parts`; amplitudes of one
         effect share their units). Every sizing parameter is an amplitude a fault makes
         larger (a deeper modulation, a softer tooth, a stronger strike, larger orders), so
-        one that fell names no fault: None when none grew, or for an effect that sizes no
-        part."""
+        one that fell names no fault: None when none grew, when another fell by more (the
+        record asks for less of the effect, and a part that barely moved would be named by
+        the sign of its rounding), or for an effect that sizes no part."""
         sized = [(changes[name], part) for name, part in self.parts if name in changes]
         size, part = max(sized, key=lambda s: s[0], default=(0.0, None))
-        return part if size > 0 else None
+        fall = max((-change for change, _ in sized), default=0.0)
+        return part if size > 0 and size >= fall else None
 
     def fault_of(self, values: dict[str, tuple[float, float]]) -> str:
         """The fault the effect names (:attr:`fault`) from ``values``: each sizing

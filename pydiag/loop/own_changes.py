@@ -14,7 +14,8 @@ record's halves do (a z of a healthy repeat is not standard normal: bench/CHANGE
 a record's rise of z over the baseline's own is held, as a component's change is
 (:mod:`pydiag.gear.component_judge`), to ``K_SPREAD`` times the healthy repeats' rise of
 the same effect on the same stage (their RMS), never below a z of 1. The effect's sizing
-parameter that grew most names the part (:attr:`pydiag.gear.effect.Effect.parts`): a
+parameter that grew most, unless another fell by more, names the part
+(:attr:`pydiag.gear.effect.Effect.parts`): a
 deeper pinion modulation is its pinion, larger orders of the pinion shaft are that shaft;
 the effect names the fault where it can (``Effect.fault``: a softer tooth chipped or
 broken, a shaft's risen orders an imbalance or a bend), else "changed". An effect the
