@@ -28,7 +28,8 @@ records) differ by the same measure, pooled over the machine's components of tha
   shaft's, whose lines survive it): its 1x alone rose, "imbalance"; its 1x and 2x, "bent"
   (a bend or a misalignment: twice a turn); three or more of its first five, "looseness"
   (a loose fit, a sheared key: a turn that repeats with harmonics); any other rise,
-  "changed". A shaft whose swing rose as well is good, and says why: its gears'
+  "changed"; orders that fell beyond the threshold name no fault, and its line says so.
+  A shaft whose swing rose as well is good, and says why: its gears'
   transmission error moves its orders (an eccentric gear's mass and mesh force turn with
   it), and a fault of the shaft itself is not told beside it.
 - **A bearing** by its defect lines in the envelope (:mod:`pydiag.gear.bearing_judge`).
@@ -225,7 +226,10 @@ def _shafts(machine: Machine, record: MachineRecord, baselines: Sequence[Machine
         rises = sorted(k for k, v in changes.items() if v > threshold)
         state = shaft_state(rises)
         biggest = max((abs(v) for v in changes.values() if math.isfinite(v)), default=math.nan)
-        why = f"orders risen: {', '.join(f'{k}x' for k in rises)}" if rises else ""
+        fell = sorted(k for k, v in changes.items() if v < -threshold)
+        why = (f"orders risen: {', '.join(f'{k}x' for k in rises)}" if rises else
+               f"orders fell: {', '.join(f'{k}x' for k in fell)} (a fall names no fault)"
+               if fell else "")
         swung = _risen(swings[s.index]) if rises else {}
         if swung:  # its gears' transmission error moves its orders (module docstring)
             state, why = GOOD, (f"{why}, with its swing ({', '.join(f'{k}x' for k in swung)}): "
