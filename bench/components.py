@@ -11,8 +11,8 @@ components were called faulty, and the seconds it took), then the counts. Usage:
 
 ``--simulator``: the same on the independent gearbox simulator's records
 (tests/truth/gearbox.py: faults written from the shafts' angles and the bearing's own
-geometry), each fault alone and two at once, seeds 2-4, each judged against seed 1's
-healthy record (with a tacho where the case has one).
+geometry), each fault alone and two at once, seeds 2-4 (``--seeds``), each judged against
+seed 1's healthy record (with a tacho where the case has one).
 
 The records and their labels are the folder README's (a record is judged against the
 case-1 run of its box, speed and load that is not itself, run 2 first; with
@@ -145,8 +145,8 @@ SIMULATED = [
 ]
 
 
-def simulator_rows() -> tuple[list, list]:
-    """Each of :data:`SIMULATED` on seeds 2-4 against seed 1's healthy record: a row a
+def simulator_rows(seeds: tuple[int, ...] = (2, 3, 4)) -> tuple[list, list]:
+    """Each of :data:`SIMULATED` on ``seeds`` against seed 1's healthy record: a row a
     record (case, seed, faulty said, seconds) and a row a labelled or said component."""
     sys.path.append(str(ROOT / "tests"))
     from truth import gearbox as sim
@@ -161,7 +161,7 @@ def simulator_rows() -> tuple[list, list]:
                  else SpeedSettings("mesh"))
         baseline = machine_record(sim.gearbox_record(1, box=box, tacho_pulses=pulses), machine,
                                   speed, sim.INPUT_HZ)
-        for seed in (2, 3, 4):
+        for seed in seeds:
             started = time.perf_counter()
             seen = machine_record(sim.gearbox_record(seed, box=box, **faults), machine,
                                   speed, sim.INPUT_HZ)
@@ -178,8 +178,8 @@ def simulator_rows() -> tuple[list, list]:
     return records, rows
 
 
-def simulator_main() -> int:
-    records, rows = simulator_rows()
+def simulator_main(seeds: tuple[int, ...]) -> int:
+    records, rows = simulator_rows(seeds)
     print(f"{'case':<40}{'seed':>5}{'faulty said':>12}{'s':>6}")
     for case, seed, said, seconds in records:
         print(f"{case:<40}{seed:>5}{said:>12}{seconds:>6.1f}")
@@ -207,11 +207,14 @@ def main() -> int:
                          "load but itself, not only the first")
     ap.add_argument("--simulator", action="store_true",
                     help="the independent gearbox simulator's cases instead")
+    ap.add_argument("--seeds", default="2,3,4",
+                    help="with --simulator: the records' seeds (default 2,3,4; 1 is the baseline)")
     args = ap.parse_args()
     if args.simulator:
+        seeds = tuple(int(s) for s in args.seeds.split(","))
         print(f"# {platform.machine()}, {os.cpu_count()} cores, Python "
-              f"{platform.python_version()}, the gearbox simulator")
-        return simulator_main()
+              f"{platform.python_version()}, the gearbox simulator, seeds {list(seeds)}")
+        return simulator_main(seeds)
     files = sorted(p for p in Path(args.folder).iterdir() if NAME.search(p.name))
     print(f"# {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"{len(files)} records")
