@@ -163,13 +163,13 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     core (module docstring); ``progress`` gets each as it starts, as "effect on stage";
     ``every_synchronous``: :func:`~pydiag.loop.validate.validate`'s."""
     estimator = estimator or FaultEstimator(**EFFECT_REFIT)
+    catalogues = [lacking(machine, model, k) for k in range(len(machine.stages))]
     views, seens, wanted = {}, {}, []
-    for k in range(len(machine.stages)):
+    for k, catalogue in enumerate(catalogues):
         views[k] = stage_view(problem, machine, model, k, comparison.parameters)
         seens[k] = compare(views[k], None, comparison.false_alarm_rate, comparison.n_periods,
-                           parameters=comparison.parameters, effects=lacking(machine, model, k))
-        wanted += [(k, key) for key in effects_to_fit(views[k], seens[k],
-                                                      effects=lacking(machine, model, k),
+                           parameters=comparison.parameters, effects=catalogue)
+        wanted += [(k, key) for key in effects_to_fit(views[k], seens[k], effects=catalogue,
                                                       every_synchronous=every_synchronous)]
     # built here, side by side, before any fit: two workers must not build one model; one
     # that fails is built again by validate, which says why
@@ -180,7 +180,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
     for k in range(len(machine.stages)):
         keys = [key for j, key in wanted if j == k and (j, key) in fmus]
         stages[k] = _Stage(views[k], seens[k], shared_halves(
-            views[k], seens[k], keys, estimator, lacking(machine, model, k)))
+            views[k], seens[k], keys, estimator, catalogues[k]))
         tasks += [(k, key) for key in keys]
     tasks.sort(key=lambda task: -discovery_cost(model.stage_effects(task[0])[task[1]]))
     name = [s.name for s in machine.stages]
@@ -196,7 +196,7 @@ def validate_machine(problem: FitProblem, machine: Machine, model: MachineModel,
         def fmu(effect: Effect, k: int = k) -> str:
             return effect_model(_with_effect(machine, effect.key, k))
         checked = validate(stage.view, stage.seen, fmu, estimator,
-                           effects=lacking(machine, model, k),
+                           effects=catalogues[k],
                            tried={key: h for (j, key), h in tried.items() if j == k},
                            every_synchronous=every_synchronous,
                            progress=None if progress is None else
