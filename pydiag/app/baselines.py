@@ -37,24 +37,54 @@ KEPT = "kept"
 
 
 def baseline_records(args, machine: Machine, speed: SpeedSettings,
-                     read: Mapping[str, Measurement] | None = None) -> list[MachineRecord]:
+                     read: Mapping[str, Measurement] | None = None,
+                     kept_in: str | None = None) -> list[MachineRecord]:
     """The --baseline records as the machine sees them (their speed and every shaft's TSA),
     read and made once; ``kept``: those kept for the machine in the history at the
     record's operating point (:func:`~pydiag.gear.comparable.at_speed`). Each baseline
     counts once, however often it is given or whether it is given and kept too (a second
     copy would narrow the healthy spread); the record among its own baselines is said.
-    ``read``: files already read (:func:`healthy_measurements`), by the path given."""
+    ``read``: files already read (:func:`healthy_measurements`), by the path given;
+    ``kept_in``: a history where each file's record is kept, and found again under a
+    fingerprint of all it is made from (:func:`record_fingerprint`), so that it is made
+    once (a command that writes the history anyway gives it)."""
     record = _same_file(getattr(args, "measurement", None))
     asked = list(args.baseline or [])
     files = _files(args, warn=True)
     read = read or {}
-    out = [machine_record(read[path] if path in read else read_input(args, path), machine,
-                          speed, args.input_hz) for path in files.values()]
+    out = [_record_of(args, machine, speed, path, read, kept_in) for path in files.values()]
     if asked.count(KEPT) > 1:
         _warn(args, "--baseline kept is given twice; the kept baselines count once")
     if KEPT in asked:
         out += _kept(args, machine, set(files), record)
     return out
+
+
+def _record_of(args, machine: Machine, speed: SpeedSettings, path: str,
+               read: Mapping[str, Measurement], db: str | None) -> MachineRecord:
+    """The record of the --baseline file ``path`` as the machine sees it: found in the
+    history ``db`` (its file as read now), else made, and kept there."""
+    key = record_fingerprint(args, path) if db is not None else None
+    found = history.kept_baseline_record(db, machine, key) if key is not None else None
+    if found is not None:
+        return found if path not in read else dataclasses.replace(
+            found, file=str(read[path].metadata.get("file", found.file)))
+    made = machine_record(read[path] if path in read else read_input(args, path), machine,
+                          speed, args.input_hz)
+    if key is not None:
+        history.keep_baseline_record(db, machine, key, path, made)
+    return made
+
+
+def records_kept_in(args, machine: Machine, healthy: Mapping[str, Measurement]) -> str | None:
+    """The history where a command that keeps the machine's healthy model of the
+    --baseline files ``healthy`` keeps their records too (:func:`baseline_records`),
+    checked before any work; None when it keeps no healthy model."""
+    if not healthy or not (machine.effects or lacking_effects(args)):
+        return None
+    db = str(history.resolve(args.history))
+    history.check(db)
+    return db
 
 
 def healthy_measurements(args) -> dict[str, Measurement]:
@@ -82,10 +112,24 @@ def healthy_fingerprint(args, built: BuiltModel, files: list[str]) -> str:
     library, each file's bytes, and every other argument but :data:`NOT_FITTED_FROM`."""
     root, _ = library(args)
     sources = sorted(root.rglob("*.mo"))
-    facts = {"pydiag": __version__, "machine": history.sha256_of(args.machine),
-             "model": history.sha256_of(built.fmu),
-             "library": [[str(p.relative_to(root)), history.sha256_of(p)] for p in sources],
-             "baselines": [history.sha256_of(f) for f in files],
+    return _fingerprint(args, {
+        "model": history.sha256_of(built.fmu),
+        "library": [[str(p.relative_to(root)), history.sha256_of(p)] for p in sources],
+        "baselines": [history.sha256_of(f) for f in files]})
+
+
+def record_fingerprint(args, path: str) -> str:
+    """What a --baseline file's record is made from, as a key: pydiag's version, the
+    machine file's bytes, the file's bytes, and every argument but
+    :data:`NOT_FITTED_FROM` (how it is read, its speed; those that cannot change it only
+    make the key narrower)."""
+    return _fingerprint(args, {"baseline": history.sha256_of(path)})
+
+
+def _fingerprint(args, facts: dict) -> str:
+    """``facts`` with pydiag's version, the machine file's bytes and every argument but
+    :data:`NOT_FITTED_FROM`, hashed."""
+    facts = {"pydiag": __version__, "machine": history.sha256_of(args.machine), **facts,
              "arguments": {k: v for k, v in sorted(vars(args).items())
                            if k not in NOT_FITTED_FROM}}
     return hashlib.sha256(json.dumps(facts, sort_keys=True, default=str).encode()).hexdigest()

@@ -11,7 +11,8 @@ from pathlib import Path
 
 from pydiag.app import batch
 from pydiag.app.baselines import (baseline_records, check_lacking, grower,
-                                  healthy_measurements, kept_healthy_model, lacking_effects)
+                                  healthy_measurements, kept_healthy_model, lacking_effects,
+                                  records_kept_in)
 from pydiag.app.models import library, machine_fmus, machine_models
 from pydiag.app.progress import progress_bar, records_bar
 from pydiag.app.formatting import (format_facts, format_healthy_model, format_indicators,
@@ -195,7 +196,8 @@ def _diagnose_stages(args, machine: Machine, m: Measurement) -> int:
     settings = problem_settings(args)
     # the healthy model's records, read once for it and for the baselines' indicators
     healthy = healthy_measurements(args) if not args.fmu else {}
-    baselines = baseline_records(args, machine, settings.tracking, healthy)
+    baselines = baseline_records(args, machine, settings.tracking, healthy,
+                                 records_kept_in(args, machine, healthy))
     machines = None if args.fmu else machine_models(args)
     model = None if machines is None else machines(machine)
     update, close = progress_bar(args.quiet)
@@ -296,7 +298,8 @@ def cmd_batch(args) -> int:
     problem = problem_settings(args)
     # the healthy model's records, read once for it and for the baselines' indicators
     healthy = healthy_measurements(args) if not args.fmu else {}
-    baselines = tuple(baseline_records(args, machine, problem.tracking, healthy))
+    baselines = tuple(baseline_records(args, machine, problem.tracking, healthy,
+                                       records_kept_in(args, machine, healthy)))
     # the machine's own model, built once here for every record (a worker only runs it)
     machines = None if args.fmu else machine_models(args)
     built = None if machines is None else machines(machine)

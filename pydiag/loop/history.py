@@ -2,7 +2,7 @@
 of the baselines kept for each machine (records of it in a known healthy state), and of
 each machine's healthy model fitted to them.
 
-SQLite, three tables. ``pydiag history`` lists the runs and can plot the error across
+SQLite, four tables. ``pydiag history`` lists the runs and can plot the error across
 model revisions, so the effect of adding physics to the Modelica model stays visible.
 ``pydiag baseline`` keeps a record as seen through its machine (the speed found, every
 shaft's TSA facts: :class:`~pydiag.gear.machine_indicators.MachineRecord`), found again
@@ -10,7 +10,8 @@ by the machine's identity (:attr:`~pydiag.gear.machine.Machine.identity`); ``--b
 kept`` judges a record against those of its operating point. ``diagnose --machine`` keeps
 the healthy model it fits to its --baseline files (:class:`~pydiag.loop.own_changes.
 HealthyModel`), found again by a fingerprint of all it was made from, so that it is
-fitted once.
+fitted once; and each --baseline file's record as its machine sees it, the same way, so
+that it is made once.
 
 The history is an input as much as an output: :func:`check` refuses, before any work, a
 file that is not SQLite, an SQLite file of another application (a table that is not
@@ -90,6 +91,15 @@ CREATE TABLE IF NOT EXISTS healthy_models (
     fingerprint TEXT NOT NULL,
     baselines TEXT NOT NULL,
     model TEXT NOT NULL
+)""", "baseline_records": """
+CREATE TABLE IF NOT EXISTS baseline_records (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    time_utc TEXT NOT NULL,
+    machine TEXT NOT NULL,
+    machine_identity TEXT NOT NULL,
+    fingerprint TEXT NOT NULL,
+    measurement TEXT NOT NULL,
+    record TEXT NOT NULL
 )"""}
 
 
@@ -109,7 +119,9 @@ TABLES = {"runs": COLUMNS,
           "baselines": ("id", "time_utc", "machine", "machine_identity", "measurement",
                         "speed_hz", "record"),
           "healthy_models": ("id", "time_utc", "machine", "machine_identity", "fingerprint",
-                             "baselines", "model")}
+                             "baselines", "model"),
+          "baseline_records": ("id", "time_utc", "machine", "machine_identity", "fingerprint",
+                               "measurement", "record")}
 
 
 def _tables(con: sqlite3.Connection) -> set[str]:
@@ -341,6 +353,36 @@ def kept_healthy_model(db: str | Path, machine: Machine, fingerprint: str
                                 HealthyModel.from_dict(json.loads(model)))
     except (sqlite3.Error, ValueError, KeyError, TypeError) as err:
         raise OutputError(f"cannot read the healthy models kept in {db}: {err}") from err
+    finally:
+        con.close()
+
+
+def keep_baseline_record(db: str | Path, machine: Machine, fingerprint: str,
+                         measurement_path: str, record: MachineRecord) -> None:
+    """Keep ``record`` (a --baseline file of ``machine``, read from ``measurement_path``)
+    in the history ``db`` under ``fingerprint`` (everything it was made from, the
+    caller's to say), so that it is made once."""
+    _kept_row(db, "baseline_records", machine, "the baseline's record", {
+        "fingerprint": fingerprint, "measurement": str(measurement_path),
+        "record": json.dumps(record.to_dict())})
+
+
+def kept_baseline_record(db: str | Path, machine: Machine, fingerprint: str
+                         ) -> MachineRecord | None:
+    """The record of a --baseline file of ``machine`` last kept in the history ``db``
+    under ``fingerprint``, or None."""
+    if not Path(db).exists():
+        return None
+    con = _connect(db)
+    try:
+        if "baseline_records" not in _tables(con):
+            return None
+        row = con.execute("SELECT record FROM baseline_records WHERE machine_identity = ? "
+                          "AND fingerprint = ? ORDER BY id DESC LIMIT 1",
+                          (machine.identity, fingerprint)).fetchone()
+        return None if row is None else MachineRecord.from_dict(json.loads(row[0]))
+    except (sqlite3.Error, ValueError, KeyError, TypeError) as err:
+        raise OutputError(f"cannot read the baseline records kept in {db}: {err}") from err
     finally:
         con.close()
 

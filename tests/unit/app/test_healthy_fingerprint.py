@@ -1,10 +1,12 @@
-"""The key a machine's healthy model is kept under (pydiag.app.baselines.healthy_fingerprint):
-anything it is fitted from changes it, nothing else does."""
+"""The keys a machine's healthy model and its --baseline files' records are kept under in
+the history (pydiag.app.baselines): anything they are made from changes them, nothing
+else does."""
 
 from pathlib import Path
 
 from pydiag.app.baselines import healthy_fingerprint
 from pydiag.app.cli import build_parser
+from pydiag.gear.speed import SpeedSettings
 from pydiag.loop.compose import BuiltModel
 from pydiag.loop.stage_catalogue import FAULT_EFFECTS
 
@@ -52,3 +54,47 @@ def test_a_healthy_model_is_asked_about_every_component_fault_of_the_catalogue()
             "other_shaft_orders"} <= set(FAULT_EFFECTS)
     assert not {"mesh_modulation", "mesh_stiffness_shape", "backlash", "pinion_tooth_softening",
                 "second_pinion_tooth_fault", "housing_sensor"} & set(FAULT_EFFECTS)
+
+
+def test_a_baseline_files_record_is_made_once_and_found_again(tmp_path, monkeypatch):
+    """The --baseline files' records as the machine sees them, kept in the history the
+    healthy model is kept in: made on the first call, found on the next (the same
+    record), made again when the file's bytes or how it is read change."""
+    import json
+    import sys
+    sys.path.insert(0, str(ROOT / "tests"))
+    from truth.gearbox import SHORT_BOX, gearbox_record
+
+    import pydiag.app.baselines as baselines
+    from pydiag.app.machine_options import apply_machine
+    from pydiag.io.measurements import write_measurement
+    machine_file = tmp_path / "box.toml"
+    machine_file.write_text((ROOT / "tests" / "golden" / "short_box.loop.toml").read_text())
+    files = [tmp_path / f"healthy_{seed}.csv" for seed in (1, 3)]
+    for seed, path in zip((1, 3), files):
+        write_measurement(path, gearbox_record(seed, box=SHORT_BOX))
+    made = []
+    real = baselines.machine_record
+    monkeypatch.setattr(baselines, "machine_record",
+                        lambda m, *a, **k: made.append(m.metadata["file"]) or real(m, *a, **k))
+
+    def records(*extra: str) -> list:
+        args = build_parser().parse_args([
+            "diagnose", "--machine", str(machine_file), "--measurement", "record.csv",
+            "--history", str(tmp_path / "h.sqlite"),
+            *(a for f in files for a in ("--baseline", str(f))), *extra])
+        args.machine_description = apply_machine(args)
+        machine = args.machine_description
+        healthy = baselines.healthy_measurements(args)
+        return [json.dumps(r.to_dict()) for r in baselines.baseline_records(
+            args, machine, SpeedSettings("mesh"), healthy,
+            baselines.records_kept_in(args, machine, healthy))]  # NaN != NaN, not in JSON
+
+    first = records()
+    assert made == [str(f) for f in files]
+    assert records() == first and len(made) == 2  # found, not made again
+    assert records("--quiet", "--workers", "1") == first and len(made) == 2
+    write_measurement(files[1], gearbox_record(4, box=SHORT_BOX), overwrite=True)  # its bytes
+    assert records()[1] != first[1] and made[2:] == [str(files[1])]
+    records("--rpm", "1490")  # read at another speed: both made again
+    assert len(made) == 5
