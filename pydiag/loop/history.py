@@ -28,7 +28,7 @@ import json
 import os
 import sqlite3
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -337,22 +337,30 @@ def kept_healthy_model(db: str | Path, machine: Machine, fingerprint: str
                        ) -> KeptHealthyModel | None:
     """The healthy model of ``machine`` last kept in the history ``db`` under
     ``fingerprint``, or None."""
+    return _last_kept(db, "healthy_models", ("id", "time_utc", "baselines", "model"),
+                      machine, fingerprint, "the healthy models",
+                      lambda i, when, files, model: KeptHealthyModel(
+                          i, when, tuple(json.loads(files)),
+                          HealthyModel.from_dict(json.loads(model))))
+
+
+def _last_kept(db: str | Path, table: str, columns: tuple[str, ...], machine: Machine,
+               fingerprint: str, what: str, made: Callable):
+    """``made(*columns)`` of the row of ``machine`` last kept in ``table`` of the history
+    ``db`` under ``fingerprint``, or None; ``what`` the table holds, for the error that
+    says it could not be read."""
     if not Path(db).exists():
         return None
     con = _connect(db)
     try:
-        if "healthy_models" not in _tables(con):
+        if table not in _tables(con):
             return None
-        row = con.execute("SELECT id, time_utc, baselines, model FROM healthy_models WHERE "
+        row = con.execute(f"SELECT {', '.join(columns)} FROM {table} WHERE "
                           "machine_identity = ? AND fingerprint = ? ORDER BY id DESC LIMIT 1",
                           (machine.identity, fingerprint)).fetchone()
-        if row is None:
-            return None
-        i, when, files, model = row
-        return KeptHealthyModel(i, when, tuple(json.loads(files)),
-                                HealthyModel.from_dict(json.loads(model)))
+        return None if row is None else made(*row)
     except (sqlite3.Error, ValueError, KeyError, TypeError) as err:
-        raise OutputError(f"cannot read the healthy models kept in {db}: {err}") from err
+        raise OutputError(f"cannot read {what} kept in {db}: {err}") from err
     finally:
         con.close()
 
@@ -371,20 +379,9 @@ def kept_baseline_record(db: str | Path, machine: Machine, fingerprint: str
                          ) -> MachineRecord | None:
     """The record of a --baseline file of ``machine`` last kept in the history ``db``
     under ``fingerprint``, or None."""
-    if not Path(db).exists():
-        return None
-    con = _connect(db)
-    try:
-        if "baseline_records" not in _tables(con):
-            return None
-        row = con.execute("SELECT record FROM baseline_records WHERE machine_identity = ? "
-                          "AND fingerprint = ? ORDER BY id DESC LIMIT 1",
-                          (machine.identity, fingerprint)).fetchone()
-        return None if row is None else MachineRecord.from_dict(json.loads(row[0]))
-    except (sqlite3.Error, ValueError, KeyError, TypeError) as err:
-        raise OutputError(f"cannot read the baseline records kept in {db}: {err}") from err
-    finally:
-        con.close()
+    return _last_kept(db, "baseline_records", ("record",), machine, fingerprint,
+                      "the baseline records",
+                      lambda record: MachineRecord.from_dict(json.loads(record)))
 
 
 def check_plot(out: str | Path) -> None:
