@@ -24,7 +24,7 @@ from pydiag.gear.effects import EFFECTS
 from pydiag.gear.machine import Machine
 from pydiag.gear.speed import SpeedEstimate
 from pydiag.io.outputs import check_output, write_text
-from pydiag.loop import history
+from pydiag.loop import history, history_plot
 from pydiag.loop.accumulate import accumulate
 from pydiag.loop.compare import compare, refit_with_effect
 from pydiag.diagnose.diagnosis import fit_warnings
@@ -289,12 +289,12 @@ def _machine_loop(args) -> tuple[list, str]:
 def cmd_history(args) -> int:
     check_outputs(args, "plot")
     if args.plot:
-        history.check_plot(args.plot)
+        history_plot.check_plot(args.plot)
     args.history = str(args.history or history.default_path())
     rows = history.runs(args.history)
     if not rows:
         raise UsageError(f"no compare runs recorded in {args.history}")
     print(format_history(rows))
     if args.plot:
-        print(f"wrote {history.plot(rows, args.plot, args.force)}")
+        print(f"wrote {history_plot.plot(rows, args.plot, args.force)}")
     return 0

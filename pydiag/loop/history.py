@@ -3,7 +3,8 @@ of the baselines kept for each machine (records of it in a known healthy state),
 each machine's healthy model fitted to them.
 
 SQLite, four tables. ``pydiag history`` lists the runs and can plot the error across
-model revisions, so the effect of adding physics to the Modelica model stays visible.
+model revisions (:mod:`pydiag.loop.history_plot`), so the effect of adding physics to
+the Modelica model stays visible.
 ``pydiag baseline`` keeps a record as seen through its machine (the speed found, every
 shaft's TSA facts: :class:`~pydiag.gear.machine_indicators.MachineRecord`), found again
 by the machine's identity (:attr:`~pydiag.gear.machine.Machine.identity`); ``--baseline
@@ -36,11 +37,8 @@ from pathlib import Path
 from pydiag.core.errors import OutputError, UsageError
 from pydiag.gear.machine import Machine
 from pydiag.gear.machine_indicators import MachineRecord
-from pydiag.io.outputs import atomic_output, check_output
+from pydiag.io.outputs import check_output
 from pydiag.loop.own_changes import HealthyModel
-
-#: The formats ``history --plot`` writes, by the file's suffix.
-PLOT_FORMATS = (".png", ".svg", ".pdf")
 
 
 def default_path() -> Path:
@@ -382,39 +380,3 @@ def kept_baseline_record(db: str | Path, machine: Machine, fingerprint: str
     return _last_kept(db, "baseline_records", ("record",), machine, fingerprint,
                       "the baseline records",
                       lambda record: MachineRecord.from_dict(json.loads(record)))
-
-
-def check_plot(out: str | Path) -> None:
-    """OutputError unless ``out`` names a format :func:`plot` writes (before any work)."""
-    if Path(out).suffix.lower() not in PLOT_FORMATS:
-        raise OutputError(f"--plot {out}: the plot is written as {', '.join(PLOT_FORMATS)} "
-                          "(by the file's suffix)")
-
-
-def plot(rows: list[dict], out: str | Path, force: bool = False) -> Path:
-    """Error per run, labelled with the model name: the error falling as physics is added.
-    Written under the output policy (:mod:`pydiag.io.outputs`); the format follows the
-    name's suffix (:data:`PLOT_FORMATS`)."""
-    check_plot(out)
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import matplotlib.ticker
-
-    fig, ax = plt.subplots(figsize=(7, 3.5), dpi=110)
-    ax.plot([r["id"] for r in rows], [r["error"] for r in rows], "o-", color="#1f5fa8")
-    for r in rows:
-        ax.annotate(r["model_name"] or Path(r["fmu"]).stem, (r["id"], r["error"]),
-                    textcoords="offset points", xytext=(4, 6), fontsize=8)
-    ax.set_xlabel("compare run")
-    ax.set_ylabel("spectral error (Eq. 12, relative)")
-    ax.set_ylim(bottom=0)
-    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    try:
-        with atomic_output(out, force) as tmp:
-            fig.savefig(tmp, format=Path(out).suffix.lower().lstrip("."))
-    finally:
-        plt.close(fig)
-    return Path(out)

@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from pydiag.core.errors import OutputError
-from pydiag.loop import history
+from pydiag.loop import history, history_plot
 
 
 def test_a_file_that_is_not_a_history_is_refused_and_kept(tmp_path):
@@ -28,11 +28,11 @@ def test_checking_a_new_history_creates_nothing(tmp_path):
 def test_history_plot_follows_the_output_policy(tmp_path):
     rows = [{"id": 1, "error": 0.5, "model_name": "GearPair", "fmu": "a.fmu"},
             {"id": 2, "error": 0.1, "model_name": "WithRunout", "fmu": "b.fmu"}]
-    out = history.plot(rows, tmp_path / "h.png")
+    out = history_plot.plot(rows, tmp_path / "h.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(OutputError, match="exists"):
-        history.plot(rows, out)
-    assert history.plot(rows, tmp_path / "h.svg").read_text().lstrip().startswith("<?xml")
+        history_plot.plot(rows, out)
+    assert history_plot.plot(rows, tmp_path / "h.svg").read_text().lstrip().startswith("<?xml")
 
 
 class _Run:
@@ -87,8 +87,8 @@ def test_a_history_that_cannot_take_the_run_is_the_users_problem(tmp_path, monke
 
 def test_plot_formats_are_checked_by_suffix(tmp_path):
     with pytest.raises(OutputError, match="written as .png"):
-        history.check_plot(tmp_path / "p.txt")
-    history.check_plot(tmp_path / "p.PDF")
+        history_plot.check_plot(tmp_path / "p.txt")
+    history_plot.check_plot(tmp_path / "p.PDF")
 
 
 def test_a_healthy_model_is_found_again_by_its_machine_and_fingerprint(tmp_path):
