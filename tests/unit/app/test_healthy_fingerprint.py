@@ -61,8 +61,7 @@ def test_a_baseline_files_record_is_made_once_and_found_again(tmp_path, monkeypa
     healthy model is kept in: made on the first call, found on the next (the same
     record), made again when the file's bytes or how it is read change."""
     import json
-    import sys
-    sys.path.insert(0, str(ROOT / "tests"))
+
     from truth.gearbox import SHORT_BOX, gearbox_record
 
     import pydiag.app.baselines as baselines
