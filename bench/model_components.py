@@ -22,7 +22,7 @@ runs (run 2, the healthy model's record, then run 1, its repeat), each judged wi
 machine files of examples/ as they are (no effects: the model is the stages alone, asked
 for the catalogue's component faults), beside the data set's labels (bench/components.py's).
 ``--one-baseline``: every record of the folder with a healthy run of its operating point
-but itself, judged against that one file (run 2 first), as the issue's command runs it: the
+but itself, judged against that one file (run 2 first), as the README's command runs it: the
 model then judges nothing, but its fit to the file is kept and each record's fit is its
 polish; a row a record (seconds: the first of each file fits it) and the counts.
 Cite the PHM Society 2009 Data Challenge where you report results.

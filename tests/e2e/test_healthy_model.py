@@ -167,7 +167,7 @@ def test_batch_judges_every_record_by_the_healthy_model_fitted_once(tmp_path):
 
 
 def test_of_one_baseline_file_the_healthy_fit_is_kept_and_each_record_polishes_it(tmp_path):
-    """One --baseline file (the issue's command): no healthy repeat, so the model judges no
+    """One --baseline file (the README's command): no healthy repeat, so the model judges no
     component (said, and a warning); but its fit to the baseline is kept in the history and
     each record's fit is that fit polished (at most the polish's budget and one more), not
     a swarm from nothing, record after record."""
