@@ -54,10 +54,10 @@ PARTS = [
 
 def busy_s() -> float:
     """CPU-seconds the machine has been busy (every core; /proc/stat's user, nice, system,
-    irq and softirq ticks, at 100 a second)."""
+    irq and softirq ticks)."""
     with open("/proc/stat") as f:
         ticks = [int(x) for x in f.readline().split()[1:8]]
-    return (sum(ticks) - ticks[3] - ticks[4]) / 100.0
+    return (sum(ticks) - ticks[3] - ticks[4]) / os.sysconf("SC_CLK_TCK")
 
 
 def timed(function, label: str, depth: int, rows: list):
