@@ -15,15 +15,14 @@ a record's rise of z over the baseline's own is held, as a component's change is
 (:mod:`pydiag.gear.component_judge`), to ``K_SPREAD`` times the healthy repeats' rise of
 the same effect on the same stage (their RMS), never below a z of 1. The effect's sizing
 parameter that grew most, unless another fell by more, names the part
-(:attr:`pydiag.gear.effect.Effect.parts`): a
-deeper pinion modulation is its pinion, larger orders of the pinion shaft are that shaft;
-the effect names the fault where it can (``Effect.fault``: a softer tooth chipped or
-broken, a shaft's risen orders an imbalance or a bend), else "changed". An effect the
-healthy model lacks is tried the same way, from off
-(:func:`~pydiag.loop.machine_discover.discover_machine`), where it could name a component
-a record is asked about (:func:`lacking_tries`), on the baseline and the repeats the first
-time a record asks for it (:func:`with_lacking`). Of two changes whose held-out fits
-claim one line, the larger names it (:func:`_settled`).
+(:attr:`pydiag.gear.effect.Effect.parts`): a deeper pinion modulation is its pinion,
+larger orders of the pinion shaft are that shaft; the effect names the fault where it
+can (``Effect.fault``: a softer tooth chipped or broken, a shaft's risen orders an
+imbalance or a bend), else "changed". An effect the healthy model lacks is tried the same
+way, from off (:func:`~pydiag.loop.machine_discover.discover_machine`), where it could
+name a component a record is asked about (:func:`lacking_tries`), on the baseline and the
+repeats the first time a record asks for it (:func:`with_lacking`). Of two changes whose
+held-out fits claim one line, the larger names it (:func:`_settled`).
 """
 
 from __future__ import annotations
