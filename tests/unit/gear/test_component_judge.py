@@ -319,8 +319,8 @@ def test_a_baseline_kept_before_the_swing_was_read_says_so_on_the_gears_it_would
 
 def test_a_shaft_whose_order_fell_beyond_its_threshold_is_good_and_says_so():
     """A fault makes a shaft's orders larger: one that fell, however far, names no fault,
-    and the line says why its change is beyond the threshold (the input shaft of PHM09
-    spur 6: its 3x 15.1 dB down, 1.03 x, said good with no word)."""
+    and the line says why its change is beyond the threshold (before, such a shaft was
+    said good with no word)."""
     machine = machine_of(BOX)
     speed = SpeedSettings("mesh")
     baseline = machine_record(gearbox_record(1, box=BOX), machine, speed, INPUT_HZ)

@@ -89,8 +89,8 @@ def test_the_part_is_that_of_the_sizing_parameter_that_grew_most():
     assert modulation.part_of({"m_p": 0.24, "m_g": -0.04, "phi_g": 3.0}) == PINION
     assert modulation.part_of({"m_p": 0.01, "m_g": 0.05}) == GEAR
     assert modulation.part_of({"m_p": 0.05, "m_g": -0.01}) == PINION  # a fall names none
-    # the record asks mostly for less modulation: a part that grew by less names nothing
-    # (the short box's chipped idler gear, seed 6: stage 2's m_p -0.0084, m_g +0.00004)
+    # the record asks mostly for less modulation: a part that grew by less (a rounding's
+    # worth) names nothing
     assert modulation.part_of({"m_p": -0.0084, "m_g": 0.00004}) is None
     assert EFFECTS["pinion_shaft_orders"].part_of({"A_s1": -150.0, "A_s2": -99.0}) is None
     assert EFFECTS["speed_fluctuation"].part_of({"ds": 0.01}) is None
